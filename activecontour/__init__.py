@@ -1,0 +1,39 @@
+"""activecontour: sub-pixel Chan-Vese active contours.
+
+The method is section 6.5 of *The Shapes of Things* (S. W. Walker): the Chan-Vese functional (6.38)
+minimised by the gradient flow (6.30)-(6.31) with the H^1 velocity (6.39)-(6.40) and the shape
+derivative (6.41), on a polygon, or on a level-set function over the pixel grid.
+
+Parts
+-----
+segment            the entry point: ``segment(image, init, backend=..., mu=..., ...)``
+SegmentationResult the result of every backend
+circle, rectangle  initial curves (any (K, 2) array, list of them, or bool mask also works)
+chan_vese_energy   the common evaluator of (6.38) for any contours
+curve, fem         polygon geometry (tangent, normal, curvature) and P1 finite elements
+image, energy      the image model with its cumulative tables; the functional and its derivative
+flow, levelset     the two backends
+io, raster         writers/readers of masks, overlays and contours; curves <-> masks
+synthetic          anti-aliased test images with exact ground truth
+
+Conventions: points are (row, col) with pixel centres at integer coordinates; outer boundaries are
+positively oriented (signed area > 0), holes negatively; the normal points out of the inside region.
+"""
+
+from activecontour.energy import chan_vese_energy
+from activecontour.image import load_image
+from activecontour.initial import circle, rectangle
+from activecontour.result import FlowState, SegmentationResult
+from activecontour.segment import segment
+
+__all__ = [
+    "FlowState",
+    "SegmentationResult",
+    "chan_vese_energy",
+    "circle",
+    "load_image",
+    "rectangle",
+    "segment",
+]
+
+__version__ = "0.1.0"

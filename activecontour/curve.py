@@ -1,0 +1,158 @@
+"""Closed polygonal curves and their 1-D geometry, in the book's conventions.
+
+A closed curve is a float array of shape (K, 2) of vertices in (row, col), each stored once; edge i
+joins vertex i and vertex (i + 1) mod K.  The signed area ``0.5 * sum(r_i c_{i+1} - r_{i+1} c_i)`` is
+positive for an outer boundary and negative for a hole.  With the unit tangent ``tau = (t_r, t_c)``
+of an edge, the normal is ``nu = (t_c, -t_r)`` (section 4.5.2): it points out of the enclosed region
+Omega_i, into Omega_o, as in Figure 6.6.
+
+Curvature follows (3.45) and (4.30): ``kappa * nu = -Laplace_Sigma(id)``, so a circle of radius R has
+``kappa = 1/R``.  On the polygon it is computed in P1 weak form, ``kappa nu = M^{-1} K X``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from activecontour import fem
+
+__all__ = [
+    "as_curve",
+    "curvature",
+    "curvature_vector",
+    "edge_lengths",
+    "edge_normals",
+    "edge_tangents",
+    "length",
+    "orient",
+    "resample",
+    "signed_area",
+    "tangential_gradient",
+    "vertex_normals",
+]
+
+
+def as_curve(points, *, name="curve"):
+    """Validate and return a closed curve as a float64 (K, 2) array.
+
+    A repeated closing vertex (first == last) is dropped.  Raises ``ValueError`` naming ``name`` for
+    a wrong shape, NaN/inf, fewer than 3 distinct vertices, or zero enclosed area.
+    """
+    try:
+        points = np.array(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be an array of (row, col) points") from None
+    if points.ndim != 2 or points.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (K, 2) in (row, col), got shape {points.shape}")
+    if not np.all(np.isfinite(points)):
+        raise ValueError(f"{name} contains NaN or infinite coordinates")
+    if len(points) > 1 and np.array_equal(points[0], points[-1]):
+        points = points[:-1]
+    keep = np.any(points != np.roll(points, 1, axis=0), axis=1)
+    if len(points) > 1:
+        points = points[keep]
+    if len(points) < 3:
+        raise ValueError(f"{name} needs at least 3 distinct vertices, got {len(points)}")
+    if abs(signed_area(points)) <= 1e-12 * max(1.0, length(points) ** 2):
+        raise ValueError(f"{name} is degenerate: it encloses no area")
+    return points
+
+
+def edge_vectors(points):
+    """``X[i + 1] - X[i]`` for every edge, shape (K, 2)."""
+    return np.roll(points, -1, axis=0) - points
+
+
+def edge_lengths(points):
+    """Length of every edge, shape (K,)."""
+    d = edge_vectors(points)
+    return np.hypot(d[:, 0], d[:, 1])
+
+
+def length(points):
+    """Arc length |Sigma| (1.9) of the closed polygon."""
+    return float(edge_lengths(points).sum())
+
+
+def signed_area(points):
+    """Signed enclosed area: positive for an outer boundary, negative for a hole."""
+    r, c = points[:, 0], points[:, 1]
+    return 0.5 * float(np.dot(r, np.roll(c, -1)) - np.dot(np.roll(r, -1), c))
+
+
+def edge_tangents(points):
+    """Unit tangent tau (3.44) of every edge, shape (K, 2); zero for a zero-length edge."""
+    d = edge_vectors(points)
+    h = np.hypot(d[:, 0], d[:, 1])
+    return np.divide(d, h[:, None], out=np.zeros_like(d), where=h[:, None] > 0)
+
+
+def edge_normals(points):
+    """Unit normal ``nu = (t_c, -t_r)`` of every edge (section 4.5.2), shape (K, 2)."""
+    tau = edge_tangents(points)
+    return np.column_stack([tau[:, 1], -tau[:, 0]])
+
+
+def vertex_normals(points):
+    """Unit normal at each vertex: the normalised sum of the normals of its two edges."""
+    nu = edge_normals(points)
+    n = nu + np.roll(nu, 1, axis=0)
+    norm = np.hypot(n[:, 0], n[:, 1])
+    return np.divide(n, norm[:, None], out=np.zeros_like(n), where=norm[:, None] > 0)
+
+
+def curvature_vector(points):
+    """Curvature vector ``kappa nu = M^{-1} K X`` (4.30), the P1 weak form of -Laplace_Sigma id."""
+    h = edge_lengths(points)
+    stiffness = fem.stiffness_diagonals(h)
+    return fem.cyclic_solve(*fem.mass_diagonals(h), fem.cyclic_apply(*stiffness, points))
+
+
+def curvature(points):
+    """Signed scalar curvature at the vertices: ``(kappa nu) . nu``, 1/R on a circle (3.45)."""
+    return np.einsum("ij,ij->i", curvature_vector(points), vertex_normals(points))
+
+
+def tangential_gradient(points, values):
+    """Tangential gradient grad_Sigma of a P1 field on each edge (constant per edge).
+
+    Parameters
+    ----------
+    points : ndarray (K, 2)
+    values : ndarray (K,) or (K, d)
+        Nodal values of a scalar or vector P1 field.
+
+    Returns
+    -------
+    ndarray (K, 2) for a scalar field, (K, d, 2) for a vector field: row k of the Jacobian is the
+    gradient of component k, so ``trace`` gives the tangential divergence (4.22).
+    """
+    values = np.asarray(values, dtype=np.float64)
+    h = edge_lengths(points)
+    tau = edge_tangents(points)
+    dv = (np.roll(values, -1, axis=0) - values) / np.where(h > 0, h, np.inf).reshape(
+        (-1,) + (1,) * (values.ndim - 1)
+    )
+    return dv[..., None] * tau[:, None, :] if values.ndim == 2 else dv[:, None] * tau
+
+
+def orient(points, *, hole=False):
+    """Return the curve with positive signed area (or negative when ``hole``)."""
+    area = signed_area(points)
+    return points[::-1].copy() if (area < 0) != hole else points
+
+
+def resample(points, spacing, *, min_vertices=8):
+    """Vertices at equal arc-length steps of about ``spacing`` along the polygon.
+
+    The first vertex is kept; the number of vertices is ``max(min_vertices, round(L / spacing))``.
+    """
+    h = edge_lengths(points)
+    s = np.concatenate([[0.0], np.cumsum(h)])
+    total = s[-1]
+    n = max(min_vertices, int(round(total / spacing)))
+    closed = np.vstack([points, points[:1]])
+    targets = np.arange(n) * (total / n)
+    return np.column_stack(
+        [np.interp(targets, s, closed[:, 0]), np.interp(targets, s, closed[:, 1])]
+    )

@@ -1,0 +1,120 @@
+"""Initial curves: circles, rectangles, and turning any accepted ``init`` into a list of curves."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from activecontour.curve import as_curve, orient, signed_area
+from activecontour.raster import mask_to_curves
+
+__all__ = ["circle", "default_init", "initial_curves", "rectangle"]
+
+#: Radius of the default initial circle, as a fraction of the image's smaller side (the same as
+#: ``skimage.segmentation.morphological_chan_vese``'s default circle).
+DEFAULT_RADIUS_FRACTION = 3.0 / 8.0
+
+
+def circle(center, radius, n=None):
+    """A positively oriented circle in (row, col).
+
+    Parameters
+    ----------
+    center : (row, col)
+    radius : float
+        In pixels, > 0.
+    n : int, optional
+        Number of vertices; by default about one per pixel of arc length (at least 16).
+
+    Returns
+    -------
+    ndarray (n, 2)
+        Vertices at angles ``2 pi k / n``; the closing vertex is not repeated.
+    """
+    center = np.asarray(center, dtype=np.float64)
+    if center.shape != (2,) or not np.all(np.isfinite(center)):
+        raise ValueError(f"center must be a finite (row, col) pair, got {center!r}")
+    if not np.isfinite(radius) or radius <= 0:
+        raise ValueError(f"radius must be a positive number, got {radius!r}")
+    if n is None:
+        n = max(16, int(np.ceil(2 * np.pi * radius)))
+    if int(n) < 3:
+        raise ValueError(f"n must be at least 3, got {n}")
+    angle = 2.0 * np.pi * np.arange(int(n)) / int(n)
+    return center + radius * np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+def rectangle(start, end):
+    """A positively oriented axis-aligned rectangle with opposite corners ``start``, ``end`` (row, col)."""
+    (r0, c0), (r1, c1) = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
+    if r0 == r1 or c0 == c1:
+        raise ValueError(f"rectangle from {tuple(start)} to {tuple(end)} has no area")
+    corners = np.array([[r0, c0], [r1, c0], [r1, c1], [r0, c1]])
+    return orient(corners)
+
+
+def default_init(shape):
+    """The documented default: a centred circle of radius 3/8 of the smaller side."""
+    m, n = shape
+    return [circle(((m - 1) / 2.0, (n - 1) / 2.0), DEFAULT_RADIUS_FRACTION * min(m, n))]
+
+
+def initial_curves(init, shape):
+    """Turn an ``init`` into a list of closed curves inside the image domain.
+
+    Parameters
+    ----------
+    init : None, ndarray (K, 2), list of them, bool ndarray (M, N), or a SegmentationResult
+        A curve, several curves (holes negatively oriented), a mask whose components and holes
+        become curves, or a previous result (its contours), e.g. from the other backend.
+    shape : tuple (M, N)
+
+    Returns
+    -------
+    list of ndarray (K, 2)
+
+    Raises
+    ------
+    ValueError
+        For a mask of the wrong shape or an empty one, a malformed curve, or a curve that lies
+        outside the image.  Curves partly outside are clipped to the image domain
+        ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``.
+    """
+    if init is None:
+        return default_init(shape)
+    if hasattr(init, "contours") and hasattr(init, "mask"):
+        init = init.contours
+    if isinstance(init, np.ndarray) and init.dtype == bool:
+        if init.shape != tuple(shape):
+            raise ValueError(
+                f"init mask has shape {init.shape}, but the image has shape {tuple(shape)}"
+            )
+        curves = mask_to_curves(init)
+        if not curves:
+            raise ValueError("init mask is empty: it selects no pixel")
+        return curves
+    if isinstance(init, str):
+        raise ValueError(
+            f"init {init!r} is not understood by the polygon backend: pass None, a (K, 2) curve, "
+            "a list of curves or a bool mask"
+        )
+    arr = np.asarray(init, dtype=object) if isinstance(init, (list, tuple)) else None
+    if arr is not None and (len(init) == 0 or np.ndim(init[0]) == 2):
+        if len(init) == 0:
+            raise ValueError("init is an empty list of curves")
+        raw = list(init)
+    else:
+        raw = [init]
+    return [_clip(as_curve(c, name=f"init curve {i}"), shape, i) for i, c in enumerate(raw)]
+
+
+def _clip(curve, shape, index):
+    m, n = shape
+    low, high = np.array([-0.5, -0.5]), np.array([m - 0.5, n - 0.5])
+    clipped = np.clip(curve, low, high)
+    if abs(signed_area(clipped)) < 1.0:
+        raise ValueError(
+            f"init curve {index} lies outside the image (rows -0.5..{m - 0.5}, "
+            f"cols -0.5..{n - 0.5}); its bounding box is rows {curve[:, 0].min():.1f}.."
+            f"{curve[:, 0].max():.1f}, cols {curve[:, 1].min():.1f}..{curve[:, 1].max():.1f}"
+        )
+    return clipped

@@ -1,0 +1,104 @@
+"""`SegmentationResult`: the one result type of every backend (after ``scipy.optimize.OptimizeResult``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult"]
+
+#: Status codes and their messages, shared by every backend.
+STATUS_MESSAGES = {
+    0: "Converged: the relative energy decrease and the largest displacement fell below tol.",
+    1: "Reached max_num_iter before converging.",
+    2: "Stopped by the callback.",
+    3: "The contour collapsed: nothing left inside (try a smaller mu or another init).",
+    4: "Line search found no descent step: stationary to working precision.",
+}
+
+
+@dataclass
+class SegmentationResult:
+    """The outcome of :func:`activecontour.segment`.
+
+    Attributes
+    ----------
+    mask : ndarray of bool, shape (M, N)
+        The inside region Omega_i: pixels whose centre lies inside the contours.
+    contours : list of ndarray (K, 2)
+        Closed curves in (row, col), pixel centres at integer coordinates, each vertex once; outer
+        boundaries have positive signed area, holes negative (DESIGN.md conventions).
+    c_in, c_out : float or ndarray (C,)
+        The region constants (6.42) at the end: floats for gray images, one per channel otherwise.
+    energy : float
+        Final value of the functional (6.38).
+    energies : ndarray
+        Energy before the first iteration and after every iteration, ending with ``energy``.
+    n_iter : int
+        Iterations performed.
+    success : bool
+        True when the flow converged (status 0 or 4).
+    status : int
+        Key of :data:`STATUS_MESSAGES`.
+    message : str
+    backend : str
+    phi : ndarray (M, N) or None
+        The level-set function (``backend="levelset"``), None for the polygon backend.
+    """
+
+    mask: np.ndarray
+    contours: list
+    c_in: object
+    c_out: object
+    energy: float
+    energies: np.ndarray
+    n_iter: int
+    status: int
+    backend: str
+    phi: np.ndarray | None = None
+    success: bool = field(init=False)
+    message: str = field(init=False)
+
+    def __post_init__(self):
+        self.success = self.status in (0, 4)
+        self.message = STATUS_MESSAGES[self.status]
+        self.energies = np.asarray(self.energies, dtype=np.float64)
+        self.c_in = _scalar_if_gray(self.c_in)
+        self.c_out = _scalar_if_gray(self.c_out)
+
+    def __repr__(self):
+        return (
+            f"SegmentationResult(backend={self.backend!r}, success={self.success}, "
+            f"n_iter={self.n_iter}, energy={self.energy:.6g}, c_in={self.c_in}, "
+            f"c_out={self.c_out}, contours={len(self.contours)}, "
+            f"area={int(self.mask.sum())} px, message={self.message!r})"
+        )
+
+
+@dataclass
+class FlowState:
+    """What a callback sees once per iteration.  Return True from the callback to stop."""
+
+    iteration: int
+    contours: list
+    energy: float
+    c_in: object
+    c_out: object
+    shape: tuple
+    max_num_iter: int
+    phi: np.ndarray | None = None
+
+    @property
+    def mask(self):
+        """The current inside region, rasterised on demand (not free: O(M N))."""
+        if self.phi is not None:
+            return self.phi > 0
+        from activecontour.raster import rasterize
+
+        return rasterize(self.contours, self.shape)
+
+
+def _scalar_if_gray(value):
+    value = np.asarray(value, dtype=np.float64)
+    return float(value.reshape(-1)[0]) if value.size == 1 else value

@@ -1,0 +1,81 @@
+"""`segment`: the one public entry point, shared by the CLI, the viewer and pipelines."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+
+from activecontour.energy import ChanVeseParameters
+from activecontour.image import ImageModel, normalize_image
+
+__all__ = ["BACKENDS", "segment"]
+
+#: backend name -> "module:function" implementing it (imported on first use)
+BACKENDS = {
+    "polygon": "activecontour.flow:segment_polygon",
+    "levelset": "activecontour.levelset:segment_levelset",
+}
+
+
+def segment(image, init=None, *, backend="polygon", mu=0.5, omega=0.0, lambda_in=1.0,
+            lambda_out=1.0, max_num_iter=500, tol=1e-3, callback=None, c_in=None, c_out=None,
+            color="gray", options=None):
+    """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
+
+    Parameters
+    ----------
+    image : ndarray of shape (M, N) or (M, N, C)
+        Gray or colour image.  Integer dtypes are scaled by their range to [0, 1]; floats are
+        used as given.
+    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), or SegmentationResult
+        Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
+        starts from a centred circle of radius 3/8 of the smaller side.  The level-set backend also
+        accepts ``"checkerboard"``.
+    backend : {"polygon", "levelset"}
+        ``"polygon"``: the book's gradient flow (6.30)-(6.31) of a polygon with the H^1 velocity
+        (6.39)-(6.40), sub-pixel.  ``"levelset"``: the same functional on the pixel grid.
+    mu : float
+        Length weight (intensity^2 * pixel), >= 0.  Larger gives smoother, shorter contours.
+    omega : float
+        Area weight (intensity^2); positive shrinks, negative grows the inside.
+    lambda_in, lambda_out : float
+        Weights of the inside and outside fitting terms, > 0.
+    max_num_iter : int
+        Iteration limit.
+    tol : float
+        Convergence tolerance: the run stops once the relative decrease of the energy and the
+        largest vertex displacement (pixels) per iteration stay below ``tol``.
+    callback : callable, optional
+        ``callback(state)`` with a :class:`~activecontour.result.FlowState` once per iteration;
+        return True to stop.
+    c_in, c_out : float or sequence, optional
+        Hold the region constants fixed; by default they are updated by (6.42) every iteration.
+    color : {"gray", "vector"}
+        Colour images: convert to gray, or keep the channels (vector-valued functional).
+    options : dict, optional
+        Backend-specific settings, documented by the backend function
+        (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
+
+    Returns
+    -------
+    SegmentationResult
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {backend!r}")
+    if isinstance(max_num_iter, bool) or not isinstance(max_num_iter, (int, np.integer)):
+        raise TypeError(f"max_num_iter must be an integer, got {max_num_iter!r}")
+    if max_num_iter < 0:
+        raise ValueError(f"max_num_iter must be >= 0, got {max_num_iter}")
+    if not (isinstance(tol, (int, float, np.floating)) and np.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
+    if callback is not None and not callable(callback):
+        raise TypeError("callback must be callable or None")
+    if options is not None and not isinstance(options, dict):
+        raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+    params = ChanVeseParameters(mu, omega, lambda_in, lambda_out, c_in, c_out)
+    model = ImageModel(normalize_image(image, color=color))
+    module_name, function_name = BACKENDS[backend].split(":")
+    solver = getattr(importlib.import_module(module_name), function_name)
+    return solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
+                  callback=callback, **(options or {}))
