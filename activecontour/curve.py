@@ -28,6 +28,8 @@ __all__ = [
     "resample",
     "signed_area",
     "tangential_gradient",
+    "to_xy",
+    "from_xy",
     "vertex_normals",
 ]
 
@@ -156,3 +158,13 @@ def resample(points, spacing, *, min_vertices=8):
     return np.column_stack(
         [np.interp(targets, s, closed[:, 0]), np.interp(targets, s, closed[:, 1])]
     )
+
+
+def to_xy(points):
+    """(row, col) -> (x, y) = (col, row), for OpenCV, matplotlib, SVG and GeoJSON: the only place."""
+    return np.asarray(points, dtype=np.float64)[..., ::-1].copy()
+
+
+def from_xy(points):
+    """(x, y) -> (row, col), the inverse of :func:`to_xy`."""
+    return to_xy(points)
