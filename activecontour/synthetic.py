@@ -37,7 +37,8 @@ def annulus(center, inner, outer):
 
 def rectangle(start, end):
     """The axis-aligned rectangle with corners ``start`` and ``end`` (row, col)."""
-    (r0, c0), (r1, c1) = np.sort([start[0], end[0]]), np.sort([start[1], end[1]])
+    r0, r1 = sorted((start[0], end[0]))
+    c0, c1 = sorted((start[1], end[1]))
     return lambda r, c: (r >= r0) & (r <= r1) & (c >= c0) & (c <= c1)
 
 
