@@ -25,6 +25,8 @@ for three iterations in a row (this ends clean images whose energy tends to zero
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 
 from activecontour import fem
@@ -143,7 +145,7 @@ class _Flow:
     def velocity(self, points, offsets, load):
         """Solve b(V, Y) = -f (6.40) curve by curve."""
         out = np.empty_like(load)
-        for start, stop in zip(offsets[:-1], offsets[1:]):
+        for start, stop in pairwise(offsets):
             h = edge_lengths(points[start:stop])
             diagonal, off = fem.mass_diagonals(h)
             if self.h1:
@@ -189,7 +191,7 @@ def _remesh(points, offsets, spacing):
 
 
 def _split(points, offsets):
-    return [points[a:b].copy() for a, b in zip(offsets[:-1], offsets[1:])]
+    return [points[a:b].copy() for a, b in pairwise(offsets)]
 
 
 def _max_displacement(old, new):
