@@ -53,7 +53,7 @@ class ChanVeseParameters:
     channel) holds them fixed, as the book allows when the intensities are known.
     """
 
-    mu: float = 0.5
+    mu: float = 0.2
     omega: float = 0.0
     lambda_in: float = 1.0
     lambda_out: float = 1.0
@@ -241,7 +241,7 @@ def _load(quadrature, lengths, next_index, params, c_in, c_out):
     return load
 
 
-def chan_vese_energy(image, contours, *, mu=0.5, omega=0.0, lambda_in=1.0, lambda_out=1.0,
+def chan_vese_energy(image, contours, *, mu=0.2, omega=0.0, lambda_in=1.0, lambda_out=1.0,
                      c_in=None, c_out=None, color="gray"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
