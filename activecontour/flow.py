@@ -14,7 +14,7 @@ Per iteration k, on the polygon(s) Gamma^k:
    backtracking until the Armijo condition ``J(X^{k+1}) <= J(X^k) + 1e-4 f . (X^{k+1} - X^k)`` holds.
    The first trial moves the fastest vertex by ``max_step`` pixels (at most twice the last accepted
    dt), so a step is scale-free: it does not depend on the image contrast.
-4. Mesh health: when an edge is shorter than a quarter or longer than twice ``spacing``, the curve
+4. Mesh health: when an edge is shorter than half or longer than twice ``spacing``, the curve
    is resampled at equal arc length; the resampled curve is kept only if its energy is not above
    the previous iterate's, so the recorded energy sequence never increases.
 
@@ -198,7 +198,7 @@ def _stalled(energies, stage_start, tol):
 def _unhealthy(points, next_index, spacing):
     d = points[next_index] - points
     h = np.hypot(d[:, 0], d[:, 1])
-    return h.max() > 2.0 * spacing or h.min() < 0.25 * spacing
+    return h.max() > 2.0 * spacing or h.min() < 0.5 * spacing
 
 
 def _remesh(points, offsets, spacing):
