@@ -1,0 +1,579 @@
+"""The ``activecontour`` command line: ``segment`` images in a batch, or ``view`` one interactively.
+
+Usage
+-----
+::
+
+    activecontour segment IMAGE [IMAGE ...] [-o DIR] [--format json,geojson,svg,csv,npz]
+                          [--backend {polygon,levelset}] [--mu MU] [--omega OMEGA]
+                          [--lambda-in L] [--lambda-out L] [--max-iter N] [--tol TOL]
+                          [--c-in C] [--c-out C] [--color {gray,vector}]
+                          [--init-circle ROW COL RADIUS | --init-rect ROW0 COL0 ROW1 COL1 |
+                           --init-mask FILE | --init-contours FILE]
+                          [--overlay-color COLOR] [--quiet]
+    activecontour view IMAGE [the same parameter and init options]
+
+``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
+(the contour drawn on the image) and ``<DIR>/<name>_contours.<fmt>`` for each format, where
+``<name>`` is the image's file name without its suffix.  ``DIR`` defaults to the directory of each
+image and is created when missing.  A progress bar is drawn on stderr when it is a terminal; one
+summary line per image goes to stdout (``--quiet`` silences both).
+
+Errors
+------
+Every input is checked before the first image is segmented: the files exist and are images, the
+parameters are valid, the initial curve lies inside each image (an init mask must have its shape),
+the output directory can hold the files, and no output would overwrite an input or another image's
+output.  Any problem prints one line ``activecontour: error: ...`` on stderr and exits with status
+2.  Each image's files are written as a group, all or none (:func:`activecontour.io.save_result`),
+so an interrupted or failed run never leaves a half-written file; images finished before a failure
+keep their complete outputs.  A run that reaches ``--max-iter`` without converging is not an error:
+its summary says ``success=False``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+PROG = "activecontour"
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+#: segment()'s keyword -> command-line option, for the parameters both subcommands share.
+_PARAMETER_OPTIONS = {
+    "backend": "--backend",
+    "mu": "--mu",
+    "omega": "--omega",
+    "lambda_in": "--lambda-in",
+    "lambda_out": "--lambda-out",
+    "max_num_iter": "--max-iter",
+    "tol": "--tol",
+    "c_in": "--c-in",
+    "c_out": "--c-out",
+    "color": "--color",
+}
+
+
+class UsageError(Exception):
+    """Bad input found by the command line itself (reported like the library's ValueError)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line (no usage block), exit status 2."""
+
+    def error(self, message):
+        self.exit(EXIT_USAGE, f"{PROG}: error: {message} (see '{self.prog} --help')\n")
+
+
+def main(argv=None):
+    """Run the command line; return the exit status (0 success, 2 bad input, 130 interrupted).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name; ``sys.argv[1:]`` by default.
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a usage error (2), already printed
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        return args.run(args)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (UsageError, FileNotFoundError, ValueError, TypeError, OSError) as exc:
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+def build_parser():
+    """The argparse parser with the ``segment`` and ``view`` subcommands."""
+    parser = _Parser(
+        prog=PROG,
+        description="Sub-pixel Chan-Vese active contours (The Shapes of Things, section 6.5).",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    segment = commands.add_parser(
+        "segment",
+        help="segment images and write mask, overlay and contour files",
+        description="Segment each IMAGE; write <name>_mask.png, <name>_overlay.png and "
+        "<name>_contours.<fmt> into the output directory.",
+    )
+    segment.add_argument("images", nargs="+", metavar="IMAGE", help="image files (PNG, TIFF, JPEG, ...)")
+    segment.add_argument(
+        "-o", "--output", metavar="DIR", type=Path,
+        help="output directory, created if missing (default: the directory of each image)",
+    )
+    segment.add_argument(
+        "--format", dest="formats", type=_formats, default=["json"], metavar="FMT[,FMT...]",
+        help="contour file formats, a comma-separated list of json, geojson, svg, csv, npz "
+        "(default: json)",
+    )
+    segment.add_argument(
+        "--overlay-color", default="red", metavar="COLOR",
+        help="colour of the contour in the overlay: a name (red, green, blue, yellow, cyan, "
+        "magenta, white, black) or R,G,B in 0..255 (default: red)",
+    )
+    segment.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress bar and no summary lines"
+    )
+    _add_parameter_options(segment)
+    segment.set_defaults(run=_run_segment)
+
+    view = commands.add_parser(
+        "view",
+        help="open the interactive viewer on one image",
+        description="Watch the contour move on IMAGE; change parameters and the initial curve live.",
+    )
+    view.add_argument("image", metavar="IMAGE", help="an image file")
+    view.add_argument(
+        "--format", dest="formats", type=_formats, default=None, metavar="FMT[,FMT...]",
+        help="contour file formats the viewer's Save writes (default: the viewer's)",
+    )
+    _add_parameter_options(view)
+    view.set_defaults(run=_run_view)
+    return parser
+
+
+def _add_parameter_options(parser):
+    defaults = _segment_defaults()
+    group = parser.add_argument_group("parameters of the functional (6.38) and the flow")
+    group.add_argument(
+        "--backend", choices=("polygon", "levelset"), default=defaults["backend"],
+        help="polygon: the book's sub-pixel polygon flow; levelset: the same functional on the "
+        "pixel grid, free topology (default: %(default)s)",
+    )
+    group.add_argument("--mu", type=float, default=defaults["mu"],
+                       help="length weight, >= 0 (default: %(default)s)")
+    group.add_argument("--omega", type=float, default=defaults["omega"],
+                       help="area weight: > 0 shrinks, < 0 grows the inside (default: %(default)s)")
+    group.add_argument("--lambda-in", type=float, default=defaults["lambda_in"],
+                       help="weight of the inside fitting term, > 0 (default: %(default)s)")
+    group.add_argument("--lambda-out", type=float, default=defaults["lambda_out"],
+                       help="weight of the outside fitting term, > 0 (default: %(default)s)")
+    group.add_argument("--max-iter", dest="max_num_iter", type=_nonnegative_int,
+                       default=defaults["max_num_iter"], metavar="N",
+                       help="iteration limit (default: %(default)s)")
+    group.add_argument("--tol", type=_nonnegative_float, default=defaults["tol"],
+                       help="convergence tolerance (default: %(default)s)")
+    group.add_argument("--c-in", type=_constant, default=None, metavar="C",
+                       help="hold the inside intensity fixed: a number, or one per channel "
+                       "separated by commas (default: optimised)")
+    group.add_argument("--c-out", type=_constant, default=None, metavar="C",
+                       help="hold the outside intensity fixed (default: optimised)")
+    group.add_argument("--color", choices=("gray", "vector"), default=defaults["color"],
+                       help="colour images: convert to gray or use every channel "
+                       "(default: %(default)s)")
+    init = parser.add_argument_group(
+        "initial curve (default: a centred circle of radius 3/8 of the smaller side)"
+    ).add_mutually_exclusive_group()
+    init.add_argument("--init-circle", nargs=3, type=float, metavar=("ROW", "COL", "RADIUS"),
+                      help="a circle, in pixels (row, col of its centre)")
+    init.add_argument("--init-rect", nargs=4, type=float, metavar=("ROW0", "COL0", "ROW1", "COL1"),
+                      help="an axis-aligned rectangle with opposite corners (ROW0, COL0), (ROW1, COL1)")
+    init.add_argument("--init-mask", type=Path, metavar="FILE",
+                      help="a mask image of the image's size (nonzero = inside)")
+    init.add_argument("--init-contours", type=Path, metavar="FILE",
+                      help="a contour file written by this tool (.json, .geojson, .svg, .csv, .npz)")
+
+
+# --------------------------------------------------------------------------------------- segment
+
+
+def _run_segment(args):
+    import activecontour
+    from activecontour import io
+
+    settings = _settings(args)
+    init, init_description = _load_init(args)
+    plans = _plan_outputs(args.images, args.output, args.formats)
+    color = _overlay_color(args.overlay_color)
+    for image_path, _ in plans:
+        _check_image(image_path, init, settings)
+    created = _make_directory(args.output)
+    show_progress = not args.quiet and _is_terminal(sys.stderr)
+    init_argument = list(init) if isinstance(init, _ContourInit) else init
+    try:
+        for image_path, stem in plans:
+            image = activecontour.load_image(image_path)
+            progress = _Progress(Path(image_path).name) if show_progress else None
+            started = time.perf_counter()
+            try:
+                result = activecontour.segment(image, init_argument, callback=progress, **settings)
+            finally:
+                if progress is not None:
+                    progress.close()
+            elapsed = time.perf_counter() - started
+            metadata = {
+                "image": os.fspath(image_path),
+                "init": init_description,
+                "parameters": settings,
+                "wall_time_s": elapsed,
+            }
+            written = io.save_result(result, image, stem, args.formats, metadata=metadata,
+                                     color=color, protect=[p for p, _ in plans])
+            if not args.quiet:
+                print(_summary(Path(image_path).name, result, elapsed, written), flush=True)
+    except BaseException:
+        _remove_if_empty(created)
+        raise
+    return 0
+
+
+def _settings(args):
+    """The keyword arguments of activecontour.segment, validated before any work is done."""
+    from activecontour.energy import ChanVeseParameters
+
+    settings = {name: getattr(args, name) for name in _PARAMETER_OPTIONS}
+    try:
+        ChanVeseParameters(settings["mu"], settings["omega"], settings["lambda_in"],
+                           settings["lambda_out"], settings["c_in"], settings["c_out"])
+    except (ValueError, TypeError) as exc:
+        raise UsageError(_with_option_names(str(exc))) from None
+    return settings
+
+
+def _with_option_names(message):
+    """A library message about ``lambda_in`` etc., with the options' spelling added."""
+    for name, option in _PARAMETER_OPTIONS.items():
+        if message.startswith(name + " ") or message.startswith(name + ","):
+            return f"{option}: {message}"
+    return message
+
+
+def _load_init(args):
+    """The init object given to segment (None, a curve, or a mask) and its description."""
+    import activecontour
+    from activecontour import io
+
+    if args.init_circle is not None:
+        row, col, radius = args.init_circle
+        if not all(math.isfinite(v) for v in args.init_circle):
+            raise UsageError("--init-circle: ROW, COL and RADIUS must be finite numbers")
+        if radius <= 0:
+            raise UsageError(f"--init-circle: RADIUS must be > 0, got {radius:g}")
+        return activecontour.circle((row, col), radius), f"circle {row:g} {col:g} {radius:g}"
+    if args.init_rect is not None:
+        row0, col0, row1, col1 = args.init_rect
+        if not all(math.isfinite(v) for v in args.init_rect):
+            raise UsageError("--init-rect: the corners must be finite numbers")
+        if row0 == row1 or col0 == col1:
+            raise UsageError("--init-rect: the rectangle has no area (ROW0 = ROW1 or COL0 = COL1)")
+        return (activecontour.rectangle((row0, col0), (row1, col1)),
+                f"rectangle {row0:g} {col0:g} {row1:g} {col1:g}")
+    if args.init_mask is not None:
+        try:
+            mask = io.read_mask(args.init_mask)
+        except (FileNotFoundError, ValueError) as exc:
+            raise UsageError(f"--init-mask: {_one_line(exc)}") from None
+        if not mask.any():
+            raise UsageError(f"--init-mask: {os.fspath(args.init_mask)!r} is empty (no nonzero pixel)")
+        return mask, f"mask {os.fspath(args.init_mask)}"
+    if args.init_contours is not None:
+        try:
+            curves = io.read_contours(args.init_contours)
+            shape = io.read_metadata(args.init_contours).get("image_shape")
+        except (FileNotFoundError, ValueError) as exc:
+            raise UsageError(f"--init-contours: {_one_line(exc)}") from None
+        if not curves:
+            raise UsageError(f"--init-contours: {os.fspath(args.init_contours)!r} holds no contour")
+        return _ContourInit(curves, shape), f"contours {os.fspath(args.init_contours)}"
+    return None, "default"
+
+
+class _ContourInit(list):
+    """Curves read from a contour file, remembering the shape of the image they were made on."""
+
+    def __init__(self, curves, shape):
+        super().__init__(curves)
+        self.image_shape = tuple(shape) if shape is not None else None
+
+
+def _plan_outputs(images, output, formats):
+    """[(image path, output stem)], after checking no output overwrites an input or another one."""
+    from activecontour.io import output_paths
+
+    if output is not None and os.path.exists(output) and not os.path.isdir(output):
+        raise UsageError(f"output path {os.fspath(output)!r} exists and is not a directory")
+    plans, owners = [], {}
+    inputs = {}
+    for image_path in images:
+        inputs.setdefault(os.path.realpath(image_path), image_path)
+    for image_path in inputs.values():  # the same file named twice is segmented once
+        directory = Path(output) if output is not None else Path(image_path).parent
+        if directory.is_dir() and not os.access(directory, os.W_OK | os.X_OK):
+            raise UsageError(f"the output directory {os.fspath(directory)!r} is not writable")
+        stem = directory / Path(image_path).stem
+        for path in output_paths(stem, formats):
+            key = os.path.realpath(path)
+            if key in inputs:
+                raise UsageError(
+                    f"the output {os.fspath(path)!r} of {image_path!r} would overwrite the input "
+                    f"{inputs[key]!r}; choose another --output directory"
+                )
+            if key in owners and owners[key] != image_path:
+                raise UsageError(
+                    f"{owners[key]!r} and {image_path!r} would both write {os.fspath(path)!r}; "
+                    "rename one or segment them into different --output directories"
+                )
+            owners[key] = image_path
+        plans.append((image_path, stem))
+    return plans
+
+
+def _check_image(image_path, init, settings):
+    """Load the image and check that it and the init are usable (no segmentation yet)."""
+    import activecontour
+    from activecontour.image import normalize_image
+    from activecontour.initial import initial_curves
+
+    image = activecontour.load_image(image_path)
+    try:
+        channels = normalize_image(image, color=settings["color"]).shape[2]
+    except (ValueError, TypeError) as exc:
+        raise UsageError(f"{image_path}: {_one_line(exc)}") from None
+    for name in ("c_in", "c_out"):
+        count = len(settings[name]) if isinstance(settings[name], list) else 1
+        if count not in (1, channels):
+            raise UsageError(
+                f"{_PARAMETER_OPTIONS[name]} has {count} values, but {image_path!r} has {channels} "
+                f"channel(s) with --color {settings['color']}"
+            )
+    shape = image.shape[:2]
+    if isinstance(init, _ContourInit) and init.image_shape is not None:
+        if tuple(init.image_shape) != tuple(shape):
+            raise UsageError(
+                f"--init-contours were made on an image of shape {tuple(init.image_shape)}, but "
+                f"{image_path!r} has shape {tuple(shape)}"
+            )
+    try:
+        initial_curves(list(init) if isinstance(init, _ContourInit) else init, shape)
+    except (ValueError, TypeError) as exc:
+        raise UsageError(f"{image_path}: {_one_line(exc)}") from None
+
+
+def _make_directory(output):
+    """Create the output directory if needed; return the topmost directory this run created."""
+    if output is None or os.path.isdir(output):
+        return None
+    topmost = Path(os.path.abspath(output))
+    while not topmost.parent.exists():
+        topmost = topmost.parent
+    try:
+        os.makedirs(output)
+    except OSError as exc:
+        raise UsageError(f"cannot create the output directory {os.fspath(output)!r}: "
+                         f"{exc.strerror or exc}") from None
+    return (Path(os.path.abspath(output)), topmost)
+
+
+def _remove_if_empty(created):
+    """Remove the directories this run created, from the leaf up, if nothing was written in them."""
+    if created is None:
+        return
+    leaf, topmost = created
+    for directory in [leaf, *leaf.parents]:
+        try:
+            os.rmdir(directory)  # only succeeds on an empty directory
+        except OSError:
+            return
+        if directory == topmost:
+            return
+
+
+def _overlay_color(text):
+    from activecontour.io import COLORS
+
+    if text.lower() in COLORS:
+        return text.lower()
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(0 <= v <= 255 for v in values):
+        raise UsageError(
+            f"--overlay-color must be one of {', '.join(COLORS)} or R,G,B in 0..255, got {text!r}"
+        )
+    return values
+
+
+def _summary(name, result, elapsed, written):
+    stem = os.path.commonprefix([os.fspath(p) for p in written])
+    return (
+        f"{name}: iterations={result.n_iter} energy={result.energy:.6g} "
+        f"c_in={_format_constant(result.c_in)} c_out={_format_constant(result.c_out)} "
+        f"time={elapsed:.2f}s success={result.success} output={stem}*"
+    )
+
+
+def _format_constant(value):
+    try:
+        return f"{float(value):.4g}"
+    except TypeError:
+        return ",".join(f"{float(v):.4g}" for v in value)
+
+
+class _Progress:
+    """A one-line text progress bar on stderr, redrawn in place at most ten times a second."""
+
+    width = 30
+
+    def __init__(self, name, stream=None):
+        self.name = name
+        self.stream = stream if stream is not None else sys.stderr
+        self._last = 0.0
+        self._drawn = False
+
+    def __call__(self, state):
+        now = time.monotonic()
+        if now - self._last < 0.1 and state.iteration < state.max_num_iter:
+            return None
+        self._last = now
+        total = max(int(state.max_num_iter), 1)
+        filled = min(self.width, int(self.width * state.iteration / total))
+        bar = "#" * filled + "-" * (self.width - filled)
+        self.stream.write(
+            f"\r{self.name} [{bar}] {state.iteration}/{state.max_num_iter} "
+            f"energy {state.energy:<12.6g}"
+        )
+        self.stream.flush()
+        self._drawn = True
+        return None
+
+    def close(self):
+        if self._drawn:
+            self.stream.write("\r\033[K")  # clear the line for the summary
+            self.stream.flush()
+
+
+# ------------------------------------------------------------------------------------------ view
+
+
+def _run_view(args):
+    import activecontour
+    from activecontour.initial import initial_curves
+
+    settings = _settings(args)
+    init, _ = _load_init(args)
+    image = activecontour.load_image(args.image)
+    shape = image.shape[:2]
+    if isinstance(init, _ContourInit):
+        init = list(init)
+    if init is not None:
+        try:
+            initial_curves(init, shape)
+        except (ValueError, TypeError) as exc:
+            raise UsageError(f"{args.image}: {_one_line(exc)}") from None
+    try:
+        from app import viewer
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("app.viewer",):
+            raise
+        raise UsageError("the interactive viewer (app.viewer) is not installed") from None
+    launch = viewer.launch
+    accepted = inspect.signature(launch).parameters
+    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())
+    defaults = _segment_defaults()
+    kwargs = {"init": init}
+    for name, value in settings.items():
+        if takes_any or name in accepted:
+            kwargs[name] = value
+        elif value != defaults.get(name):
+            raise UsageError(f"the viewer does not take {_PARAMETER_OPTIONS[name]}")
+    if args.formats is not None:
+        if not (takes_any or "formats" in accepted):
+            raise UsageError("the viewer does not take --format")
+        kwargs["formats"] = tuple(args.formats)
+    status = launch(args.image, **kwargs)
+    return 0 if status is None else int(status)
+
+
+# --------------------------------------------------------------------------------------- helpers
+
+
+def _segment_defaults():
+    """segment()'s default values, so the options and the library never disagree."""
+    import importlib
+
+    # the module, not the package attribute of the same name (the function, which may be wrapped)
+    segment = importlib.import_module("activecontour.segment").segment
+    parameters = inspect.signature(segment).parameters
+    return {name: parameters[name].default for name in _PARAMETER_OPTIONS}
+
+
+def _version():
+    import activecontour
+
+    return activecontour.__version__
+
+
+def _formats(text):
+    from activecontour.io import CONTOUR_FORMATS
+
+    formats = [f.strip().lower().lstrip(".") for f in text.split(",") if f.strip()]
+    if not formats:
+        raise argparse.ArgumentTypeError("give at least one format")
+    unknown = [f for f in formats if f not in CONTOUR_FORMATS]
+    if unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown format {unknown[0]!r}; choose from {', '.join(CONTOUR_FORMATS)}"
+        )
+    return list(dict.fromkeys(formats))
+
+
+def _nonnegative_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def _nonnegative_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def _constant(text):
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a number or comma-separated numbers, got {text!r}"
+        ) from None
+    if not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite numbers, got {text!r}")
+    return values[0] if len(values) == 1 else values
+
+
+def _one_line(exc):
+    text = str(exc)
+    if isinstance(exc, KeyError) and exc.args:
+        text = str(exc.args[0])
+    if isinstance(exc, OSError) and exc.strerror and exc.filename:
+        text = f"{exc.strerror}: {exc.filename!r}"
+    return " ".join(text.split()) or type(exc).__name__
+
+
+def _is_terminal(stream):
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False

@@ -1,0 +1,283 @@
+"""The command line end to end: outputs, summary, progress, and one-line errors with exit status 2."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import app
+from activecontour import io, synthetic
+from app import cli
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_images"
+SIZE = (48, 64)
+CENTER, RADIUS = (23.0, 33.5), 13.0
+
+
+@pytest.fixture
+def small(tmp_path):
+    """A small noisy disk image (PNG) in its own folder, and its ground truth."""
+    image, truth = synthetic.render(synthetic.disk(CENTER, RADIUS), SIZE, inside=0.75, outside=0.25)
+    image = synthetic.add_noise(image, 0.05, seed=5)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    path = folder / "disk.png"
+    cv2.imwrite(str(path), np.round(np.clip(image, 0, 1) * 255).astype(np.uint8))
+    return path, truth
+
+
+def run(capsys, *argv):
+    status = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def summary_fields(line):
+    return dict(re.findall(r"(\w+)=(\S+)", line))
+
+
+def assert_one_line_error(status, err, *words):
+    assert status == 2
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("activecontour: error: ")
+    assert "Traceback" not in err
+    for word in words:
+        assert word.lower() in lines[0].lower(), lines[0]
+
+
+def test_segment_sample_image_end_to_end(tmp_path, capsys):
+    out = tmp_path / "out"
+    image = SAMPLES / "disk_noisy.png"
+    status, stdout, stderr = run(capsys, "segment", image, "-o", out, "--format", "json,geojson")
+    assert status == 0 and stderr == ""
+    expected = ["disk_noisy_contours.geojson", "disk_noisy_contours.json", "disk_noisy_mask.png",
+                "disk_noisy_overlay.png"]
+    assert sorted(os.listdir(out)) == expected
+    (line,) = stdout.splitlines()
+    assert line.startswith("disk_noisy.png: ")
+    fields = summary_fields(line)
+    meta = io.read_metadata(out / "disk_noisy_contours.json")
+    assert int(fields["iterations"]) == meta["n_iter"]
+    assert float(fields["c_in"]) == pytest.approx(meta["c_in"], rel=1e-3)
+    assert fields["success"] == "True" and fields["time"].endswith("s")
+    mask = io.read_mask(out / "disk_noisy_mask.png")
+    assert synthetic.dice(mask, io.read_mask(SAMPLES / "disk_noisy_truth.png")) > 0.95
+    overlay = cv2.imread(str(out / "disk_noisy_overlay.png"))
+    assert overlay.shape == mask.shape + (3,)
+    contours = io.read_contours(out / "disk_noisy_contours.geojson")
+    assert all(np.array_equal(a, b) for a, b in
+               zip(contours, io.read_contours(out / "disk_noisy_contours.json"), strict=True))
+
+
+def test_default_output_is_next_to_the_image_and_quiet_prints_nothing(small, capsys):
+    path, truth = small
+    status, stdout, stderr = run(capsys, "segment", path, "--quiet", "--mu", "0.2")
+    assert (status, stdout, stderr) == (0, "", "")
+    assert sorted(os.listdir(path.parent)) == ["disk.png", "disk_contours.json", "disk_mask.png",
+                                               "disk_overlay.png"]
+    assert synthetic.dice(io.read_mask(path.parent / "disk_mask.png"), truth) > 0.95
+    meta = io.read_metadata(path.parent / "disk_contours.json")
+    assert meta["parameters"]["mu"] == 0.2 and meta["image"] == str(path)
+
+
+@pytest.mark.parametrize("init", ["circle", "rect", "mask", "contours"])
+def test_each_kind_of_initial_curve(small, tmp_path, capsys, init):
+    path, truth = small
+    if init == "circle":
+        options = ["--init-circle", 20, 30, 8]
+    elif init == "rect":
+        options = ["--init-rect", 5, 5, 42, 60]
+    elif init == "mask":
+        io.write_mask(tmp_path / "init.png", synthetic.render(synthetic.disk(CENTER, 8.0), SIZE)[1])
+        options = ["--init-mask", tmp_path / "init.png"]
+    else:
+        io.write_contours(tmp_path / "init.json", [np.array([[10.0, 20.0], [35.0, 20.0], [35.0, 45.0]])],
+                          image_shape=SIZE)
+        options = ["--init-contours", tmp_path / "init.json"]
+    status, _, stderr = run(capsys, "segment", path, "-o", tmp_path / "out", *options)
+    assert status == 0, stderr
+    assert synthetic.dice(io.read_mask(tmp_path / "out" / "disk_mask.png"), truth) > 0.95
+
+
+def test_the_same_image_named_twice_is_segmented_once(small, tmp_path, capsys):
+    path, _ = small
+    same = path.parent / ".." / path.parent.name / path.name
+    status, stdout, _ = run(capsys, "segment", path, same, "-o", tmp_path / "out")
+    assert status == 0 and len(stdout.splitlines()) == 1
+
+
+def test_progress_bar_only_on_a_terminal(small, tmp_path, capsys, monkeypatch):
+    path, _ = small
+    monkeypatch.setattr(cli, "_is_terminal", lambda stream: True)
+    status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "a", "--max-iter", 3)
+    assert status == 0
+    assert "\r" in stderr and "[" in stderr and "/3" in stderr
+    assert len(stdout.splitlines()) == 1
+    status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "b", "--quiet")
+    assert (status, stdout, stderr) == (0, "", "")
+
+
+def bad_text_image(folder):
+    path = folder / "text.png"
+    path.write_text("this is not an image\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    "case, words",
+    [
+        ("missing file", ["not found", "missing.png"]),
+        ("unreadable file", ["cannot read", "text.png"]),
+        ("init mask of the wrong shape", ["shape"]),
+        ("negative mu", ["--mu", ">= 0"]),
+        ("nan parameter", ["omega", "finite"]),
+        ("init circle outside", ["outside the image"]),
+        ("zero radius", ["radius"]),
+        ("unknown format", ["unknown format", "xml"]),
+        ("negative max-iter", ["--max-iter"]),
+        ("output is a file", ["not a directory"]),
+        ("output under a file", ["not a directory"]),
+        ("good then missing", ["not found"]),
+        ("same output twice", ["both write"]),
+        ("output overwrites an input", ["overwrite"]),
+        ("no image", ["required"]),
+        ("missing init mask", ["--init-mask", "not found"]),
+        ("c_in per channel of a gray image", ["--c-in", "2 values"]),
+    ],
+)
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(small, tmp_path, capsys, case, words):
+    path, _ = small
+    out = tmp_path / "out"
+    argv = ["segment", path, "-o", out]
+    if case == "missing file":
+        argv[1] = tmp_path / "missing.png"
+    elif case == "unreadable file":
+        argv[1] = bad_text_image(tmp_path)
+    elif case == "init mask of the wrong shape":
+        io.write_mask(tmp_path / "m.png", np.ones((SIZE[0] + 1, SIZE[1]), bool))
+        argv += ["--init-mask", tmp_path / "m.png"]
+    elif case == "negative mu":
+        argv += ["--mu", "-1"]
+    elif case == "nan parameter":
+        argv += ["--omega", "nan"]
+    elif case == "init circle outside":
+        argv += ["--init-circle", 500, 500, 10]
+    elif case == "zero radius":
+        argv += ["--init-circle", 20, 20, 0]
+    elif case == "unknown format":
+        argv += ["--format", "json,xml"]
+    elif case == "negative max-iter":
+        argv += ["--max-iter", "-3"]
+    elif case == "output is a file":
+        out.write_text("a file where the directory should be")
+    elif case == "output under a file":
+        (tmp_path / "file").write_text("")
+        argv[3] = out = tmp_path / "file" / "out"
+    elif case == "good then missing":
+        argv.insert(2, tmp_path / "missing.png")
+    elif case == "same output twice":
+        other = tmp_path / "other"
+        other.mkdir()
+        shutil.copy(path, other / "disk.png")
+        argv.insert(2, other / "disk.png")
+    elif case == "output overwrites an input":
+        shutil.copy(path, path.parent / "disk_mask.png")
+        argv = ["segment", path, path.parent / "disk_mask.png"]
+    elif case == "no image":
+        argv = ["segment"]
+    elif case == "missing init mask":
+        argv += ["--init-mask", tmp_path / "nope.png"]
+    elif case == "c_in per channel of a gray image":
+        argv += ["--c-in", "0.2,0.3"]
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    status, stdout, stderr = run(capsys, *argv)
+    assert_one_line_error(status, stderr, *words)
+    assert stdout == ""
+    after = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    assert after == before  # nothing written, nothing overwritten
+    assert not out.is_dir()
+
+
+@pytest.mark.parametrize("stage", ["segment", "write"])
+def test_a_failure_while_running_leaves_no_file_and_no_new_directory(small, tmp_path, capsys,
+                                                                      monkeypatch, stage):
+    path, _ = small
+    if stage == "segment":
+        def failing_segment(*args, **kwargs):
+            raise ValueError("the flow found a problem")
+
+        monkeypatch.setattr("activecontour.segment", failing_segment)
+    else:
+        real_replace = os.replace
+
+        def failing_replace(src, dst):
+            if str(dst).endswith("_contours.json"):
+                raise OSError(28, "No space left on device", str(dst))
+            return real_replace(src, dst)
+
+        monkeypatch.setattr(os, "replace", failing_replace)
+    status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "new" / "deeper")
+    assert_one_line_error(status, stderr, "problem" if stage == "segment" else "no space")
+    assert stdout == ""
+    assert not (tmp_path / "new").exists()
+
+
+def test_help_exits_0(capsys):
+    status, stdout, _ = run(capsys, "segment", "--help")
+    assert status == 0 and "--init-circle" in stdout and "--lambda-in" in stdout
+
+
+def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
+    path, _ = small
+    calls = []
+
+    def launch(image_path, *, backend="polygon", mu=0.5, omega=0.0, lambda_in=1.0, lambda_out=1.0,
+               max_num_iter=500, tol=1e-3, init=None):
+        calls.append(dict(image_path=image_path, backend=backend, mu=mu, max_num_iter=max_num_iter,
+                          init=init))
+        return 0
+
+    viewer = types.ModuleType("app.viewer")
+    viewer.launch = launch
+    monkeypatch.setitem(sys.modules, "app.viewer", viewer)
+    monkeypatch.setattr(app, "viewer", viewer, raising=False)
+    status, _, stderr = run(capsys, "view", path, "--mu", "0.25", "--max-iter", "40",
+                            "--init-circle", 20, 30, 8)
+    assert status == 0, stderr
+    (call,) = calls
+    assert call["image_path"] == str(path) and call["mu"] == 0.25 and call["max_num_iter"] == 40
+    assert np.allclose(np.hypot(call["init"][:, 0] - 20, call["init"][:, 1] - 30), 8.0)
+    # an option the viewer does not take is refused rather than silently dropped
+    status, _, stderr = run(capsys, "view", path, "--c-in", "0.5")
+    assert_one_line_error(status, stderr, "--c-in")
+    status, _, stderr = run(capsys, "view", path.parent / "missing.png")
+    assert_one_line_error(status, stderr, "not found")
+    assert len(calls) == 1
+
+
+def test_installed_console_script(small, tmp_path):
+    executable = shutil.which("activecontour")
+    if executable is None:
+        pytest.skip("the activecontour console script is not installed (pip install -e .)")
+    path, truth = small
+    completed = subprocess.run(
+        [executable, "segment", str(path), "-o", str(tmp_path / "out"), "--format", "csv"],
+        capture_output=True, text=True, timeout=120, check=False,
+    )
+    assert completed.returncode == 0, completed.stderr
+    assert completed.stdout.startswith("disk.png: ") and len(completed.stdout.splitlines()) == 1
+    assert sorted(os.listdir(tmp_path / "out")) == ["disk_contours.csv", "disk_mask.png",
+                                                    "disk_overlay.png"]
+    assert synthetic.dice(io.read_mask(tmp_path / "out" / "disk_mask.png"), truth) > 0.95
+    csv_rows = (tmp_path / "out" / "disk_contours.csv").read_text().splitlines()
+    meta = json.loads(csv_rows[1].split(":", 1)[1])
+    assert meta["image_shape"] == list(SIZE)
