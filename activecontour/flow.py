@@ -31,10 +31,10 @@ from itertools import pairwise
 
 import numpy as np
 
-from activecontour import fem
-from activecontour.curve import edge_lengths, resample
+from activecontour import fem, topology
+from activecontour.curve import edge_lengths, resample, signed_area
 from activecontour.energy import evaluate, stack_curves
-from activecontour.initial import initial_curves
+from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
 
@@ -46,11 +46,15 @@ _MAX_HALVINGS = 40
 _PATIENCE = 3
 _ENERGY_WINDOW = 5
 _SMOOTHING_FACTOR = 4.0
+_MIN_EDGE = 1e-9
+_NUCLEATION_RADIUS = 4.0
+_NUCLEATION_ROUNDS = 4
+_NUCLEATION_TRIALS = 30
 _REMESH_COOLDOWN = 10
 
 
 def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocity="h1", spacing=1.0,
-                    max_step=2.0, smoothing=30.0, min_smoothing=1.0):
+                    max_step=2.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True):
     """Minimise (6.38) by the H^1 gradient flow of a polygon (``backend="polygon"``).
 
     Called by :func:`activecontour.segment`; the keywords after ``callback`` are its ``options``.
@@ -79,6 +83,15 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
         pixels and fills corners slowly.  Coarse to fine gets both: the curve reaches the object
         in a few tens of iterations and then settles into its details.
 
+    min_area : float
+        Curves enclosing less than this many square pixels are removed (when that does not raise
+        the energy), e.g. circles of a grid start that shrink away on the background.
+    nucleate : bool
+        When the flow has converged, look for holes and new components that lower the energy
+        (the topological derivative, :func:`activecontour.topology.nucleation_sites`), insert
+        small circles there and continue; repeated at most a few times.  This is how a single
+        initial curve finds a hole or a second object it cannot reach by deformation.
+
     Returns
     -------
     SegmentationResult
@@ -93,48 +106,54 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
             f"smoothing and min_smoothing must be pixel lengths with smoothing >= min_smoothing >= 0, "
             f"got {smoothing!r} and {min_smoothing!r}"
         )
+    if not (np.isfinite(min_area) and min_area >= 0):
+        raise ValueError(f"min_area must be a number of square pixels >= 0, got {min_area!r}")
     shape = model.shape
-    curves = [resample(c, spacing) for c in initial_curves(init, shape)]
-    points, next_index, offsets = stack_curves(curves)
-    current = evaluate(model, points, next_index, params, gradient=True)
+    geometry = stack_curves([resample(c, spacing) for c in initial_curves(init, shape)])
+    current = evaluate(model, *geometry[:2], params, gradient=True)
     if not np.isfinite(current.energy):
         raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")
-    flow = _Flow(model, params, velocity, smoothing, max_step, model.bounds)
+    flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds)
     energies = [current.energy]
-    status, n_iter, quiet, last_remesh, stage_start = 1, 0, 0, -_REMESH_COOLDOWN, 0
+    status, n_iter, quiet, last_remesh, stage_start, rounds = 1, 0, 0, -_REMESH_COOLDOWN, 0, 0
     for k in range(max_num_iter):
-        step = flow.step(points, next_index, offsets, current)
+        step = flow.step(geometry, current)
         if step is None:
             status = 4
             break
-        new_points, new = step
-        if _unhealthy(new_points, next_index, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
+        new_geometry, new = flow.drop_small(*step)
+        if new is None:
+            geometry, status = new_geometry, 3
+            break
+        if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
             last_remesh = k
-            remeshed = _remesh(new_points, offsets, spacing)
+            remeshed = stack_curves([resample(c, spacing) for c in _split(*new_geometry[::2])])
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
-                (new_points, next_index, offsets), new = remeshed, candidate
-        displacement = (_max_displacement(points, new_points) if new_points.shape == points.shape
-                        else np.inf)  # a remeshed curve has no vertex-to-vertex displacement
-        points, current, n_iter = new_points, new, k + 1
+                new_geometry, new = remeshed, candidate
+        displacement = _max_displacement(geometry, new_geometry)
+        geometry, current, n_iter = new_geometry, new, k + 1
         energies.append(current.energy)
         quiet = quiet + 1 if displacement < tol else 0
-        if current.area < 1.0:
-            status = 3
-            break
         if callback is not None:
-            state = FlowState(n_iter, _split(points, offsets), current.energy, current.c_in,
+            state = FlowState(n_iter, _split(*geometry[::2]), current.energy, current.c_in,
                               current.c_out, shape, max_num_iter)
             if callback(state):
                 status = 2
                 break
         if quiet >= _PATIENCE or _stalled(energies, stage_start, tol):
-            if flow.smoothing <= min_smoothing or not flow.h1:
+            if flow.smoothing > min_smoothing and flow.h1:
+                flow.refine(min_smoothing)
+            elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
+                rounds += 1
+                geometry, current = grown
+                energies[-1] = current.energy  # part of this iteration's update: lower still
+                flow.restart(smoothing)
+            else:
                 status = 0
                 break
-            flow.refine(min_smoothing)
             quiet, stage_start = 0, len(energies) - 1
-    contours = _split(points, offsets)
+    contours = _split(*geometry[::2])
     return SegmentationResult(
         mask=rasterize(contours, shape), contours=contours, c_in=current.c_in, c_out=current.c_out,
         energy=current.energy, energies=energies, n_iter=n_iter, status=status, backend="polygon",
@@ -142,13 +161,14 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
 
 
 class _Flow:
-    """One time step (6.30)-(6.31) with backtracking; remembers the last accepted dt."""
+    """One time step (6.30)-(6.31) with backtracking and topology repair; remembers the last dt."""
 
-    def __init__(self, model, params, velocity, smoothing, max_step, bounds):
+    def __init__(self, model, params, velocity, smoothing, max_step, min_area, bounds):
         self.model, self.params = model, params
         self.h1 = velocity == "h1"
         self.smoothing = smoothing
         self.max_step = max_step
+        self.min_area = min_area
         self.low, self.high = bounds
         self.dt = np.inf
 
@@ -156,7 +176,8 @@ class _Flow:
         """Solve b(V, Y) = -f (6.40) curve by curve."""
         out = np.empty_like(load)
         for start, stop in pairwise(offsets):
-            h = edge_lengths(points[start:stop])
+            # a crossing repair can leave an edge of (nearly) zero length: keep 1/h finite
+            h = np.maximum(edge_lengths(points[start:stop]), _MIN_EDGE)
             diagonal, off = fem.mass_diagonals(h)
             if self.h1:
                 stiff_diagonal, stiff_off = fem.stiffness_diagonals(h)
@@ -167,11 +188,58 @@ class _Flow:
 
     def refine(self, min_smoothing):
         """Next, finer smoothing length; the step memory restarts with the new metric."""
-        self.smoothing = max(min_smoothing, self.smoothing / _SMOOTHING_FACTOR)
+        self.restart(max(min_smoothing, self.smoothing / _SMOOTHING_FACTOR))
+
+    def restart(self, smoothing):
+        self.smoothing = smoothing
         self.dt = np.inf
 
-    def step(self, points, next_index, offsets, current):
-        """Return (new points, their Evaluation), or None when no descent step exists."""
+    def nucleate(self, geometry, current):
+        """Add the small holes/components that the topological derivative proposes, if J drops.
+
+        All proposed circles are tried together, then (if that does not lower the energy) one at
+        a time, best first.  Returns (geometry, evaluation) or None.
+        """
+        curves = _split(*geometry[::2])
+        inside = rasterize(curves, self.model.shape)
+        sites = topology.nucleation_sites(self.model.values, inside, self.params, current.c_in,
+                                          current.c_out, _NUCLEATION_RADIUS)
+        seeds = [circle(center, _NUCLEATION_RADIUS)[:: -1 if hole else 1] for center, hole in sites]
+        best = None
+        for chosen in ([seeds], [[seed] for seed in seeds[:_NUCLEATION_TRIALS]]):
+            accepted = []
+            for group in chosen:
+                trial = self._settle(curves + accepted + group)
+                if trial is None:
+                    continue
+                reference = best[1].energy if best else current.energy
+                if trial[1].energy < reference:
+                    best = trial
+                    accepted += group
+            if best is not None:
+                return best
+        return None
+
+    def _settle(self, curves):
+        """Stack curves, resolving any overlap, and evaluate them."""
+        geometry = stack_curves(curves)
+        repaired = topology.repair(*geometry, min_area=self.min_area)
+        if repaired is not None:
+            if not repaired:
+                return None
+            geometry = stack_curves(repaired)
+        new = evaluate(self.model, *geometry[:2], self.params, gradient=True)
+        return (geometry, new) if np.isfinite(new.energy) else None
+
+    def step(self, geometry, current):
+        """Return (new geometry, its Evaluation), or None when no descent step exists.
+
+        A trial whose edges cross is replaced by the boundary of {w > 0}
+        (:func:`activecontour.topology.repair`) before the energy test, so a step that splits,
+        merges or opens a hole is accepted only if the repaired curves satisfy the same descent
+        condition as any other step.
+        """
+        points, next_index, offsets = geometry
         v = self.velocity(points, offsets, current.load)
         speed = np.hypot(v[:, 0], v[:, 1]).max()
         if not speed > 0:
@@ -179,13 +247,36 @@ class _Flow:
         dt = min(self.max_step / speed, 2.0 * self.dt)
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
-            new = evaluate(self.model, trial, next_index, self.params, gradient=True)
             predicted = np.sum(current.load * (trial - points))
-            if new.energy <= current.energy + _ARMIJO * predicted and predicted < 0:
-                self.dt = dt
-                return trial, new
+            candidate = (trial, next_index, offsets)
+            repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
+            if repaired is not None:
+                candidate = stack_curves(repaired) if repaired else None
+            if candidate is not None and predicted < 0:
+                new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
+                if new.energy <= current.energy + _ARMIJO * predicted:
+                    self.dt = dt
+                    return candidate, new
             dt *= 0.5
         return None
+
+    def drop_small(self, geometry, current):
+        """Remove curves enclosing less than ``min_area`` when that does not raise the energy.
+
+        Returns the geometry and its evaluation, or (geometry, None) when nothing is left inside.
+        """
+        points, _, offsets = geometry
+        curves = _split(points, offsets)
+        keep = [c for c in curves if abs(signed_area(c)) >= self.min_area]
+        if len(keep) == len(curves):
+            return geometry, current
+        if not keep or sum(signed_area(c) for c in keep) <= 0:
+            return geometry, (None if current.area < self.min_area else current)
+        reduced = stack_curves(keep)
+        candidate = evaluate(self.model, *reduced[:2], self.params, gradient=True)
+        if candidate.energy <= current.energy:
+            return reduced, candidate
+        return geometry, current
 
 
 def _stalled(energies, stage_start, tol):
@@ -195,14 +286,11 @@ def _stalled(energies, stage_start, tol):
     return decrease < tol * max(abs(energies[-1]), 1e-300)
 
 
-def _unhealthy(points, next_index, spacing):
+def _unhealthy(geometry, spacing):
+    points, next_index, _ = geometry
     d = points[next_index] - points
     h = np.hypot(d[:, 0], d[:, 1])
     return h.max() > 2.0 * spacing or h.min() < 0.5 * spacing
-
-
-def _remesh(points, offsets, spacing):
-    return stack_curves([resample(c, spacing) for c in _split(points, offsets)])
 
 
 def _split(points, offsets):
@@ -210,5 +298,8 @@ def _split(points, offsets):
 
 
 def _max_displacement(old, new):
-    d = new - old
+    """Largest vertex displacement, or inf when remeshing or a repair changed the vertices."""
+    if old[0].shape != new[0].shape or not np.array_equal(old[2], new[2]):
+        return np.inf
+    d = new[0] - old[0]
     return float(np.hypot(d[:, 0], d[:, 1]).max())
