@@ -51,6 +51,8 @@ class ChanVeseParameters:
 
     ``c_in``/``c_out`` of None are updated by (6.42) at every evaluation; a number (or one per
     channel) holds them fixed, as the book allows when the intensities are known.
+    ``lambda_in``/``lambda_out`` are numbers or, for a vector-valued image, one weight per channel
+    (Chan, Sandberg and Vese 2000).
     """
 
     mu: float = 0.2
@@ -63,13 +65,18 @@ class ChanVeseParameters:
     def __post_init__(self):
         for name in ("mu", "omega", "lambda_in", "lambda_out"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+            if name.startswith("lambda") and isinstance(value, (list, tuple, np.ndarray)):
+                value = np.asarray(value, dtype=np.float64)
+                if value.ndim != 1 or value.size == 0:
+                    raise ValueError(f"{name} must be a number or one number per channel")
+                object.__setattr__(self, name, value)
+            elif isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
                 raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-            if not np.isfinite(value):
+            if not np.all(np.isfinite(value)):
                 raise ValueError(f"{name} must be finite, got {value}")
         if self.mu < 0:
             raise ValueError(f"mu must be >= 0 (length weight), got {self.mu}")
-        if self.lambda_in <= 0 or self.lambda_out <= 0:
+        if np.any(self.lambda_in <= 0) or np.any(self.lambda_out <= 0):
             raise ValueError(
                 f"lambda_in and lambda_out must be > 0, got {self.lambda_in}, {self.lambda_out}"
             )
@@ -80,6 +87,16 @@ class ChanVeseParameters:
                 if arr.ndim != 1 or not np.all(np.isfinite(arr)):
                     raise ValueError(f"{name} must be None, a finite number or one per channel")
                 object.__setattr__(self, name, arr)
+
+    def weights(self, n_channels):
+        """(lambda_in, lambda_out), each broadcast to one weight per channel."""
+        out = []
+        for name in ("lambda_in", "lambda_out"):
+            value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
+            if value.size not in (1, n_channels):
+                raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} channels")
+            out.append(np.broadcast_to(value, (n_channels,)))
+        return out
 
     def constant(self, name, n_channels):
         """The fixed constant ``name`` broadcast to ``n_channels``, or None when optimised."""
@@ -206,16 +223,10 @@ def evaluate(model, points, next_index, params, *, gradient=False):
         c_in = s1 / area
     if c_out is None:
         c_out = (total1 - s1) / outside_area
-    inside = np.sum(s2 - 2.0 * c_in * s1 + c_in * c_in * area)
-    outside = np.sum(
-        (total2 - s2) - 2.0 * c_out * (total1 - s1) + c_out * c_out * outside_area
-    )
-    energy = (
-        params.mu * length
-        + params.omega * area
-        + params.lambda_in * inside
-        + params.lambda_out * outside
-    )
+    lambda_in, lambda_out = params.weights(channels)
+    inside = lambda_in @ (s2 - 2.0 * c_in * s1 + c_in * c_in * area)
+    outside = lambda_out @ ((total2 - s2) - 2.0 * c_out * (total1 - s1) + c_out * c_out * outside_area)
+    energy = params.mu * length + params.omega * area + inside + outside
     result = Evaluation(float(energy), c_in, c_out, area, length)
     if gradient:
         result.load = _load(quadrature, lengths, next_index, params, c_in, c_out)
@@ -225,11 +236,8 @@ def evaluate(model, points, next_index, params, *, gradient=False):
 def _load(quadrature, lengths, next_index, params, c_in, c_out):
     edge, t, weights, delta, intensity = quadrature
     n_edges = len(delta)
-    integrand = (
-        params.omega
-        + params.lambda_in * np.sum((intensity - c_in) ** 2, axis=1)
-        - params.lambda_out * np.sum((intensity - c_out) ** 2, axis=1)
-    )
+    lambda_in, lambda_out = params.weights(intensity.shape[1])
+    integrand = params.omega + ((intensity - c_in) ** 2) @ lambda_in - ((intensity - c_out) ** 2) @ lambda_out
     weighted = weights * integrand
     at_start = np.bincount(edge, weighted * (1.0 - t), minlength=n_edges)
     at_end = np.bincount(edge, weighted * t, minlength=n_edges)

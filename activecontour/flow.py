@@ -109,7 +109,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     if not (np.isfinite(min_area) and min_area >= 0):
         raise ValueError(f"min_area must be a number of square pixels >= 0, got {min_area!r}")
     shape = model.shape
-    geometry = stack_curves([resample(c, spacing) for c in initial_curves(init, shape)])
+    geometry = stack_curves([resample(c, spacing) for c in initial_curves(init, shape, model.values)])
     current = evaluate(model, *geometry[:2], params, gradient=True)
     if not np.isfinite(current.energy):
         raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")

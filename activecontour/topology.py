@@ -98,9 +98,9 @@ def winding_number(points, next_index, probes):
         t = (r - start[moving, 0]) / (end[moving, 0] - start[moving, 0])
         col = start[moving, 1] + t * (end[moving, 1] - start[moving, 1])
         right = col > c
-        out[i] = int(np.sum(upward[moving] & right) - np.sum(downward[moving] & right))
-    # A positively oriented curve (area > 0) runs upward on its larger-column side in (row, col),
-    # so this count is +1 inside it.
+        # a positively oriented curve (area > 0) runs towards smaller rows on its larger-column
+        # side, so a downward crossing on the right counts +1
+        out[i] = int(np.sum(downward[moving] & right) - np.sum(upward[moving] & right))
     return out
 
 
@@ -233,8 +233,8 @@ def nucleation_sites(values, inside, params, c_in, c_out, radius):
     """
     import scipy.ndimage
 
-    g = (params.omega + params.lambda_in * np.sum((values - c_in) ** 2, axis=2)
-         - params.lambda_out * np.sum((values - c_out) ** 2, axis=2))
+    lambda_in, lambda_out = params.weights(values.shape[2])
+    g = params.omega + ((values - c_in) ** 2) @ lambda_in - ((values - c_out) ** 2) @ lambda_out
     size = int(np.ceil(radius))
     yy, xx = np.mgrid[-size: size + 1, -size: size + 1]
     disk = (yy**2 + xx**2) <= radius**2

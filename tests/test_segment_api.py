@@ -47,7 +47,7 @@ def test_bad_arguments(image, kwargs, error, match):
         ([ac.circle((20.0, 20.0), 5.0), [[0, 0], [1, 1]]], "init curve 1 needs at least 3"),
         ([], "empty list"),
         (np.array([[0.0, 0.0], [np.inf, 1.0], [2.0, 3.0]]), "NaN or infinite"),
-        ("checkerboard", "not understood by the polygon backend"),
+        ("checkerboard", "not understood: pass None, .grid."),
         (np.array([[-0.5, -0.5], [39.5, -0.5], [39.5, 49.5], [-0.5, 49.5]]), "whole image"),
     ],
 )
