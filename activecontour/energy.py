@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from activecontour.curve import as_curve
@@ -41,8 +42,6 @@ __all__ = [
     "stack_curves",
 ]
 
-_GAUSS_NODES = np.array([0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6)])
-_GAUSS_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
 
 
 @dataclass(frozen=True)
@@ -134,57 +133,24 @@ def stack_curves(curves):
     return points, next_index, offsets
 
 
-def _edge_quadrature(start, end):
-    """Gauss points of every edge split at the grid lines (integer u and v).
-
-    Returns the edge index, edge parameter t in [0, 1] and weight (in units of t) of each point.
-    """
-    n_edges = len(start)
-    breaks_t = [np.zeros(n_edges), np.ones(n_edges)]
-    breaks_e = [np.arange(n_edges), np.arange(n_edges)]
-    for axis in (0, 1):
-        a, b = start[:, axis], end[:, axis]
-        low = np.floor(np.minimum(a, b))
-        count = (np.floor(np.maximum(a, b)) - low).astype(np.intp)
-        edge = np.repeat(np.arange(n_edges), count)
-        rank = np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)
-        crossing = low[edge] + 1.0 + rank
-        breaks_t.append(np.clip((crossing - a[edge]) / (b - a)[edge], 0.0, 1.0))
-        breaks_e.append(edge)
-    t = np.concatenate(breaks_t)
-    edge = np.concatenate(breaks_e)
-    order = np.argsort(edge * 2.0 + t, kind="stable")
-    t, edge = t[order], edge[order]
-    same = edge[:-1] == edge[1:]
-    t0, t1, piece_edge = t[:-1][same], t[1:][same], edge[:-1][same]
-    span = (t1 - t0)[:, None]
-    t_points = (t0[:, None] + span * _GAUSS_NODES).ravel()
-    weights = (span * _GAUSS_WEIGHTS).ravel()
-    return np.repeat(piece_edge, 3), t_points, weights
-
-
 def region_moments(model, curves):
     """``int_{Omega_i} 1``, ``int I`` and ``int I^2`` (per channel) for closed curves in (row, col).
 
     Exact for the bilinear image, by Green's theorem on the row-antiderivative tables.
     """
     points, next_index, _ = stack_curves([np.asarray(c, dtype=np.float64) for c in curves])
-    return _moments(model, points + 1.0, next_index)[:3]
+    area, _, s1, s2 = _moments(model, points, next_index)
+    return area, s1, s2
 
 
-def _moments(model, padded_points, next_index):
-    start = padded_points
-    end = padded_points[next_index]
-    edge, t, weights = _edge_quadrature(start, end)
-    delta = end - start
-    u = start[edge, 0] + t * delta[edge, 0]
-    v = start[edge, 1] + t * delta[edge, 1]
-    intensity, g1, g2 = model.evaluate(u, v, antiderivatives=True)
-    dv = (weights * delta[edge, 1])[:, None]
-    r, c = start[:, 0], start[:, 1]
-    area = 0.5 * float(np.dot(r, end[:, 1]) - np.dot(end[:, 0], c))
-    quadrature = (edge, t, weights, delta, intensity)
-    return area, (dv * g1).sum(axis=0), (dv * g2).sum(axis=0), quadrature
+def _moments(model, points, next_index):
+    channels = model.n_channels
+    s1, s2 = np.zeros(channels), np.zeros(channels)
+    sums = np.zeros(2)  # area, length
+    unused = np.zeros(channels)
+    _edge_integrals(np.ascontiguousarray(points), next_index, model.table, 0, unused, unused,
+                    unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
+    return sums[0], sums[1], s1, s2
 
 
 def evaluate(model, points, next_index, params, *, gradient=False):
@@ -207,12 +173,9 @@ def evaluate(model, points, next_index, params, *, gradient=False):
         must be optimised (6.42 is undefined there).
     """
     channels = model.n_channels
-    area, s1, s2, quadrature = _moments(model, points + 1.0, next_index)
+    area, length, s1, s2 = _moments(model, points, next_index)
     total_area, total1, total2 = model.totals
     outside_area = total_area - area
-    delta = quadrature[3]
-    lengths = np.hypot(delta[:, 0], delta[:, 1])
-    length = float(lengths.sum())
     c_in = params.constant("c_in", channels)
     c_out = params.constant("c_out", channels)
     degenerate = area <= 1e-9 or outside_area <= 1e-9
@@ -229,24 +192,105 @@ def evaluate(model, points, next_index, params, *, gradient=False):
     energy = params.mu * length + params.omega * area + inside + outside
     result = Evaluation(float(energy), c_in, c_out, area, length)
     if gradient:
-        result.load = _load(quadrature, lengths, next_index, params, c_in, c_out)
+        load = np.zeros_like(points)
+        _edge_integrals(np.ascontiguousarray(points), next_index, model.table, 1,
+                        np.ascontiguousarray(c_in), np.ascontiguousarray(c_out),
+                        np.ascontiguousarray(lambda_in), np.ascontiguousarray(lambda_out),
+                        float(params.omega), float(params.mu), s1, s2, np.zeros(2), load)
+        result.load = load
     return result
 
 
-def _load(quadrature, lengths, next_index, params, c_in, c_out):
-    edge, t, weights, delta, intensity = quadrature
-    n_edges = len(delta)
-    lambda_in, lambda_out = params.weights(intensity.shape[1])
-    integrand = params.omega + ((intensity - c_in) ** 2) @ lambda_in - ((intensity - c_out) ** 2) @ lambda_out
-    weighted = weights * integrand
-    at_start = np.bincount(edge, weighted * (1.0 - t), minlength=n_edges)
-    at_end = np.bincount(edge, weighted * t, minlength=n_edges)
-    # nu |e| = (dv, -du): the edge normal (section 4.5.2) times the edge length.
-    scaled_normal = np.column_stack([delta[:, 1], -delta[:, 0]])
-    tangent = np.divide(delta, lengths[:, None], out=np.zeros_like(delta), where=lengths[:, None] > 0)
-    load = at_start[:, None] * scaled_normal - params.mu * tangent
-    load[next_index] += at_end[:, None] * scaled_normal + params.mu * tangent
-    return load
+@numba.njit(cache=True, error_model="numpy")
+def _cell_values(table, u, v, intensity, g1, g2, antiderivatives):
+    """I, and its row-antiderivatives of I and I^2, at padded coordinates (u, v), per channel.
+
+    On the cell [a, a + 1] x [j, j + 1] with local coordinates (t, w), I is bilinear; the row
+    antiderivatives are the table values at row a plus the exact integral from a to u.
+    """
+    a = min(max(int(np.floor(u)), 0), table.shape[0] - 2)
+    j = min(max(int(np.floor(v)), 0), table.shape[1] - 2)
+    t, w = u - a, v - j
+    w0 = 1.0 - w
+    half, third = 0.5 * t * t, t * t * t / 3.0
+    for ch in range(table.shape[2]):
+        here, right = table[a, j, ch], table[a, j + 1, ch]  # (P, t1, t2, t3) at two corners
+        p0, p1 = here[0], table[a + 1, j, ch, 0]
+        q0, q1 = right[0], table[a + 1, j + 1, ch, 0]
+        dp, dq = p1 - p0, q1 - q0
+        intensity[ch] = w0 * (p0 + t * dp) + w * (q0 + t * dq)
+        if antiderivatives:
+            g1[ch] = w0 * (here[1] + t * p0 + half * dp) + w * (right[1] + t * q0 + half * dq)
+            b_pp = here[2] + p0 * p0 * t + 2.0 * p0 * dp * half + dp * dp * third
+            b_qq = right[2] + q0 * q0 * t + 2.0 * q0 * dq * half + dq * dq * third
+            b_pq = here[3] + p0 * q0 * t + (p0 * dq + q0 * dp) * half + dp * dq * third
+            g2[ch] = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _edge_integrals(points, next_index, table, stage, c_in, c_out, lambda_in,
+                    lambda_out, omega, mu, s1, s2, sums, load):
+    """Exact integrals along every edge, split where it crosses a grid line.
+
+    ``stage`` 0 accumulates the moments ``closed integral of G dc`` into s1, s2 and the signed area
+    and length into ``sums``; stage 1 adds the load (6.41) into ``load``.  Each piece between grid
+    lines is a polynomial of degree <= 5 in the edge parameter: 3-point Gauss-Legendre is exact.
+    """
+    channels = table.shape[2]
+    intensity, g1, g2 = np.empty(channels), np.empty(channels), np.empty(channels)
+    nodes = (0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6))
+    weights = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
+    for e in range(points.shape[0]):
+        b = next_index[e]
+        u0, v0 = points[e, 0] + 1.0, points[e, 1] + 1.0
+        du, dv = points[b, 0] + 1.0 - u0, points[b, 1] + 1.0 - v0
+        # next grid lines in the direction of travel
+        step_u = 1 if du > 0 else -1
+        step_v = 1 if dv > 0 else -1
+        k_u = np.floor(u0) + 1.0 if du > 0 else np.ceil(u0) - 1.0
+        k_v = np.floor(v0) + 1.0 if dv > 0 else np.ceil(v0) - 1.0
+        at_start, at_end = 0.0, 0.0
+        t_prev = 0.0
+        while True:
+            t_u = (k_u - u0) / du if du != 0.0 else 2.0
+            t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
+            t_next = min(t_u, t_v, 1.0)
+            span = t_next - t_prev
+            if span > 0.0:
+                for g in range(3):
+                    t = t_prev + span * nodes[g]
+                    weight = span * weights[g]
+                    _cell_values(table, u0 + t * du, v0 + t * dv, intensity, g1, g2, stage == 0)
+                    if stage == 0:
+                        for ch in range(channels):
+                            s1[ch] += weight * dv * g1[ch]
+                            s2[ch] += weight * dv * g2[ch]
+                    else:
+                        density = omega
+                        for ch in range(channels):
+                            density += (lambda_in[ch] * (intensity[ch] - c_in[ch]) ** 2
+                                        - lambda_out[ch] * (intensity[ch] - c_out[ch]) ** 2)
+                        at_start += weight * density * (1.0 - t)
+                        at_end += weight * density * t
+            if t_next >= 1.0:
+                break
+            if t_u <= t_next:
+                k_u += step_u
+            if t_v <= t_next:
+                k_v += step_v
+            t_prev = t_next
+        length = np.sqrt(du * du + dv * dv)
+        if stage == 0:
+            sums[0] += 0.5 * ((u0 - 1.0) * (v0 - 1.0 + dv) - (u0 - 1.0 + du) * (v0 - 1.0))
+            sums[1] += length
+        else:
+            # nu |e| = (dv, -du): the edge normal (section 4.5.2) times its length
+            tangent_r = du / length if length > 0.0 else 0.0
+            tangent_c = dv / length if length > 0.0 else 0.0
+            load[e, 0] += at_start * dv - mu * tangent_r
+            load[e, 1] += -at_start * du - mu * tangent_c
+            load[b, 0] += at_end * dv + mu * tangent_r
+            load[b, 1] += -at_end * du + mu * tangent_c
 
 
 def chan_vese_energy(image, contours, *, mu=0.2, omega=0.0, lambda_in=1.0, lambda_out=1.0,

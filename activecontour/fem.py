@@ -8,14 +8,14 @@ cyclic tridiagonal, stored as a pair ``(diagonal, off)`` with ``off[i] = A[i, (i
     K[i, i] = 1 / h[i - 1] + 1 / h[i], K[i, i + 1] = -1 / h[i]      (P1 stiffness, -Laplace_Sigma)
 
 ``b(V, Y) = int V.Y + int grad_Sigma V : grad_Sigma Y`` of (6.39) is ``M + K``; the L^2 form (6.25) is
-``M``.  :func:`cyclic_solve` solves either in O(K) by Sherman-Morrison on a banded Cholesky
-factorisation: no dense inverse, no general sparse LU.
+``M``.  :func:`cyclic_solve` solves either in O(K) by Sherman-Morrison on the Thomas algorithm,
+several polygons in one call: no dense inverse, no general sparse LU.
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
-import scipy.linalg
 import scipy.sparse
 
 __all__ = [
@@ -29,16 +29,21 @@ __all__ = [
 ]
 
 
-def mass_diagonals(h):
-    """Diagonal and cyclic off-diagonal of the P1 mass matrix for edge lengths ``h``."""
+def mass_diagonals(h, previous=None):
+    """Diagonal and cyclic off-diagonal of the P1 mass matrix for edge lengths ``h``.
+
+    ``previous[i]`` is the edge ending at vertex i (default i - 1, cyclically); pass it for several
+    stacked polygons.
+    """
     h = np.asarray(h, dtype=np.float64)
-    return (np.roll(h, 1) + h) / 3.0, h / 6.0
+    h_before = np.roll(h, 1) if previous is None else h[previous]
+    return (h_before + h) / 3.0, h / 6.0
 
 
-def stiffness_diagonals(h):
+def stiffness_diagonals(h, previous=None):
     """Diagonal and cyclic off-diagonal of the P1 stiffness matrix for edge lengths ``h``."""
     inv = 1.0 / np.asarray(h, dtype=np.float64)
-    return np.roll(inv, 1) + inv, -inv
+    return (np.roll(inv, 1) if previous is None else inv[previous]) + inv, -inv
 
 
 def cyclic_matrix(diagonal, off):
@@ -70,39 +75,68 @@ def cyclic_apply(diagonal, off, x):
     return diagonal * x + off * np.roll(x, -1, axis=0) + np.roll(off * x, 1, axis=0)
 
 
-def cyclic_solve(diagonal, off, rhs):
-    """Solve ``A x = rhs`` for a symmetric positive definite cyclic tridiagonal A in O(K).
-
-    A is split as ``T + u v^T`` with T tridiagonal SPD (Sherman-Morrison), and T is factorised once
-    by a banded Cholesky for all right-hand sides.
+def cyclic_solve(diagonal, off, rhs, offsets=None):
+    """Solve ``A x = rhs`` for symmetric positive definite cyclic tridiagonal A, in O(K).
 
     Parameters
     ----------
     diagonal, off : ndarray of shape (K,)
-        ``A[i, i]`` and ``A[i, (i + 1) % K]``, K >= 3.
+        ``A[i, i]`` and ``A[i, next(i)]``, where next(i) is i + 1 within a block and the block's
+        first index for its last one.
     rhs : ndarray of shape (K,) or (K, d)
+    offsets : ndarray of int, optional
+        Block boundaries ``[0, K_0, K_0 + K_1, ..., K]`` for several independent closed polygons
+        solved at once (each block >= 3); by default one block.
+
+    Each block is split as ``T + u v^T`` with T tridiagonal SPD (Sherman-Morrison); T is
+    eliminated once (Thomas algorithm, no pivoting needed for SPD) for all right-hand sides.
     """
-    diagonal = np.asarray(diagonal, dtype=np.float64)
-    off = np.asarray(off, dtype=np.float64)
+    diagonal = np.ascontiguousarray(diagonal, dtype=np.float64)
+    off = np.ascontiguousarray(off, dtype=np.float64)
     rhs = np.asarray(rhs, dtype=np.float64)
-    k = diagonal.shape[0]
-    if k < 3:
-        raise ValueError(f"a closed polygon needs at least 3 vertices, got {k}")
     squeeze = rhs.ndim == 1
-    b = rhs[:, None] if squeeze else rhs
-    gamma = -diagonal[0]
-    corner = off[-1]
-    banded = np.empty((2, k))
-    banded[0, 0] = 0.0
-    banded[0, 1:] = off[:-1]
-    banded[1] = diagonal
-    banded[1, 0] -= gamma
-    banded[1, -1] -= corner * corner / gamma
-    u = np.zeros(k)
-    u[0], u[-1] = gamma, corner
-    solution = scipy.linalg.solveh_banded(banded, np.column_stack([b, u]), check_finite=False)
-    y, z = solution[:, :-1], solution[:, -1]
-    v_y = y[0] + (corner / gamma) * y[-1]
-    v_z = z[0] + (corner / gamma) * z[-1]
-    x = y - np.outer(z, v_y / (1.0 + v_z))
+    b = np.ascontiguousarray(rhs[:, None] if squeeze else rhs)
+    offsets = np.array([0, len(diagonal)] if offsets is None else offsets, dtype=np.intp)
+    if np.any(np.diff(offsets) < 3):
+        raise ValueError(f"a closed polygon needs at least 3 vertices, got {np.diff(offsets).min()}")
+    x = np.empty_like(b)
+    _cyclic_thomas(diagonal, off, b, offsets, x)
     return x[:, 0] if squeeze else x
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cyclic_thomas(diagonal, off, rhs, offsets, out):
+    columns = rhs.shape[1]
+    for block in range(offsets.shape[0] - 1):
+        first, stop = offsets[block], offsets[block + 1]
+        k = stop - first
+        d = diagonal[first:stop].copy()
+        e = off[first:stop]
+        gamma = -d[0]
+        corner = e[k - 1]
+        d[0] -= gamma
+        d[k - 1] -= corner * corner / gamma
+        # right-hand sides: the block's columns plus u = (gamma, 0, ..., 0, corner)
+        y = np.zeros((k, columns + 1))
+        y[:, :columns] = rhs[first:stop]
+        y[0, columns] = gamma
+        y[k - 1, columns] += corner
+        # Thomas: forward elimination on the tridiagonal part (super-diagonal e[:k-1])
+        c_prime = np.empty(k)
+        c_prime[0] = e[0] / d[0]
+        for col in range(columns + 1):
+            y[0, col] /= d[0]
+        for i in range(1, k):
+            denominator = d[i] - e[i - 1] * c_prime[i - 1]
+            c_prime[i] = e[i] / denominator if i < k - 1 else 0.0
+            for col in range(columns + 1):
+                y[i, col] = (y[i, col] - e[i - 1] * y[i - 1, col]) / denominator
+        for i in range(k - 2, -1, -1):
+            for col in range(columns + 1):
+                y[i, col] -= c_prime[i] * y[i + 1, col]
+        z0, zk = y[0, columns], y[k - 1, columns]
+        scale = 1.0 + z0 + (corner / gamma) * zk
+        for col in range(columns):
+            factor = (y[0, col] + (corner / gamma) * y[k - 1, col]) / scale
+            for i in range(k):
+                out[first + i, col] = y[i, col] - factor * y[i, columns]

@@ -21,8 +21,8 @@ Per iteration k, on the polygon(s) Gamma^k:
 The flow stalls when either measure falls below ``tol``: the relative energy decrease per iteration
 averaged over the last five iterations (this ends the slow tail of noisy images, where the curve
 keeps chasing noise for no measurable gain), or the largest vertex displacement, in pixels, for three
-iterations in a row (clean images whose energy tends to zero).  A stall at the finest l is
-convergence; the run also stops at ``max_num_iter``.
+iterations in a row (clean images whose energy tends to zero).  A coarse l gives way to the next
+at 10 tol; a stall at the finest l is convergence; the run also stops at ``max_num_iter``.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from itertools import pairwise
 import numpy as np
 
 from activecontour import fem, topology
-from activecontour.curve import edge_lengths, resample, signed_area
+from activecontour.curve import resample, signed_area
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
@@ -46,7 +46,9 @@ _MAX_HALVINGS = 40
 _PATIENCE = 3
 _ENERGY_WINDOW = 5
 _SMOOTHING_FACTOR = 4.0
+_STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
 _MIN_EDGE = 1e-9
+_RELATIVE_SMOOTHING = 0.5
 _NUCLEATION_RADIUS = 4.0
 _NUCLEATION_ROUNDS = 4
 _NUCLEATION_TRIALS = 30
@@ -141,8 +143,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
             if callback(state):
                 status = 2
                 break
-        if quiet >= _PATIENCE or _stalled(energies, stage_start, tol):
-            if flow.smoothing > min_smoothing and flow.h1:
+        finest = flow.smoothing <= min_smoothing or not flow.h1
+        if quiet >= _PATIENCE or _stalled(energies, stage_start, tol if finest else _STAGE_TOL * tol):
+            if not finest:
                 flow.refine(min_smoothing)
             elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
                 rounds += 1
@@ -172,19 +175,25 @@ class _Flow:
         self.low, self.high = bounds
         self.dt = np.inf
 
-    def velocity(self, points, offsets, load):
-        """Solve b(V, Y) = -f (6.40) curve by curve."""
-        out = np.empty_like(load)
-        for start, stop in pairwise(offsets):
-            # a crossing repair can leave an edge of (nearly) zero length: keep 1/h finite
-            h = np.maximum(edge_lengths(points[start:stop]), _MIN_EDGE)
-            diagonal, off = fem.mass_diagonals(h)
-            if self.h1:
-                stiff_diagonal, stiff_off = fem.stiffness_diagonals(h)
-                diagonal = diagonal + self.smoothing**2 * stiff_diagonal
-                off = off + self.smoothing**2 * stiff_off
-            out[start:stop] = -fem.cyclic_solve(diagonal, off, load[start:stop])
-        return out
+    def velocity(self, geometry, load):
+        """Solve b(V, Y) = -f (6.40) for all curves at once (block-cyclic, O(K))."""
+        points, next_index, offsets = geometry
+        previous = np.empty_like(next_index)
+        previous[next_index] = np.arange(len(next_index))
+        d = points[next_index] - points
+        # a crossing repair can leave an edge of (nearly) zero length: keep 1/h finite
+        h = np.maximum(np.hypot(d[:, 0], d[:, 1]), _MIN_EDGE)
+        diagonal, off = fem.mass_diagonals(h, previous)
+        if self.h1:
+            # per curve, l is at most half its radius L / 2 pi: a larger l would damp a small
+            # curve's own growth and shape modes (by 1 + (k l / R)^2) while others set the step
+            lengths = np.add.reduceat(h, offsets[:-1])
+            smoothing = np.minimum(self.smoothing, _RELATIVE_SMOOTHING * lengths / (2 * np.pi))
+            weight = np.repeat(smoothing**2, np.diff(offsets))
+            stiff_diagonal, stiff_off = fem.stiffness_diagonals(h, previous)
+            diagonal = diagonal + weight * stiff_diagonal
+            off = off + weight * stiff_off
+        return -fem.cyclic_solve(diagonal, off, load, offsets)
 
     def refine(self, min_smoothing):
         """Next, finer smoothing length; the step memory restarts with the new metric."""
@@ -240,7 +249,7 @@ class _Flow:
         condition as any other step.
         """
         points, next_index, offsets = geometry
-        v = self.velocity(points, offsets, current.load)
+        v = self.velocity(geometry, current.load)
         speed = np.hypot(v[:, 0], v[:, 1]).max()
         if not speed > 0:
             return None

@@ -12,8 +12,9 @@ interpolant is a polynomial on each grid cell, both G and I are integrated *exac
 pieces of a polygon edge between grid lines, which is what makes the discrete energy and its shape
 derivative consistent to rounding error (see :mod:`activecontour.energy`).
 
-Internally everything works in *padded* coordinates ``(u, v) = (r + 1, c + 1)`` on the image padded
-by one replicated pixel, so that the interpolation cell of every point of D exists.
+The tables live in *padded* coordinates ``(u, v) = (r + 1, c + 1)`` of the image padded by one
+replicated pixel, so that the interpolation cell of every point of D exists; the polynomial
+evaluation on a cell is :func:`activecontour.energy._cell_values`.
 """
 
 from __future__ import annotations
@@ -134,55 +135,22 @@ class ImageModel:
         self.shape = values.shape[:2]
         self.n_channels = values.shape[2]
         padded = np.pad(values, ((1, 1), (1, 1), (0, 0)), mode="edge")
-        self._padded = padded
         # Cumulative exact integrals along rows of the piecewise-linear column profiles:
-        # t1[a, j] = int_0^a P(s, j) ds, t2 = int P(s, j)^2, t3 = int P(s, j) P(s, j + 1).
+        # t1[a, j] = int_0^a P(s, j) ds, t2 = int P(s, j)^2, t3 = int P(s, j) P(s, j + 1)
+        # (t3's last column, which has no right neighbour, stays 0).
         p0, p1 = padded[:-1], padded[1:]
         q0, q1 = p0[:, 1:], p1[:, 1:]
         inc1 = 0.5 * (p0 + p1)
         inc2 = (p0 * p0 + p0 * p1 + p1 * p1) / 3.0
-        inc3 = (2 * p0[:, :-1] * q0 + p0[:, :-1] * q1 + p1[:, :-1] * q0 + 2 * p1[:, :-1] * q1) / 6.0
-        self._t1 = _cumulative(inc1)
-        self._t2 = _cumulative(inc2)
-        self._t3 = _cumulative(inc3)
+        inc3 = np.zeros_like(inc1)
+        inc3[:, :-1] = (2 * p0[:, :-1] * q0 + p0[:, :-1] * q1 + p1[:, :-1] * q0 + 2 * p1[:, :-1] * q1) / 6.0
+        #: (M + 2, N + 2, C, 4): padded image, t1, t2, t3 side by side, so that the data of one
+        #: interpolation cell sits in two cache lines (what the edge integrals read)
+        self.table = np.ascontiguousarray(
+            np.stack([padded, _cumulative(inc1), _cumulative(inc2), _cumulative(inc3)], axis=-1))
         m, n = self.shape
         self.bounds = np.array([[-0.5, -0.5], [m - 0.5, n - 0.5]])
         self.totals = self._domain_totals()
-
-    def interpolate(self, points):
-        """Bilinear intensity at points (K, 2) in (row, col) image coordinates, shape (K, C)."""
-        points = np.asarray(points, dtype=np.float64)
-        return self.evaluate(points[:, 0] + 1.0, points[:, 1] + 1.0)[0]
-
-    def evaluate(self, u, v, *, antiderivatives=False):
-        """I at padded coordinates (u, v); with ``antiderivatives``, also the row-antiderivatives.
-
-        Returns
-        -------
-        intensity : ndarray (K, C)
-        g1, g2 : ndarray (K, C) or None
-            ``int_0^u I(s, v) ds`` and ``int_0^u I(s, v)^2 ds``.
-        """
-        last_row, last_col = self._padded.shape[0] - 2, self._padded.shape[1] - 2
-        a = np.clip(np.floor(u).astype(np.intp), 0, last_row)
-        j = np.clip(np.floor(v).astype(np.intp), 0, last_col)
-        t = (u - a)[:, None]
-        w = (v - j)[:, None]
-        pad = self._padded
-        p0, p1 = pad[a, j], pad[a + 1, j]
-        q0, q1 = pad[a, j + 1], pad[a + 1, j + 1]
-        dp, dq = p1 - p0, q1 - q0
-        w0 = 1.0 - w
-        intensity = w0 * (p0 + t * dp) + w * (q0 + t * dq)
-        if not antiderivatives:
-            return intensity, None, None
-        t2, t3 = t * t / 2.0, t * t * t / 3.0
-        g1 = w0 * (self._t1[a, j] + t * p0 + t2 * dp) + w * (self._t1[a, j + 1] + t * q0 + t2 * dq)
-        b_pp = self._t2[a, j] + p0 * p0 * t + p0 * dp * 2.0 * t2 + dp * dp * t3
-        b_qq = self._t2[a, j + 1] + q0 * q0 * t + q0 * dq * 2.0 * t2 + dq * dq * t3
-        b_pq = self._t3[a, j] + p0 * q0 * t + (p0 * dq + q0 * dp) * t2 + dp * dq * t3
-        g2 = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
-        return intensity, g1, g2
 
     def _domain_totals(self):
         from activecontour.energy import region_moments  # energy builds on this module

@@ -19,6 +19,7 @@ as large as the longest edge: an iteration costs O(K) on average, not O(K^2).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from activecontour.curve import signed_area
@@ -37,52 +38,66 @@ def crossings(points, next_index):
         The crossing is ``X[first] + s (X[next[first]] - X[first])``, likewise t on ``second``;
         both strictly inside (0, 1).
     """
-    start, end = points, points[next_index]
-    n = len(points)
-    empty = np.zeros(0, dtype=np.intp)
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    found = _crossings(points, np.ascontiguousarray(next_index, dtype=np.intp))
+    first = np.array([f[0] for f in found], dtype=np.intp)
+    second = np.array([f[1] for f in found], dtype=np.intp)
+    s = np.array([f[2] for f in found], dtype=np.float64)
+    t = np.array([f[3] for f in found], dtype=np.float64)
+    return first, second, s, t
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _crossings(points, next_index):
+    """Grid hashing: every edge is filed under the cell of its bounding box's low corner, with
+    cells as large as the longest edge's extent, so edges whose boxes overlap sit in the same or
+    neighbouring cells; only those pairs are tested."""
+    n = points.shape[0]
+    found = [(0, 0, 0.0, 0.0)]
+    found.pop()
     if n < 4:
-        return empty, empty, np.zeros(0), np.zeros(0)
-    low = np.minimum(start, end)
-    high = np.maximum(start, end)
-    cell = max(float(np.max(high - low)), 1e-9) * 1.0001
-    origin = low.min(axis=0)
-    lo_cell = np.floor((low - origin) / cell).astype(np.int64)
-    hi_cell = np.floor((high - origin) / cell).astype(np.int64)
-    # each edge spans at most 2 x 2 cells (cell >= edge extent): register it in each
-    entries_edge, entries_key = [], []
-    width = int(hi_cell[:, 1].max()) + 2
-    for dr in (0, 1):
-        for dc in (0, 1):
-            use = (lo_cell[:, 0] + dr <= hi_cell[:, 0]) & (lo_cell[:, 1] + dc <= hi_cell[:, 1])
-            edges = np.nonzero(use)[0]
-            entries_edge.append(edges)
-            entries_key.append((lo_cell[edges, 0] + dr) * width + lo_cell[edges, 1] + dc)
-    edge = np.concatenate(entries_edge)
-    key = np.concatenate(entries_key)
-    order = np.argsort(key, kind="stable")
-    edge, key = edge[order], key[order]
-    group_start = np.concatenate([[0], np.nonzero(key[1:] != key[:-1])[0] + 1])
-    group_size = np.diff(np.concatenate([group_start, [len(key)]]))
-    position = np.arange(len(key))
-    group_end = np.repeat(group_start + group_size, group_size)
-    partners = group_end - position - 1
-    a = np.repeat(position, partners)
-    rank = np.arange(a.size) - np.repeat(np.cumsum(partners) - partners, partners)
-    b = a + 1 + rank
-    first, second = edge[a], edge[b]
-    first, second = np.minimum(first, second), np.maximum(first, second)
-    adjacent = (first == second) | (next_index[first] == second) | (next_index[second] == first)
-    pair = np.unique(first[~adjacent] * n + second[~adjacent])
-    first, second = pair // n, pair % n
-    p, r = start[first], end[first] - start[first]
-    q, u = start[second], end[second] - start[second]
-    denominator = r[:, 0] * u[:, 1] - r[:, 1] * u[:, 0]
-    qp = q - p
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = (qp[:, 0] * u[:, 1] - qp[:, 1] * u[:, 0]) / denominator
-        t = (qp[:, 0] * r[:, 1] - qp[:, 1] * r[:, 0]) / denominator
-    hit = (denominator != 0) & (s > 0) & (s < 1) & (t > 0) & (t < 1)
-    return first[hit], second[hit], s[hit], t[hit]
+        return found
+    low = np.empty((n, 2))
+    cell = 1e-9
+    for e in range(n):
+        b = next_index[e]
+        for k in range(2):
+            low[e, k] = min(points[e, k], points[b, k])
+            cell = max(cell, abs(points[b, k] - points[e, k]))
+    cell *= 1.0001
+    origin_r, origin_c = low[:, 0].min(), low[:, 1].min()
+    row = np.empty(n, dtype=np.int64)
+    col = np.empty(n, dtype=np.int64)
+    for e in range(n):
+        row[e] = int((low[e, 0] - origin_r) / cell)
+        col[e] = int((low[e, 1] - origin_c) / cell)
+    width = col.max() + 3
+    key = (row + 1) * width + col + 1
+    order = np.argsort(key)
+    sorted_key = key[order]
+    for e in range(n):
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                target = key[e] + dr * width + dc
+                i = np.searchsorted(sorted_key, target)
+                while i < n and sorted_key[i] == target:
+                    f = order[i]
+                    i += 1
+                    if f <= e or next_index[e] == f or next_index[f] == e:
+                        continue
+                    a, b = e, next_index[e]
+                    c, d = f, next_index[f]
+                    r0, r1 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1]
+                    u0, u1 = points[d, 0] - points[c, 0], points[d, 1] - points[c, 1]
+                    denominator = r0 * u1 - r1 * u0
+                    if denominator == 0.0:
+                        continue
+                    q0, q1 = points[c, 0] - points[a, 0], points[c, 1] - points[a, 1]
+                    s = (q0 * u1 - q1 * u0) / denominator
+                    t = (q0 * r1 - q1 * r0) / denominator
+                    if 0.0 < s < 1.0 and 0.0 < t < 1.0:
+                        found.append((e, f, s, t))
+    return found
 
 
 def winding_number(points, next_index, probes):

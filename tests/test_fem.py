@@ -65,3 +65,22 @@ def test_cyclic_solve_matches_sparse_direct_solve(k):
 def test_cyclic_solve_needs_three_vertices():
     with pytest.raises(ValueError, match="at least 3"):
         fem.cyclic_solve(np.ones(2), np.zeros(2), np.ones(2))
+
+
+def test_cyclic_solve_handles_several_polygons_at_once():
+    rng = np.random.default_rng(0)
+    sizes = [3, 10, 57]
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    h = rng.uniform(0.3, 1.5, offsets[-1])
+    blocks = [slice(a, b) for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+    diagonal, off = np.empty_like(h), np.empty_like(h)
+    for block in blocks:
+        mass, stiff = fem.mass_diagonals(h[block]), fem.stiffness_diagonals(h[block])
+        diagonal[block], off[block] = mass[0] + 4.0 * stiff[0], mass[1] + 4.0 * stiff[1]
+    rhs = rng.normal(size=(offsets[-1], 2))
+    together = fem.cyclic_solve(diagonal, off, rhs, offsets)
+    for block in blocks:
+        alone = fem.cyclic_solve(diagonal[block], off[block], rhs[block])
+        np.testing.assert_allclose(together[block], alone, rtol=1e-12)
+        np.testing.assert_allclose(fem.cyclic_apply(diagonal[block], off[block], alone), rhs[block],
+                                   atol=1e-10)
