@@ -91,10 +91,10 @@ def scaling_table(sizes):
         image, truth = synthetic.render(synthetic.disk(center, 60.0), (size, size), inside=0.7,
                                         outside=0.3, supersample=2)
         image = synthetic.add_noise(image, 0.1, 1)
-        _, t_prepare = timed(lambda: ImageModel(normalize_image(image)))  # noqa: B023
+        _, t_prepare = timed(ImageModel, normalize_image(image))
         stamps = []
-        result, t_total = timed(ac.segment, image, ac.circle(center, 100.0),
-                                callback=lambda state: stamps.append(time.perf_counter()))
+        result, _ = timed(ac.segment, image, ac.circle(center, 100.0),
+                          callback=lambda state, stamps=stamps: stamps.append(time.perf_counter()))
         per_iteration = np.median(np.diff(stamps)) * 1e3
         print(f"{size:>5d}x{size:<5d} | {t_prepare:9.3f} | {result.n_iter:5d} | {per_iteration:9.2f} | "
               f"{synthetic.dice(result.mask, truth):6.4f}")
