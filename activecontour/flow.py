@@ -32,7 +32,7 @@ from itertools import pairwise
 import numpy as np
 
 from activecontour import fem, topology
-from activecontour.curve import resample, signed_area
+from activecontour.curve import resample
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
@@ -275,13 +275,13 @@ class _Flow:
         Returns the geometry and its evaluation, or (geometry, None) when nothing is left inside.
         """
         points, _, offsets = geometry
-        curves = _split(points, offsets)
-        keep = [c for c in curves if abs(signed_area(c)) >= self.min_area]
-        if len(keep) == len(curves):
+        areas = topology.curve_areas(*geometry)
+        keep = np.abs(areas) >= self.min_area
+        if keep.all():
             return geometry, current
-        if not keep or sum(signed_area(c) for c in keep) <= 0:
+        if not keep.any() or areas[keep].sum() <= 0:
             return geometry, (None if current.area < self.min_area else current)
-        reduced = stack_curves(keep)
+        reduced = stack_curves([c for c, k in zip(_split(points, offsets), keep, strict=True) if k])
         candidate = evaluate(self.model, *reduced[:2], self.params, gradient=True)
         if candidate.energy <= current.energy:
             return reduced, candidate

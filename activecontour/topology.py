@@ -24,7 +24,7 @@ import numpy as np
 
 from activecontour.curve import signed_area
 
-__all__ = ["crossings", "nucleation_sites", "repair", "winding_number"]
+__all__ = ["crossings", "curve_areas", "nucleation_sites", "repair", "winding_number"]
 
 
 def crossings(points, next_index):
@@ -102,21 +102,36 @@ def _crossings(points, next_index):
 
 def winding_number(points, next_index, probes):
     """Winding number of each probe point (P, 2) with respect to the oriented curves."""
-    probes = np.atleast_2d(probes)
-    start, end = points, points[next_index]
-    out = np.zeros(len(probes), dtype=np.int64)
-    for i, (r, c) in enumerate(probes):
-        # crossings of the row line through the probe, to the right (larger c) of it
-        upward = (start[:, 0] <= r) & (end[:, 0] > r)
-        downward = (end[:, 0] <= r) & (start[:, 0] > r)
-        moving = upward | downward
-        t = (r - start[moving, 0]) / (end[moving, 0] - start[moving, 0])
-        col = start[moving, 1] + t * (end[moving, 1] - start[moving, 1])
-        right = col > c
-        # a positively oriented curve (area > 0) runs towards smaller rows on its larger-column
-        # side, so a downward crossing on the right counts +1
-        out[i] = int(np.sum(downward[moving] & right) - np.sum(upward[moving] & right))
+    probes = np.ascontiguousarray(np.atleast_2d(probes), dtype=np.float64)
+    return _winding(np.ascontiguousarray(points, dtype=np.float64),
+                    np.ascontiguousarray(next_index, dtype=np.intp), probes)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _winding(points, next_index, probes):
+    out = np.zeros(probes.shape[0], dtype=np.int64)
+    for i in range(probes.shape[0]):
+        r, c = probes[i, 0], probes[i, 1]
+        count = 0
+        for e in range(points.shape[0]):
+            r0, r1 = points[e, 0], points[next_index[e], 0]
+            upward = r0 <= r < r1
+            if not (upward or r1 <= r < r0):
+                continue
+            t = (r - r0) / (r1 - r0)
+            if points[e, 1] + t * (points[next_index[e], 1] - points[e, 1]) > c:
+                # a positively oriented curve (area > 0) runs towards smaller rows on its
+                # larger-column side: a downward crossing to the right counts +1
+                count += -1 if upward else 1
+        out[i] = count
     return out
+
+
+def curve_areas(points, next_index, offsets):
+    """Signed area of every stacked curve, shape (number of curves,)."""
+    following = points[next_index]
+    terms = 0.5 * (points[:, 0] * following[:, 1] - following[:, 0] * points[:, 1])
+    return np.add.reduceat(terms, offsets[:-1]) if len(points) else np.zeros(0)
 
 
 def repair(points, next_index, offsets, *, min_area=0.0):
@@ -138,54 +153,39 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     n_points = len(points)
     n_cross = first.size
     cross_points = points[first] + s[:, None] * (points[next_index[first]] - points[first])
-    # Cut positions along every edge: (edge, parameter, node id of the crossing).
-    cut_edge = np.concatenate([first, second])
-    cut_param = np.concatenate([s, t])
-    cut_node = np.concatenate([np.arange(n_cross), np.arange(n_cross)]) + n_points
     nodes = np.vstack([points, cross_points])
-    # The node sequence of every curve with crossings inserted in order along each edge.
-    order = np.lexsort((cut_param, cut_edge))
-    cut_edge, cut_node = cut_edge[order], cut_node[order]
-    sequences = []
-    for a, b in zip(offsets[:-1], offsets[1:], strict=True):
-        seq = []
-        edge_ptr = np.searchsorted(cut_edge, a)
-        for e in range(a, b):
-            seq.append(e)
-            while edge_ptr < len(cut_edge) and cut_edge[edge_ptr] == e:
-                seq.append(int(cut_node[edge_ptr]))
-                edge_ptr += 1
-        sequences.append(seq)
-    chains = _chains(sequences, n_points)
-    probes, kept = [], []
-    for chain in chains:
-        a, b = nodes[chain[0]], nodes[chain[1]]
-        direction = b - a
-        length = np.hypot(*direction)
-        normal = np.array([direction[1], -direction[0]]) / max(length, 1e-300)
-        probes.append(0.5 * (a + b) + normal * min(1e-6, 1e-3 * length))
-    windings = winding_number(points, next_index, np.array(probes))
+    # Every curve's node sequence with its crossings inserted in order along each edge: vertex e
+    # sorts at key e, a crossing at parameter s of edge e at e + s (curves are stacked in order).
+    cut_edge = np.concatenate([first, second])
+    keys = np.concatenate([np.arange(n_points, dtype=np.float64), cut_edge + np.concatenate([s, t])])
+    node_ids = np.concatenate([np.arange(n_points), np.tile(np.arange(n_cross), 2) + n_points])
+    sequence = node_ids[np.argsort(keys, kind="stable")]
+    bounds = np.searchsorted(keys[np.argsort(keys, kind="stable")], offsets[:-1].astype(np.float64))
+    bounds = np.append(bounds, len(sequence))
+    chains = []
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        chains.extend(_chains(sequence[a:b], n_points))
+    starts, seconds = nodes[[c[0] for c in chains]], nodes[[c[1] for c in chains]]
+    direction = seconds - starts
+    length = np.maximum(np.hypot(direction[:, 0], direction[:, 1]), 1e-300)
+    normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
+    probes = 0.5 * (starts + seconds) + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
+    windings = winding_number(points, next_index, probes)
     kept = [chain for chain, w in zip(chains, windings, strict=True) if w == 0]
     curves = _link(kept, nodes, n_points)
     return [c for c in curves if len(c) >= 3 and abs(signed_area(c)) > min_area]
 
 
-def _chains(sequences, n_points):
-    """Split node sequences at crossing nodes (ids >= n_points) into open chains (or closed loops)."""
-    chains = []
-    for seq in sequences:
-        marks = [i for i, node in enumerate(seq) if node >= n_points]
-        if not marks:
-            chains.append(seq + [seq[0]])  # a closed loop untouched by crossings
-            continue
-        rotated = seq[marks[0]:] + seq[: marks[0]]
-        cut = [i - marks[0] for i in marks]
-        cut.append(len(rotated))
-        for i in range(len(cut) - 1):
-            chain = rotated[cut[i]: cut[i + 1] + 1] if cut[i + 1] < len(rotated) else \
-                rotated[cut[i]:] + [rotated[0]]
-            chains.append(chain)
-    return chains
+def _chains(sequence, n_points):
+    """Split one curve's cyclic node sequence at its crossing nodes (ids >= n_points) into chains
+    from crossing to crossing; a curve without crossings is one closed chain."""
+    marks = np.nonzero(sequence >= n_points)[0]
+    if marks.size == 0:
+        return [np.append(sequence, sequence[0])]
+    rotated = np.roll(sequence, -marks[0])
+    cuts = np.append(marks - marks[0], len(rotated))
+    closed = np.append(rotated, rotated[0])
+    return [closed[a: b + 1] for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
 
 
 def _link(kept, nodes, n_points):
