@@ -462,16 +462,12 @@ def _group_polygons(curves):
 
 
 def _contains(outer, inner):
-    """Whether most of ``inner``'s vertices (up to 16 of them) lie inside ``outer`` (even-odd)."""
-    step = max(1, len(inner) // 16)
-    points = inner[::step]
-    start, end = outer, np.roll(outer, -1, axis=0)
-    r, c = points[:, 0:1], points[:, 1:2]
-    crosses = (start[None, :, 0] > r) != (end[None, :, 0] > r)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (r - start[None, :, 0]) / (end[None, :, 0] - start[None, :, 0])
-    col = start[None, :, 1] + t * (end[None, :, 1] - start[None, :, 1])
-    inside = np.count_nonzero(crosses & (c < col), axis=1) % 2 == 1
+    """Whether most of ``inner``'s vertices (up to 16 of them) lie inside ``outer``."""
+    from activecontour.topology import winding_number
+
+    points = inner[:: max(1, len(inner) // 16)]
+    next_index = np.roll(np.arange(len(outer)), -1)
+    inside = winding_number(outer, next_index, points) != 0
     return np.count_nonzero(inside) * 2 > len(points)
 
 
