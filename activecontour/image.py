@@ -20,6 +20,7 @@ evaluation on a cell is :func:`activecontour.energy._cell_values`.
 from __future__ import annotations
 
 import os
+import warnings
 
 import numpy as np
 
@@ -49,7 +50,9 @@ def load_image(path):
     import skimage.io
 
     try:
-        image = skimage.io.imread(path)
+        with warnings.catch_warnings():  # imageio's plugin probing warns about unrelated plugins
+            warnings.simplefilter("ignore", DeprecationWarning)
+            image = skimage.io.imread(path)
     except Exception as exc:  # every reader raises its own type; report them all the same way
         raise ValueError(f"cannot read image {path!r}: {exc}") from None
     image = np.asarray(image)
