@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from activecontour.curve import from_xy, signed_area, to_xy
+from activecontour.curve import as_curve, from_xy, signed_area, to_xy
 from activecontour.image import load_image, normalize_image
 
 __all__ = [
@@ -359,22 +359,7 @@ def _contours_of(contours):
 def _as_curve_list(contours):
     if isinstance(contours, (str, bytes)) or not hasattr(contours, "__iter__"):
         raise TypeError("contours must be a list of (K, 2) arrays in (row, col)")
-    curves = []
-    for i, curve in enumerate(contours):
-        try:
-            curve = np.array(curve, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"contour {i} must be an array of (row, col) points") from None
-        if curve.ndim != 2 or curve.shape[1] != 2:
-            raise ValueError(f"contour {i} must have shape (K, 2) in (row, col), got {curve.shape}")
-        if not np.all(np.isfinite(curve)):
-            raise ValueError(f"contour {i} contains NaN or infinite coordinates")
-        if len(curve) > 1 and np.array_equal(curve[0], curve[-1]):
-            curve = curve[:-1]
-        if len(curve) < 3:
-            raise ValueError(f"contour {i} needs at least 3 vertices, got {len(curve)}")
-        curves.append(curve)
-    return curves
+    return [as_curve(curve, name=f"contour {i}") for i, curve in enumerate(contours)]
 
 
 def _metadata_of(contours, metadata, image_shape):
