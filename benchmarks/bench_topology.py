@@ -33,7 +33,15 @@ def cases():
     yield "colour", image, truth, ac.circle((64.0, 64.0), 50.0), {"color": "vector"}
 
 
+def warm_up():
+    """Load both backends' compiled code (numba caches it on disk) before timing anything."""
+    image, _ = synthetic.render(synthetic.disk((20, 20), 8), (40, 40))
+    for backend in ("polygon", "levelset"):
+        ac.segment(image, backend=backend)
+
+
 def main():
+    warm_up()
     header = (f"{'case':10s} {'backend':9s} | {'time s':>7s} | {'Dice':>6s} | {'curves':>6s} | "
               f"{'energy':>10s}")
     print(header)
