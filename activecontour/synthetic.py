@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.ndimage
 
-__all__ = ["add_noise", "annulus", "dice", "disk", "rectangle", "render", "star", "union"]
+__all__ = ["add_noise", "annulus", "coins", "dice", "disk", "equal_gray_colour", "rectangle", "render",
+           "star", "union"]
 
 
 def disk(center, radius):
@@ -108,3 +109,40 @@ def dice(mask, truth):
     mask, truth = np.asarray(mask, bool), np.asarray(truth, bool)
     total = mask.sum() + truth.sum()
     return 1.0 if total == 0 else 2.0 * np.logical_and(mask, truth).sum() / total
+
+
+def coins(*, seed=7, noise=0.05):
+    """Twelve disks of different intensities (0.55 to 0.95) on a 0.2 background, 128 x 160.
+
+    Returns the noisy image, the ground truth, and the disks' centres.
+    """
+    rng = np.random.default_rng(seed)
+    centers = [(26.0 + 40 * i + rng.uniform(-3, 3), 22.0 + 38 * j + rng.uniform(-3, 3))
+               for i in range(3) for j in range(4)]
+    radii = rng.uniform(9.0, 14.0, len(centers))
+    levels = np.linspace(0.55, 0.95, len(centers))
+    shapes = [disk(c, r) for c, r in zip(centers, radii, strict=True)]
+
+    def values(r, c):
+        out = np.zeros(np.broadcast(r, c).shape)
+        for shape, level in zip(shapes, levels, strict=True):
+            out[shape(r, c)] = level
+        return out
+
+    image, truth = render(union(*shapes), (128, 160), outside=0.2, values=values)
+    return add_noise(image, noise, seed), truth, centers
+
+
+def equal_gray_colour(*, seed=5, noise=0.05):
+    """A reddish disk on a greenish background of the same luminance (rgb2gray weights).
+
+    As gray the image is flat; only the colour channels tell the regions apart.  Returns the
+    noisy (128, 128, 3) image and the ground truth.
+    """
+    object_rgb = np.array([0.8, 0.2, 0.2])
+    gray = object_rgb @ [0.2125, 0.7154, 0.0721]
+    green = (gray - 0.2125 * 0.2 - 0.0721 * 0.2) / 0.7154
+    background_rgb = np.array([0.2, green, 0.2])
+    coverage, truth = render(disk((60.3, 66.1), 30.0), (128, 128))
+    rgb = coverage[:, :, None] * object_rgb + (1 - coverage[:, :, None]) * background_rgb
+    return rgb + np.random.default_rng(seed).normal(0, noise, rgb.shape), truth

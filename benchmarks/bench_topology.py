@@ -16,7 +16,6 @@ import numpy as np
 
 import activecontour as ac
 from activecontour import synthetic
-from tests.test_topology import coins_like, colour_image
 
 SIZE = (256, 256)
 
@@ -27,9 +26,9 @@ def cases():
     yield "two disks", synthetic.add_noise(image, 0.15, 1), truth, ac.circle((127.5, 127.5), 120.0), {}
     image, truth = synthetic.render(synthetic.annulus((127.5, 128.4), 28.0, 72.0), SIZE)
     yield "annulus", synthetic.add_noise(image, 0.15, 2), truth, ac.circle((127.5, 128.0), 100.0), {}
-    image, truth, _ = coins_like()
+    image, truth, _ = synthetic.coins()
     yield "12 coins", image, truth, "grid", {}
-    image, truth = colour_image()
+    image, truth = synthetic.equal_gray_colour()
     yield "colour", image, truth, ac.circle((64.0, 64.0), 50.0), {"color": "vector"}
 
 

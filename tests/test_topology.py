@@ -91,26 +91,8 @@ def test_annulus_from_one_circle_gets_a_hole():
     assert_monotone(result)
 
 
-def coins_like():
-    rng = np.random.default_rng(7)
-    centers = [(26.0 + 40 * i + rng.uniform(-3, 3), 22.0 + 38 * j + rng.uniform(-3, 3))
-               for i in range(3) for j in range(4)]
-    radii = rng.uniform(9.0, 14.0, len(centers))
-    levels = np.linspace(0.55, 0.95, len(centers))
-    shapes = [synthetic.disk(c, r) for c, r in zip(centers, radii, strict=True)]
-
-    def values(r, c):
-        out = np.zeros(np.broadcast(r, c).shape)
-        for shape, level in zip(shapes, levels, strict=True):
-            out[shape(r, c)] = level
-        return out
-
-    image, truth = synthetic.render(synthetic.union(*shapes), (128, 160), outside=0.2, values=values)
-    return synthetic.add_noise(image, 0.05, 3), truth, centers
-
-
 def test_grid_start_finds_every_coin_and_invents_none():
-    image, truth, centers = coins_like()
+    image, truth, centers = synthetic.coins()
     result = ac.segment(image, "grid")
     assert len(result.contours) == 12
     for contour in result.contours:  # one curve per disk: each encloses exactly one centre
@@ -127,20 +109,8 @@ def test_grid_covers_the_image():
     assert centers[:, 0].min() < 16 and centers[:, 0].max() > 100 - 16
 
 
-def colour_image():
-    # two regions with the same luminance (rgb2gray weights) but different hue
-    object_rgb = np.array([0.8, 0.2, 0.2])
-    gray = object_rgb @ [0.2125, 0.7154, 0.0721]
-    green = (gray - 0.2125 * 0.2 - 0.0721 * 0.2) / 0.7154
-    background_rgb = np.array([0.2, green, 0.2])
-    mask_image, truth = synthetic.render(synthetic.disk((60.3, 66.1), 30.0), SIZE)
-    rgb = mask_image[:, :, None] * object_rgb + (1 - mask_image[:, :, None]) * background_rgb
-    noise = np.random.default_rng(5).normal(0, 0.05, rgb.shape)
-    return rgb + noise, truth
-
-
 def test_colour_regions_of_equal_gray_level():
-    image, truth = colour_image()
+    image, truth = synthetic.equal_gray_colour()
     result = ac.segment(image, ac.circle((64.0, 64.0), 50.0), color="vector")
     assert synthetic.dice(result.mask, truth) >= 0.98
     assert np.shape(result.c_in) == (3,)
@@ -152,7 +122,7 @@ def test_colour_regions_of_equal_gray_level():
 
 
 def test_per_channel_weights_select_channels():
-    image, truth = colour_image()
+    image, truth = synthetic.equal_gray_colour()
     # weight only the blue channel, equal in both regions: no contrast left to follow
     blind = ac.segment(image, ac.circle((64.0, 64.0), 50.0), color="vector",
                        lambda_in=[1e-6, 1e-6, 1.0], lambda_out=[1e-6, 1e-6, 1.0])
