@@ -46,7 +46,7 @@ def test_moments_of_linear_and_bilinear_images_are_exact():
         (1, 1): 2 * a * e + 2 * b * d, (2, 1): 2 * b * e, (1, 2): 2 * d * e, (2, 2): e * e,
     }
     antiderivative = {0: one, 1: lin, 2: sq}
-    expected2 = sum(coef * integral(antiderivative[i], antiderivative[j]) for (i, j), coef in terms.items())
+    expected2 = sum(c * integral(antiderivative[i], antiderivative[j]) for (i, j), c in terms.items())
     assert second[0] == pytest.approx(expected2, rel=1e-12)
 
 
@@ -138,7 +138,8 @@ def test_shape_derivative_of_a_hole():
     numeric = _finite_difference(model, points, nxt, params)
     np.testing.assert_allclose(numeric, analytic, atol=1e-6 * np.abs(analytic).max())
     area = evaluate(model, points, nxt, params).area
-    assert area == pytest.approx(0.5 * 60 * 225 * np.sin(2 * np.pi / 60) - 0.5 * 24 * 25 * np.sin(2 * np.pi / 24))
+    polygon_area = 0.5 * 60 * 225 * np.sin(2 * np.pi / 60) - 0.5 * 24 * 25 * np.sin(2 * np.pi / 24)
+    assert area == pytest.approx(polygon_area)
 
 
 def test_energy_is_infinite_without_inside_or_outside():
