@@ -51,7 +51,7 @@ import numpy as np
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
 from activecontour.initial import default_init, initial_curves
-from activecontour.segment import BACKENDS
+from activecontour.segment import BACKENDS, segment
 from app.viewer_layout import (
     CONTOUR_COLOR,
     PREVIEW_COLOR,
@@ -78,6 +78,7 @@ SHORTCUTS = (
     ("b", "b", "box"),
     ("p", "p", "polygon"),
     ("m", "m", "load mask"),
+    ("g", "g", "gray/colour"),
     ("q", "q", "quit"),
 )
 
@@ -506,6 +507,7 @@ class Viewer:
             "b": lambda: self.set_init_mode("box"),
             "p": lambda: self.set_init_mode("polygon"),
             "m": self.load_mask,
+            "g": self.toggle_color,
             "q": self.quit,
         }
 
@@ -545,6 +547,15 @@ class Viewer:
 
     def _on_drawn_curve(self, curve):
         self.set_init([curve])
+
+    def toggle_color(self):
+        """Switch a colour image between gray and vector-valued (per-channel) segmentation."""
+        if self.image.ndim != 3:
+            self._set_message("the image is gray: there is no colour to switch to")
+            return
+        self.color = "vector" if self.color == "gray" else "gray"
+        self._set_message(f"colour: {'each channel (vector)' if self.color == 'vector' else 'gray'}"
+                          "; applies to the next run (space)")
 
     def _on_slider(self, _value):
         if self.running or self.result is not None:
@@ -668,6 +679,9 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
               "(no display?); set MPLBACKEND to an interactive backend such as TkAgg or QtAgg",
               file=sys.stderr)
         return 1
+    # The library's compiled kernels load (or, once after installing, compile) on their first
+    # call: do that now, before the window opens, rather than freeze it during the first run.
+    segment(np.eye(8), max_num_iter=1)
     plt.show()
     return 0
 

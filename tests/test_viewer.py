@@ -489,3 +489,16 @@ def test_bad_constructor_arguments(disk_image, tmp_path):
     with pytest.raises(FileNotFoundError):
         Viewer(image, init=tmp_path / "missing_mask.png")
     assert plt.get_fignums() == figures  # no window left behind
+
+
+def test_colour_key_switches_to_vector_segmentation(make_viewer):
+    image, truth = synthetic.equal_gray_colour()
+    viewer = make_viewer(image)
+    assert viewer.parameters()["color"] == "gray"
+    key(viewer, "g")
+    assert viewer.parameters()["color"] == "vector"
+    key(viewer, " ")
+    assert synthetic.dice(viewer.result.mask, truth) >= 0.98  # the regions differ only in hue
+    gray_viewer = make_viewer(np.zeros((20, 20)))
+    key(gray_viewer, "g")
+    assert gray_viewer.parameters()["color"] == "gray" and "gray" in gray_viewer.message
