@@ -202,44 +202,21 @@ def evaluate(model, points, next_index, params, *, gradient=False):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cell_values(table, u, v, intensity, g1, g2, antiderivatives):
-    """I, and its row-antiderivatives of I and I^2, at padded coordinates (u, v), per channel.
-
-    On the cell [a, a + 1] x [j, j + 1] with local coordinates (t, w), I is bilinear; the row
-    antiderivatives are the table values at row a plus the exact integral from a to u.
-    """
-    a = min(max(int(np.floor(u)), 0), table.shape[0] - 2)
-    j = min(max(int(np.floor(v)), 0), table.shape[1] - 2)
-    t, w = u - a, v - j
-    w0 = 1.0 - w
-    half, third = 0.5 * t * t, t * t * t / 3.0
-    for ch in range(table.shape[2]):
-        here, right = table[a, j, ch], table[a, j + 1, ch]  # (P, t1, t2, t3) at two corners
-        p0, p1 = here[0], table[a + 1, j, ch, 0]
-        q0, q1 = right[0], table[a + 1, j + 1, ch, 0]
-        dp, dq = p1 - p0, q1 - q0
-        intensity[ch] = w0 * (p0 + t * dp) + w * (q0 + t * dq)
-        if antiderivatives:
-            g1[ch] = w0 * (here[1] + t * p0 + half * dp) + w * (right[1] + t * q0 + half * dq)
-            b_pp = here[2] + p0 * p0 * t + 2.0 * p0 * dp * half + dp * dp * third
-            b_qq = right[2] + q0 * q0 * t + 2.0 * q0 * dq * half + dq * dq * third
-            b_pq = here[3] + p0 * q0 * t + (p0 * dq + q0 * dp) * half + dp * dq * third
-            g2[ch] = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
-
-
-@numba.njit(cache=True, error_model="numpy")
 def _edge_integrals(points, next_index, table, stage, c_in, c_out, lambda_in,
                     lambda_out, omega, mu, s1, s2, sums, load):
     """Exact integrals along every edge, split where it crosses a grid line.
 
     ``stage`` 0 accumulates the moments ``closed integral of G dc`` into s1, s2 and the signed area
     and length into ``sums``; stage 1 adds the load (6.41) into ``load``.  Each piece between grid
-    lines is a polynomial of degree <= 5 in the edge parameter: 3-point Gauss-Legendre is exact.
+    lines lies in one interpolation cell [a, a + 1] x [j, j + 1], read once: there, with local
+    coordinates (t, w), I is bilinear and its row-antiderivatives are the table values at row a
+    plus the exact integral from a to u, so the integrands are polynomials of degree <= 5 in the
+    edge parameter and 3-point Gauss-Legendre is exact.
     """
     channels = table.shape[2]
-    intensity, g1, g2 = np.empty(channels), np.empty(channels), np.empty(channels)
     nodes = (0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6))
     weights = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
+    density = np.empty(3)
     for e in range(points.shape[0]):
         b = next_index[e]
         u0, v0 = points[e, 0] + 1.0, points[e, 1] + 1.0
@@ -257,21 +234,39 @@ def _edge_integrals(points, next_index, table, stage, c_in, c_out, lambda_in,
             t_next = min(t_u, t_v, 1.0)
             span = t_next - t_prev
             if span > 0.0:
-                for g in range(3):
-                    t = t_prev + span * nodes[g]
-                    weight = span * weights[g]
-                    _cell_values(table, u0 + t * du, v0 + t * dv, intensity, g1, g2, stage == 0)
-                    if stage == 0:
-                        for ch in range(channels):
-                            s1[ch] += weight * dv * g1[ch]
-                            s2[ch] += weight * dv * g2[ch]
-                    else:
-                        density = omega
-                        for ch in range(channels):
-                            density += (lambda_in[ch] * (intensity[ch] - c_in[ch]) ** 2
-                                        - lambda_out[ch] * (intensity[ch] - c_out[ch]) ** 2)
-                        at_start += weight * density * (1.0 - t)
-                        at_end += weight * density * t
+                t_mid = t_prev + 0.5 * span
+                a = min(max(int(np.floor(u0 + t_mid * du)), 0), table.shape[0] - 2)
+                j = min(max(int(np.floor(v0 + t_mid * dv)), 0), table.shape[1] - 2)
+                density[:] = omega
+                for ch in range(channels):
+                    here, right = table[a, j, ch], table[a, j + 1, ch]  # (P, t1, t2, t3)
+                    p0, q0 = here[0], right[0]
+                    dp, dq = table[a + 1, j, ch, 0] - p0, table[a + 1, j + 1, ch, 0] - q0
+                    for g in range(3):
+                        t_edge = t_prev + span * nodes[g]
+                        t = u0 + t_edge * du - a
+                        w = v0 + t_edge * dv - j
+                        w0 = 1.0 - w
+                        intensity = w0 * (p0 + t * dp) + w * (q0 + t * dq)
+                        if stage == 0:
+                            half, third = 0.5 * t * t, t * t * t / 3.0
+                            g1 = w0 * (here[1] + t * p0 + half * dp) + w * (right[1] + t * q0 + half * dq)
+                            b_pp = here[2] + p0 * p0 * t + 2.0 * p0 * dp * half + dp * dp * third
+                            b_qq = right[2] + q0 * q0 * t + 2.0 * q0 * dq * half + dq * dq * third
+                            b_pq = here[3] + p0 * q0 * t + (p0 * dq + q0 * dp) * half + dp * dq * third
+                            g2 = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
+                            weight = span * weights[g] * dv
+                            s1[ch] += weight * g1
+                            s2[ch] += weight * g2
+                        else:
+                            density[g] += (lambda_in[ch] * (intensity - c_in[ch]) ** 2
+                                           - lambda_out[ch] * (intensity - c_out[ch]) ** 2)
+                if stage == 1:
+                    for g in range(3):
+                        t_edge = t_prev + span * nodes[g]
+                        weight = span * weights[g] * density[g]
+                        at_start += weight * (1.0 - t_edge)
+                        at_end += weight * t_edge
             if t_next >= 1.0:
                 break
             if t_u <= t_next:
