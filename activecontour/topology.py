@@ -49,9 +49,10 @@ def crossings(points, next_index):
 
 @numba.njit(cache=True, error_model="numpy")
 def _crossings(points, next_index):
-    """Grid hashing: every edge is filed under the cell of its bounding box's low corner, with
-    cells as large as the longest edge's extent, so edges whose boxes overlap sit in the same or
-    neighbouring cells; only those pairs are tested."""
+    """Grid hashing: every edge is filed, in a linked list per cell, under the cell of its bounding
+    box's low corner.  Cells are at least as large as the largest edge extent (and the grid has at
+    most 256 x 256 cells), so edges whose boxes overlap sit in the same or neighbouring cells; only
+    those pairs are tested: O(K) on average."""
     n = points.shape[0]
     found = [(0, 0, 0.0, 0.0)]
     found.pop()
@@ -64,30 +65,39 @@ def _crossings(points, next_index):
         for k in range(2):
             low[e, k] = min(points[e, k], points[b, k])
             cell = max(cell, abs(points[b, k] - points[e, k]))
-    cell *= 1.0001
     origin_r, origin_c = low[:, 0].min(), low[:, 1].min()
+    extent = max(low[:, 0].max() - origin_r, low[:, 1].max() - origin_c)
+    cell = max(cell, extent / 255.0) * 1.0001
+    rows = int((low[:, 0].max() - origin_r) / cell) + 1
+    cols = int((low[:, 1].max() - origin_c) / cell) + 1
+    head = np.full(rows * cols, -1, dtype=np.int64)
+    following = np.empty(n, dtype=np.int64)
     row = np.empty(n, dtype=np.int64)
     col = np.empty(n, dtype=np.int64)
     for e in range(n):
         row[e] = int((low[e, 0] - origin_r) / cell)
         col[e] = int((low[e, 1] - origin_c) / cell)
-    width = col.max() + 3
-    key = (row + 1) * width + col + 1
-    order = np.argsort(key)
-    sorted_key = key[order]
+        key = row[e] * cols + col[e]
+        following[e] = head[key]
+        head[key] = e
     for e in range(n):
+        a, b = e, next_index[e]
+        r0, r1 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1]
         for dr in (-1, 0, 1):
+            cell_row = row[e] + dr
+            if cell_row < 0 or cell_row >= rows:
+                continue
             for dc in (-1, 0, 1):
-                target = key[e] + dr * width + dc
-                i = np.searchsorted(sorted_key, target)
-                while i < n and sorted_key[i] == target:
-                    f = order[i]
-                    i += 1
-                    if f <= e or next_index[e] == f or next_index[f] == e:
+                cell_col = col[e] + dc
+                if cell_col < 0 or cell_col >= cols:
+                    continue
+                f = head[cell_row * cols + cell_col]
+                while f >= 0:
+                    other = f
+                    f = following[f]
+                    if other <= e or next_index[e] == other or next_index[other] == e:
                         continue
-                    a, b = e, next_index[e]
-                    c, d = f, next_index[f]
-                    r0, r1 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1]
+                    c, d = other, next_index[other]
                     u0, u1 = points[d, 0] - points[c, 0], points[d, 1] - points[c, 1]
                     denominator = r0 * u1 - r1 * u0
                     if denominator == 0.0:
@@ -96,7 +106,7 @@ def _crossings(points, next_index):
                     s = (q0 * u1 - q1 * u0) / denominator
                     t = (q0 * r1 - q1 * r0) / denominator
                     if 0.0 < s < 1.0 and 0.0 < t < 1.0:
-                        found.append((e, f, s, t))
+                        found.append((e, other, s, t))
     return found
 
 
