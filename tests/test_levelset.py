@@ -1,0 +1,446 @@
+"""Tests of the level-set backend (activecontour/levelset.py).
+
+Every expected number is derived: analytic distances, areas and lengths, Dice against the ground
+truth of :mod:`activecontour.synthetic`, the thresholds of the issue (Dice >= 0.99 between the
+backends and their energies within 1% by the common evaluator; Dice >= 0.97 for topology).
+"""
+
+import numpy as np
+import pytest
+
+import activecontour as ac
+from activecontour import synthetic as sy
+from activecontour.curve import signed_area
+from activecontour.energy import ChanVeseParameters
+from activecontour.image import ImageModel, normalize_image
+from activecontour.levelset import (
+    DEFAULT_OPTIONS,
+    _Problem,
+    _redistance,
+    checkerboard_level_set,
+    curves_level_set,
+    heaviside,
+    initial_level_set,
+    level_set_contours,
+    signed_distance,
+    smoothed_delta,
+)
+
+MU = 0.5
+
+
+def _circle_distance(shape, center, radius):
+    rr, cc = np.indices(shape, dtype=np.float64)
+    return radius - np.hypot(rr - center[0], cc - center[1])
+
+
+def _levelset(image, init=None, **kwargs):
+    kwargs.setdefault("mu", MU)
+    return ac.segment(image, init, backend="levelset", **kwargs)
+
+
+# ---------------------------------------------------------------------------------------------
+# The regularised Heaviside and delta
+
+
+@pytest.mark.parametrize("epsilon", [0.5, 1.0, 2.0])
+def test_delta_is_the_derivative_of_the_heaviside(epsilon):
+    s = np.linspace(-3.0, 3.0, 1201)
+    h = 1e-6
+    numeric = (heaviside(s + h, epsilon) - heaviside(s - h, epsilon)) / (2 * h)
+    np.testing.assert_allclose(numeric, smoothed_delta(s, epsilon), atol=1e-6)
+    assert heaviside(-epsilon, epsilon) == 0.0 and heaviside(epsilon, epsilon) == 1.0
+    assert heaviside(0.0, epsilon) == 0.5
+
+
+@pytest.mark.parametrize("epsilon", [1.0, 1.5, 2.0])
+def test_integer_translates_give_exact_length_and_area(epsilon):
+    # The Fourier transform of delta_eps vanishes at 2 pi k for integer or half-integer eps >= 1,
+    # so sum_j delta_eps(s - j) = 1 and sum_j H_eps(s - j) = the exact length of {x < s}.
+    offsets = np.random.default_rng(0).uniform(-0.5, 0.5, size=50)
+    grid = np.arange(-20, 21)
+    for s in offsets:
+        assert np.sum(smoothed_delta(s - grid, epsilon)) == pytest.approx(1.0, abs=1e-12)
+        # cells [j - 1/2, j + 1/2] for j = -20..20 cover [-20.5, 20.5]; {x < s} has length s + 20.5
+        assert np.sum(heaviside(s - grid, epsilon)) == pytest.approx(s + 20.5, abs=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# Signed distance, reinitialisation and contours
+
+
+def test_curves_level_set_is_the_distance_to_a_circle():
+    shape, center, radius = (96, 96), (47.3, 49.6), 25.2
+    exact = _circle_distance(shape, center, radius)
+    phi = curves_level_set([ac.circle(center, radius, n=720)], shape, band=4.0)
+    near = np.abs(exact) < 3.0
+    # the 720-gon is within R (1 - cos(pi/720)) < 3e-4 px of the circle, and the distance to it
+    # is exact in the band
+    assert np.max(np.abs(phi - exact)[near]) < 1e-3
+    assert np.all(np.abs(phi) <= 4.0)
+    np.testing.assert_array_equal(phi > 0, exact > 0)
+
+
+def test_reinitialisation_keeps_the_zero_set_and_restores_the_distance():
+    shape, center, radius = (96, 96), (48.5, 47.2), 30.0
+    exact = _circle_distance(shape, center, radius)
+    rr, cc = np.indices(shape)
+    gain = 1.5 + 0.3 * np.sin(rr / 9.0) * np.cos(cc / 11.0)  # |grad gain| <= 0.3 / 9
+    phi = signed_distance(gain * exact, band=5.0)
+    np.testing.assert_array_equal(phi > 0, exact > 0)
+    # Marching squares puts the zero of gain * d within h^2 |phi''| / (8 |phi'|) of the circle,
+    # with phi''/phi' <= 2 |grad gain| / gain + kappa = 2 (0.3/9) / 1.2 + 1/30: below 0.02 px;
+    # the chords of the circle add R (1 - cos(h / (2R))) ~ h^2 / (8 R) < 0.005 px.
+    near = np.abs(exact) < 3.0
+    assert np.max(np.abs(phi - exact)[near]) < 0.025
+    # idempotent up to the chord error: a signed distance is its own reinitialisation
+    again = signed_distance(phi, band=5.0)
+    assert np.max(np.abs(again - phi)[near]) < 0.01
+
+
+def test_reinitialisation_keeps_a_straight_front_exactly():
+    shape = (40, 50)
+    rr, cc = np.indices(shape, dtype=np.float64)
+    normal = np.array([np.cos(0.3), np.sin(0.3)])
+    exact = 20.37 - (rr * normal[0] + cc * normal[1])  # a straight front at angle 0.3
+    phi = signed_distance(3.0 * exact, band=4.0)
+    # where the foot of the perpendicular lies on the grid, the zero set (which ends at the
+    # outermost pixel centres) is the line itself
+    foot_r, foot_c = rr + exact * normal[0], cc + exact * normal[1]
+    on_grid = (foot_r >= 0) & (foot_r <= shape[0] - 1) & (foot_c >= 0) & (foot_c <= shape[1] - 1)
+    near = (np.abs(exact) < 3.5) & on_grid
+    np.testing.assert_allclose(phi[near], exact[near], atol=1e-9)
+
+
+def test_energy_does_not_change_under_reinitialisation():
+    image, _ = sy.render(sy.disk((40.4, 45.1), 20.0), (96, 96), inside=0.8, outside=0.2)
+    model = ImageModel(normalize_image(image))
+    problem = _Problem(model, ChanVeseParameters(mu=MU), DEFAULT_OPTIONS)
+    distance = _circle_distance((96, 96), (42.0, 44.0), 25.0)
+    state = _redistance(distance * (1.0 + 0.5 * np.cos(np.indices((96, 96))[0] / 6.0)) ** 2, 4.0)
+    again = _redistance(state.phi, 4.0)
+    first, second = problem.energy(state)[0], problem.energy(again)[0]
+    # E depends on phi through its zero set only, and a reinitialisation moves that set by at
+    # most the chord error h^2 / (8 R) < 0.005 px; |f| <= 0.6^2 and mu, so E moves by at most
+    # (0.36 + mu / R) |Gamma| 0.005 with |Gamma| = 2 pi 25
+    bound = (0.36 + MU / 25.0) * 2 * np.pi * 25.0 * 0.005
+    assert abs(second - first) <= bound
+
+
+def test_contours_are_oriented_and_measure_the_annulus():
+    shape, center = (96, 96), (48.0, 47.5)
+    outer = _circle_distance(shape, center, 40.0)
+    inner = -_circle_distance(shape, center, 15.0)
+    phi = signed_distance(np.minimum(outer, inner), band=4.0)
+    contours = level_set_contours(phi)
+    areas = sorted(signed_area(c) for c in contours)
+    assert len(contours) == 2
+    # marching squares on a distance function: chords of a polygon inscribed within ~0.01 px
+    assert areas[0] == pytest.approx(-np.pi * 15.0**2, rel=0.01)
+    assert areas[1] == pytest.approx(np.pi * 40.0**2, rel=0.01)
+    for contour in contours:
+        assert not np.array_equal(contour[0], contour[-1])  # each vertex once
+
+
+def test_contour_of_a_region_touching_the_border_closes_on_the_domain_edge():
+    shape = (30, 40)
+    rr = np.indices(shape, dtype=np.float64)[0]
+    phi = 10.25 - rr  # inside: rows 0..10, the front at row 10.25
+    (contour,) = level_set_contours(phi)
+    assert contour[:, 0].min() == pytest.approx(-0.5)
+    assert contour[:, 1].min() == pytest.approx(-0.5) and contour[:, 1].max() == pytest.approx(39.5)
+    # the region [-0.5, 10.25] x [-0.5, 39.5], less the marching-squares cuts of its corners:
+    # right triangles with legs 0.5 x 0.5 at the two border corners, 0.5 x 0.25 where the front
+    # meets the border
+    expected = 10.75 * 40.0 - 2 * 0.5 * 0.5 * 0.5 - 2 * 0.5 * 0.5 * 0.25
+    assert signed_area(contour) == pytest.approx(expected)
+
+
+def test_checkerboard_init_is_a_checkerboard():
+    shape, period = (64, 80), 16
+    phi = initial_level_set("checkerboard", shape, band=4.0, checkerboard_period=period)
+    rr, cc = np.indices(shape)
+    expected = (rr // period + cc // period) % 2 == 0  # squares of period x period pixels
+    np.testing.assert_array_equal(phi > 0, expected)
+    np.testing.assert_array_equal(checkerboard_level_set(shape, period) > 0, expected)
+    # the zero lines run half-way between pixel centres (0.5 away), cut diagonally at the
+    # square corners (saddles), sqrt(2)/4 away
+    assert np.min(np.abs(phi)) == pytest.approx(np.sqrt(2) / 4)
+
+
+# ---------------------------------------------------------------------------------------------
+# Segmentation: agreement with the polygon backend, topology, energy history
+
+
+@pytest.fixture(scope="module")
+def noisy_disk():
+    image, truth = sy.render(sy.disk((60.3, 66.7), 30.0), (128, 128), inside=0.8, outside=0.2)
+    return sy.add_noise(image, 0.1, seed=3), truth
+
+
+def test_convex_object_agrees_with_the_polygon_backend(noisy_disk):
+    image, truth = noisy_disk
+    level = _levelset(image)
+    polygon = ac.segment(image, backend="polygon", mu=MU)
+    assert level.success and polygon.success
+    assert sy.dice(level.mask, polygon.mask) >= 0.99
+    level_energy = ac.chan_vese_energy(image, level.contours, mu=MU)
+    polygon_energy = ac.chan_vese_energy(image, polygon.contours, mu=MU)
+    assert abs(level_energy - polygon_energy) <= 0.01 * polygon_energy
+    assert sy.dice(level.mask, truth) >= 0.99
+
+
+def test_one_circle_around_two_disks_splits_into_two_contours():
+    truth_shape = sy.union(sy.disk((64.0, 40.0), 22.0), sy.disk((64.0, 92.0), 20.0))
+    image, truth = sy.render(truth_shape, (128, 128), inside=0.75, outside=0.25)
+    image = sy.add_noise(image, 0.1, seed=5)
+    result = _levelset(image, ac.circle((63.5, 65.0), 58.0))
+    assert len(result.contours) == 2
+    assert all(signed_area(c) > 0 for c in result.contours)
+    assert sy.dice(result.mask, truth) >= 0.97
+
+
+def test_annulus_ends_with_an_outer_contour_and_a_hole():
+    image, truth = sy.render(sy.annulus((64.0, 64.0), 18.0, 48.0), (128, 128), inside=0.75,
+                             outside=0.25)
+    image = sy.add_noise(image, 0.1, seed=7)
+    # the default circle (radius 48) is the outer boundary: the hole must open inside it unseeded
+    result = _levelset(image)
+    areas = sorted(signed_area(c) for c in result.contours)
+    assert len(areas) == 2
+    assert areas[0] < 0 < areas[1]
+    assert areas[0] == pytest.approx(-np.pi * 18.0**2, rel=0.05)
+    assert areas[1] == pytest.approx(np.pi * 48.0**2, rel=0.05)
+    assert sy.dice(result.mask, truth) >= 0.97
+
+
+def test_energy_history_never_increases(noisy_disk):
+    image, _ = noisy_disk
+    result = _levelset(image)
+    energies = result.energies
+    assert len(energies) == result.n_iter + 1
+    assert energies[-1] == result.energy
+    # every iteration ends with a reinitialisation; E depends on the zero set only, so it is
+    # accounted for and the history is monotone throughout
+    assert np.all(np.diff(energies) <= 1e-12 * abs(energies[0]))
+    assert energies[-1] < energies[0]
+
+
+def test_result_fields(noisy_disk):
+    image, truth = noisy_disk
+    result = _levelset(image)
+    assert result.backend == "levelset"
+    assert result.phi.shape == image.shape
+    np.testing.assert_array_equal(result.mask, result.phi > 0)
+    assert result.success and result.status in (0, 4)
+    # phi is the signed distance clipped to the band
+    assert np.max(np.abs(result.phi)) == DEFAULT_OPTIONS["band"]
+    # c_in, c_out are the region means (6.42): 0.8 and 0.2 up to the noise and the boundary
+    assert result.c_in == pytest.approx(0.8, abs=0.02)
+    assert result.c_out == pytest.approx(0.2, abs=0.02)
+
+
+def test_level_set_result_hands_over_to_the_polygon_and_back(noisy_disk):
+    image, truth = noisy_disk
+    level = _levelset(image)
+    level_energy = ac.chan_vese_energy(image, level.contours, mu=MU)
+    finish = ac.segment(image, level, backend="polygon", mu=MU)
+    # the polygon starts on the level set's contours and only descends from there
+    assert ac.chan_vese_energy(image, finish.contours, mu=MU) <= level_energy
+    assert sy.dice(finish.mask, truth) >= 0.99
+    back = _levelset(image, finish)
+    assert sy.dice(back.mask, finish.mask) >= 0.99
+
+
+def test_reuses_phi_of_a_level_set_result(noisy_disk):
+    image, _ = noisy_disk
+    first = _levelset(image)
+    again = _levelset(image, first, max_num_iter=5)
+    # the start is the converged state: the same zero set, so the same energy up to the chord
+    # error of the reinitialisation (< 0.005 px on this radius-30 disk, |f| < 1: a relative
+    # change below 2 pi 30 0.005 / E)
+    assert abs(again.energies[0] - first.energy) <= 2 * np.pi * 30 * 0.005
+    assert sy.dice(again.mask, first.mask) >= 0.999
+
+
+def test_mask_and_curve_list_inits():
+    image, truth = sy.render(sy.disk((50.0, 50.0), 20.0), (100, 100), inside=0.9, outside=0.1)
+    mask = np.zeros((100, 100), dtype=bool)
+    mask[25:75, 20:80] = True
+    from_mask = _levelset(image, mask)
+    from_curves = _levelset(image, [ac.rectangle((24.5, 19.5), (74.5, 79.5))])
+    from_grid = _levelset(image, "grid")
+    for result in (from_mask, from_curves, from_grid):
+        assert sy.dice(result.mask, truth) >= 0.99
+
+
+def test_checkerboard_start_finds_both_objects():
+    # half-integer edges: no pixel centre lies on the rectangle's boundary
+    truth_shape = sy.union(sy.disk((30.0, 30.0), 14.0), sy.rectangle((59.5, 54.5), (85.5, 88.5)))
+    image, truth = sy.render(truth_shape, (100, 100), inside=0.8, outside=0.2)
+    for period in (8, 16):
+        result = _levelset(image, "checkerboard", options={"checkerboard_period": period})
+        # the phase whose inside covers less of the image border is returned
+        assert sy.dice(result.mask, truth) >= 0.97
+        assert len(result.contours) == 2
+
+
+def test_unequal_fitting_weights():
+    # lambda_in = 2, lambda_out = 0.5 move the optimal edge to where 2 (I - 0.8)^2 = 0.5 (I - 0.2)^2,
+    # I = 0.6, a third of a pixel inside the disk's anti-aliased edge: Dice about 1 - 0.33 / 15
+    image, truth = sy.render(sy.disk((30.0, 30.0), 15.0), (64, 64), inside=0.8, outside=0.2)
+    result = _levelset(image, mu=0.2, lambda_in=2.0, lambda_out=0.5)
+    assert result.success
+    assert sy.dice(result.mask, truth) >= 0.97
+
+
+def test_fixed_constants_are_kept():
+    image, truth = sy.render(sy.disk((40.0, 40.0), 18.0), (80, 80), inside=0.9, outside=0.1)
+    result = _levelset(image, c_in=0.9, c_out=0.1)
+    assert result.c_in == 0.9 and result.c_out == 0.1
+    assert sy.dice(result.mask, truth) >= 0.99
+
+
+def test_vector_valued_image():
+    shape = sy.disk((40.0, 44.0), 18.0)
+    red, truth = sy.render(shape, (80, 88), inside=0.9, outside=0.2)
+    green, _ = sy.render(shape, (80, 88), inside=0.1, outside=0.6)
+    image = np.stack([red, green, np.full_like(red, 0.5)], axis=2)
+    result = _levelset(image, color="vector")
+    assert np.shape(result.c_in) == (3,)
+    assert sy.dice(result.mask, truth) >= 0.99
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32, np.float64])
+def test_image_dtypes_give_the_same_segmentation(dtype):
+    image, truth = sy.render(sy.disk((30.0, 33.0), 14.0), (64, 64), inside=0.8, outside=0.2)
+    if np.issubdtype(dtype, np.integer):
+        image = np.round(image * np.iinfo(dtype).max).astype(dtype)
+    else:
+        image = image.astype(dtype)
+    result = _levelset(image)
+    assert sy.dice(result.mask, truth) >= 0.99
+
+
+def test_callback_sees_every_iteration_and_can_stop(noisy_disk):
+    image, _ = noisy_disk
+    seen = []
+
+    def callback(state):
+        seen.append(state)
+        return state.iteration == 3
+
+    result = _levelset(image, callback=callback)
+    assert result.status == 2 and not result.success
+    assert result.n_iter == 3 and [s.iteration for s in seen] == [1, 2, 3]
+    assert seen[-1].energy == result.energy
+    np.testing.assert_array_equal(seen[-1].mask, result.mask)
+    assert len(seen[-1].contours) == len(result.contours)
+
+
+@pytest.mark.parametrize("dt", [0.5, 1024.0])
+def test_a_first_step_outside_the_default_range_widens_it(noisy_disk, dt):
+    image, truth = noisy_disk
+    result = _levelset(image, options={"dt": dt})
+    assert result.success and sy.dice(result.mask, truth) >= 0.99
+
+
+def test_max_num_iter_zero_returns_the_start(noisy_disk):
+    image, _ = noisy_disk
+    result = _levelset(image, max_num_iter=0)
+    assert result.n_iter == 0 and result.status == 1
+    assert len(result.energies) == 1
+
+
+@pytest.mark.parametrize(("omega", "expect_all"), [(0.05, False), (-0.05, True)])
+def test_area_weight_shrinks_or_grows_a_flat_image(omega, expect_all):
+    # On a constant image c_in = c_out = I, so f = omega everywhere: omega > 0 empties the
+    # inside (status 3), omega < 0 fills the image
+    image = np.full((40, 48), 0.5)
+    result = _levelset(image, ac.circle((20.0, 24.0), 9.0), mu=0.05, omega=omega, max_num_iter=200)
+    if expect_all:
+        assert result.mask.all()
+    else:
+        assert result.status == 3 and not result.mask.any()
+
+
+def test_a_huge_length_weight_collapses_the_contour():
+    image, _ = sy.render(sy.disk((20.0, 20.0), 6.0), (40, 40), inside=0.6, outside=0.4)
+    result = _levelset(image, mu=50.0)
+    assert result.status == 3 and not result.success
+    assert not result.mask.any() and result.contours == []
+
+
+# ---------------------------------------------------------------------------------------------
+# Bad input
+
+
+def test_unknown_init_string():
+    with pytest.raises(ValueError, match="valid strings are 'checkerboard', 'grid'"):
+        _levelset(np.zeros((20, 20)), "chequerboard")
+
+
+def test_unknown_option():
+    with pytest.raises(TypeError, match="unknown option.*'reinit'.*valid options are .*band"):
+        _levelset(np.zeros((20, 20)), options={"reinit": 3})
+
+
+def test_wrong_mask_shape():
+    with pytest.raises(ValueError, match=r"init mask has shape \(10, 10\).*\(20, 20\)"):
+        _levelset(np.zeros((20, 20)), np.ones((10, 10), dtype=bool))
+
+
+def test_wrong_phi_shape():
+    image = np.zeros((20, 20))
+    previous = ac.SegmentationResult(
+        mask=np.ones((10, 10), bool), contours=[], c_in=1.0, c_out=0.0, energy=0.0, energies=[0.0],
+        n_iter=0, status=0, backend="levelset", phi=np.ones((10, 10)),
+    )
+    with pytest.raises(ValueError, match=r"phi of shape \(10, 10\)"):
+        _levelset(image, previous)
+
+
+@pytest.mark.parametrize(
+    ("options", "error", "match"),
+    [
+        ({"dt": -1.0}, ValueError, "'dt' must be a positive"),
+        ({"band": "wide"}, TypeError, "'band' must be a number"),
+        ({"band": 1.5}, ValueError, "'band' .* must be at least epsilon"),
+        ({"max_backtracks": 2.5}, ValueError, "'max_backtracks' must be an integer"),
+        ({"dt_max": 1.0}, ValueError, "dt_min <= dt <= dt_max"),
+        ({"dt": 8.0, "dt_min": 16.0}, ValueError, "dt_min <= dt <= dt_max"),
+    ],
+)
+def test_bad_option_values(options, error, match):
+    with pytest.raises(error, match=match):
+        _levelset(np.zeros((20, 20)), options=options)
+
+
+def test_init_with_nothing_inside():
+    # a thin rectangle between two rows of pixel centres
+    with pytest.raises(ValueError, match="nothing would be inside"):
+        _levelset(np.zeros((20, 20)), ac.rectangle((10.2, 2.0), (10.8, 15.0)))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["two disks", "annulus"])
+def test_beats_skimage_chan_vese_from_the_same_start(case):
+    # the benchmark's comparison (benchmarks/bench_levelset.py) on 256 x 256 images: Dice against
+    # the ground truth at least that of skimage's chan_vese, energy by the common evaluator at most
+    skimage_segmentation = pytest.importorskip("skimage.segmentation")
+    shapes = {
+        "two disks": sy.union(sy.disk((128.0, 75.0), 40.0), sy.disk((128.0, 185.0), 35.0)),
+        "annulus": sy.annulus((128.0, 128.0), 45.0, 110.0),
+    }
+    image, truth = sy.render(shapes[case], (256, 256), inside=0.75, outside=0.25)
+    image = sy.add_noise(image, 0.15, seed=1, blur=1.0)
+    mu = 0.2
+    start = ac.initial.default_init(image.shape)
+    ours = _levelset(image, start, mu=mu)
+    scale = image.max() - image.min()  # chan_vese rescales the image to [0, 1]
+    phi0 = curves_level_set(start, image.shape) / 96.0
+    _, phi, _ = skimage_segmentation.chan_vese(image, mu=mu / scale**2, init_level_set=phi0, tol=1e-5,
+                                               extended_output=True)
+    assert sy.dice(ours.mask, truth) >= sy.dice(phi > 0, truth)
+    assert ac.chan_vese_energy(image, ours.contours, mu=mu) <= ac.chan_vese_energy(
+        image, level_set_contours(phi), mu=mu)
