@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import inspect
 
 import numpy as np
 
@@ -77,5 +78,19 @@ def segment(image, init=None, *, backend="polygon", mu=0.2, omega=0.0, lambda_in
     model = ImageModel(normalize_image(image, color=color))
     module_name, function_name = BACKENDS[backend].split(":")
     solver = getattr(importlib.import_module(module_name), function_name)
+    _check_options(solver, backend, options or {})
     return solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
                   callback=callback, **(options or {}))
+
+
+def _check_options(solver, backend, options):
+    """Name the valid options of a backend that lists them as keywords (others check their own)."""
+    parameters = inspect.signature(solver).parameters.values()
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
+        return
+    valid = sorted(p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY
+                   and p.name not in ("max_num_iter", "tol", "callback"))
+    unknown = sorted(set(options) - set(valid))
+    if unknown:
+        raise TypeError(f"unknown option(s) {', '.join(map(repr, unknown))} for backend {backend!r}; "
+                        f"the valid options are {', '.join(valid)}")

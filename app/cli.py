@@ -9,7 +9,8 @@ Usage
                           [--lambda-in L] [--lambda-out L] [--max-iter N] [--tol TOL]
                           [--c-in C] [--c-out C] [--color {gray,vector}]
                           [--init-circle ROW COL RADIUS | --init-rect ROW0 COL0 ROW1 COL1 |
-                           --init-mask FILE | --init-contours FILE]
+                           --init-mask FILE | --init-contours FILE | --init-grid |
+                           --init-checkerboard] [--option KEY=VALUE ...]
                           [--overlay-color COLOR] [--quiet]
     activecontour view IMAGE [the same parameter and init options]
 
@@ -128,6 +129,11 @@ def build_parser():
         "-q", "--quiet", action="store_true", help="no progress bar and no summary lines"
     )
     _add_parameter_options(segment)
+    segment.add_argument(
+        "--option", dest="options", action="append", type=_option, default=None, metavar="KEY=VALUE",
+        help="a backend setting passed in segment(options=...), e.g. smoothing=10 or dt=32; "
+        "repeatable (see the backends' docstrings)",
+    )
     segment.set_defaults(run=_run_segment)
 
     view = commands.add_parser(
@@ -185,6 +191,10 @@ def _add_parameter_options(parser):
                       help="a mask image of the image's size (nonzero = inside)")
     init.add_argument("--init-contours", type=Path, metavar="FILE",
                       help="a contour file written by this tool (.json, .geojson, .svg, .csv, .npz)")
+    init.add_argument("--init-grid", action="store_true",
+                      help="small circles all over the image, for many objects (either backend)")
+    init.add_argument("--init-checkerboard", action="store_true",
+                      help="a checkerboard level set (--backend levelset only)")
 
 
 # --------------------------------------------------------------------------------------- segment
@@ -235,12 +245,28 @@ def _settings(args):
     from activecontour.energy import ChanVeseParameters
 
     settings = {name: getattr(args, name) for name in _PARAMETER_OPTIONS}
+    if getattr(args, "options", None):
+        settings["options"] = dict(args.options)
     try:
         ChanVeseParameters(settings["mu"], settings["omega"], settings["lambda_in"],
                            settings["lambda_out"], settings["c_in"], settings["c_out"])
     except (ValueError, TypeError) as exc:
         raise UsageError(_with_option_names(str(exc))) from None
     return settings
+
+
+def _option(text):
+    """KEY=VALUE, the value read as an int, a float, true/false, or else kept as text."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip().isidentifier():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    value = value.strip()
+    for convert in (int, float):
+        try:
+            return key.strip(), convert(value)
+        except ValueError:
+            pass
+    return key.strip(), {"true": True, "false": False}.get(value.lower(), value)
 
 
 def _with_option_names(message):
@@ -288,6 +314,13 @@ def _load_init(args):
         if not curves:
             raise UsageError(f"--init-contours: {os.fspath(args.init_contours)!r} holds no contour")
         return _ContourInit(curves, shape), f"contours {os.fspath(args.init_contours)}"
+    if args.init_grid:
+        return "grid", "grid"
+    if args.init_checkerboard:
+        if args.backend != "levelset":
+            raise UsageError("--init-checkerboard needs --backend levelset (use --init-grid for the "
+                             "polygon backend)")
+        return "checkerboard", "checkerboard"
     return None, "default"
 
 
@@ -357,7 +390,8 @@ def _check_image(image_path, init, settings):
                 f"{image_path!r} has shape {tuple(shape)}"
             )
     try:
-        initial_curves(list(init) if isinstance(init, _ContourInit) else init, shape)
+        if not isinstance(init, str):  # "grid" and "checkerboard" fit any image
+            initial_curves(list(init) if isinstance(init, _ContourInit) else init, shape)
     except (ValueError, TypeError) as exc:
         raise UsageError(f"{image_path}: {_one_line(exc)}") from None
 

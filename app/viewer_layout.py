@@ -46,7 +46,7 @@ SLIDERS = (
 #: backend's own default.
 STEP_OPTIONS = {
     "polygon": ("max_step", "step (px)", 0.25, 10.0),
-    "levelset": ("dt", "step dt", 0.25, 16.0),
+    "levelset": ("dt", "first step dt", 4.0, 256.0),
 }
 
 _FIGSIZE = (12.0, 7.4)

@@ -281,3 +281,28 @@ def test_installed_console_script(small, tmp_path):
     csv_rows = (tmp_path / "out" / "disk_contours.csv").read_text().splitlines()
     meta = json.loads(csv_rows[1].split(":", 1)[1])
     assert meta["image_shape"] == list(SIZE)
+
+
+@pytest.mark.parametrize("backend, init", [("polygon", "--init-grid"), ("levelset", "--init-grid"),
+                                           ("levelset", "--init-checkerboard")])
+def test_grid_and_checkerboard_starts(small, tmp_path, capsys, backend, init):
+    path, truth = small
+    status, _, stderr = run(capsys, "segment", path, "-o", tmp_path / "out", "--backend", backend, init)
+    assert status == 0, stderr
+    assert synthetic.dice(io.read_mask(tmp_path / "out" / "disk_mask.png"), truth) > 0.95
+
+
+def test_backend_options_reach_the_solver(small, tmp_path, capsys):
+    path, _ = small
+    status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "a", "--option", "max_step=0.5",
+                                 "--option", "nucleate=false", "--max-iter", 2)
+    assert status == 0, stderr
+    assert summary_fields(stdout)["iterations"] == "2"
+    for argv, words in (
+        (["--option", "bogus=1"], ["unknown option", "bogus", "max_step"]),
+        (["--option", "bogus"], ["KEY=VALUE"]),
+        (["--init-checkerboard"], ["--backend levelset"]),
+    ):
+        status, _, stderr = run(capsys, "segment", path, "-o", tmp_path / "b", *argv)
+        assert_one_line_error(status, stderr, *words)
+        assert not (tmp_path / "b").exists()

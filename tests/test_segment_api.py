@@ -24,7 +24,7 @@ IMAGE[10:30, 15:35] = 1.0
         (IMAGE, {"options": {"velocity": "h2"}}, ValueError, r"velocity must be one of \('h1', 'l2'\)"),
         (IMAGE, {"options": {"spacing": 0}}, ValueError, "spacing must be a positive"),
         (IMAGE, {"options": {"smoothing": 0.5}}, ValueError, "smoothing >= min_smoothing"),
-        (IMAGE, {"options": {"bogus": 1}}, TypeError, "bogus"),
+        (IMAGE, {"options": {"bogus": 1}}, TypeError, "unknown option.s. .bogus. for backend .polygon."),
         (IMAGE, {"color": "hsv"}, ValueError, r"color must be one of \('gray', 'vector'\)"),
         (np.full((40, 50), np.nan), {}, ValueError, "NaN or infinite"),
         (np.zeros(40), {}, ValueError, r"shape \(M, N\)"),
