@@ -209,7 +209,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(small, tmp_path, cap
 
 @pytest.mark.parametrize("stage", ["segment", "write"])
 def test_a_failure_while_running_leaves_no_file_and_no_new_directory(small, tmp_path, capsys,
-                                                                      monkeypatch, stage):
+                                                                      monkeypatch, request, stage):
     path, _ = small
     if stage == "segment":
         def failing_segment(*args, **kwargs):
@@ -217,14 +217,7 @@ def test_a_failure_while_running_leaves_no_file_and_no_new_directory(small, tmp_
 
         monkeypatch.setattr("activecontour.segment", failing_segment)
     else:
-        real_replace = os.replace
-
-        def failing_replace(src, dst):
-            if str(dst).endswith("_contours.json"):
-                raise OSError(28, "No space left on device", str(dst))
-            return real_replace(src, dst)
-
-        monkeypatch.setattr(os, "replace", failing_replace)
+        request.getfixturevalue("no_space_for_contours")
     status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "new" / "deeper")
     assert_one_line_error(status, stderr, "problem" if stage == "segment" else "no space")
     assert stdout == ""

@@ -8,6 +8,7 @@ from activecontour import chan_vese_energy
 from activecontour.energy import ChanVeseParameters, evaluate, region_moments, stack_curves
 from activecontour.image import ImageModel, normalize_image
 from activecontour.initial import circle
+from tests.helpers import central_differences
 from tests.test_curve import random_smooth_curve
 
 
@@ -94,16 +95,8 @@ def test_optimal_constants_are_region_means():
     assert result.c_out[0] == pytest.approx(800.0 / (1600.0 - 250.0), rel=1e-12)
 
 
-def _finite_difference(model, points, nxt, params, step=1e-5):
-    numeric = np.zeros_like(points)
-    for i in range(len(points)):
-        for d in range(2):
-            plus, minus = points.copy(), points.copy()
-            plus[i, d] += step
-            minus[i, d] -= step
-            numeric[i, d] = (evaluate(model, plus, nxt, params).energy
-                             - evaluate(model, minus, nxt, params).energy) / (2 * step)
-    return numeric
+def _finite_difference(model, points, nxt, params):
+    return central_differences(lambda p: evaluate(model, p, nxt, params).energy, points)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

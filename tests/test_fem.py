@@ -5,6 +5,7 @@ import pytest
 import scipy.sparse.linalg
 
 from activecontour import curve, fem
+from tests.helpers import central_differences
 from tests.test_curve import random_smooth_curve
 
 
@@ -36,16 +37,8 @@ def test_stiffness_annihilates_constants_and_gives_the_dirichlet_energy(polygon)
 
 def test_stiffness_times_coordinates_is_the_gradient_of_length(polygon):
     stiffness = fem.stiffness_matrix(curve.edge_lengths(polygon))
-    analytic = stiffness @ polygon
-    step = 1e-6
-    numeric = np.zeros_like(polygon)
-    for i in range(len(polygon)):
-        for d in range(2):
-            plus, minus = polygon.copy(), polygon.copy()
-            plus[i, d] += step
-            minus[i, d] -= step
-            numeric[i, d] = (curve.length(plus) - curve.length(minus)) / (2 * step)
-    np.testing.assert_allclose(numeric, analytic, atol=1e-7)
+    numeric = central_differences(curve.length, polygon, step=1e-6)
+    np.testing.assert_allclose(numeric, stiffness @ polygon, atol=1e-7)
 
 
 @pytest.mark.parametrize("k", [3, 4, 7, 200])
