@@ -98,7 +98,7 @@ import numpy as np
 import scipy.fft
 
 from activecontour.initial import initial_curves
-from activecontour.raster import rasterize
+from activecontour.raster import level_curves, rasterize
 from activecontour.result import FlowState, SegmentationResult
 
 __all__ = [
@@ -543,20 +543,12 @@ def level_set_contours(phi):
     ``positive_orientation="high"`` outer boundaries have positive signed area and holes
     negative.  Each vertex is stored once.
     """
-    import skimage.measure
-
     phi = np.asarray(phi, dtype=np.float64)
     padded = np.pad(phi, 1, mode="edge")
     padded[0], padded[-1] = -np.abs(padded[0]), -np.abs(padded[-1])
     padded[:, 0], padded[:, -1] = -np.abs(padded[:, 0]), -np.abs(padded[:, -1])
     padded[padded == 0] = -1e-300  # phi = 0 is outside, as in the mask phi > 0
-    curves = []
-    for contour in skimage.measure.find_contours(padded, 0.0, positive_orientation="high"):
-        curve = contour[:-1] - 1.0
-        curve = curve[np.any(curve != np.roll(curve, 1, axis=0), axis=1)]
-        if len(curve) >= 3:
-            curves.append(curve)
-    return curves
+    return level_curves(padded, 0.0)
 
 
 # --------------------------------------------------------------------------------------------

@@ -11,7 +11,7 @@ import numpy as np
 
 from activecontour.curve import signed_area
 
-__all__ = ["mask_to_curves", "rasterize"]
+__all__ = ["level_curves", "mask_to_curves", "rasterize"]
 
 
 def rasterize(curves, shape):
@@ -60,12 +60,24 @@ def mask_to_curves(mask, *, min_area=0.0):
     outer boundaries positive and holes negative in our convention.  Curves with
     ``|area| <= min_area`` are dropped.
     """
+    padded = np.pad(np.asarray(mask, dtype=bool), 1).astype(np.float64)
+    return level_curves(padded, 0.5, min_area=min_area)
+
+
+def level_curves(padded, level, *, min_area=0.0):
+    """Closed curves where a field, padded by one pixel that lies below ``level``, crosses it.
+
+    Marching squares (``skimage.measure.find_contours``) with ``positive_orientation="high"``:
+    the side above ``level`` is inside, so outer boundaries are positive and holes negative.  The
+    closing vertex and repeated vertices are dropped and the padding is shifted away; curves with
+    ``|area| <= min_area`` are dropped.
+    """
     import skimage.measure
 
-    padded = np.pad(np.asarray(mask, dtype=bool), 1).astype(np.float64)
     curves = []
-    for contour in skimage.measure.find_contours(padded, 0.5, positive_orientation="high"):
-        contour = contour[:-1] - 1.0
-        if len(contour) >= 3 and abs(signed_area(contour)) > min_area:
-            curves.append(contour)
+    for contour in skimage.measure.find_contours(padded, level, positive_orientation="high"):
+        curve = contour[:-1] - 1.0
+        curve = curve[np.any(curve != np.roll(curve, 1, axis=0), axis=1)]
+        if len(curve) >= 3 and abs(signed_area(curve)) > min_area:
+            curves.append(curve)
     return curves

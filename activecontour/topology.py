@@ -169,8 +169,9 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     cut_edge = np.concatenate([first, second])
     keys = np.concatenate([np.arange(n_points, dtype=np.float64), cut_edge + np.concatenate([s, t])])
     node_ids = np.concatenate([np.arange(n_points), np.tile(np.arange(n_cross), 2) + n_points])
-    sequence = node_ids[np.argsort(keys, kind="stable")]
-    bounds = np.searchsorted(keys[np.argsort(keys, kind="stable")], offsets[:-1].astype(np.float64))
+    order = np.argsort(keys, kind="stable")
+    sequence = node_ids[order]
+    bounds = np.searchsorted(keys[order], offsets[:-1].astype(np.float64))
     bounds = np.append(bounds, len(sequence))
     chains = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
