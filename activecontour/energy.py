@@ -153,7 +153,7 @@ def _moments(model, points, next_index):
     return sums[0], sums[1], s1, s2
 
 
-def evaluate(model, points, next_index, params, *, gradient=False):
+def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=False):
     """Energy (6.38) of stacked curves (see :func:`stack_curves`), and with ``gradient`` the load.
 
     Parameters
@@ -165,12 +165,16 @@ def evaluate(model, points, next_index, params, *, gradient=False):
     params : ChanVeseParameters
     gradient : bool
         Also assemble ``load`` (K, 2), the derivative of J with respect to every vertex (6.41).
+    empty_ok : bool
+        How to treat curves that enclose no area or the whole domain while a constant is optimised
+        (6.42 is then undefined).  False (the flow's view): ``energy`` is ``inf``, so no step is
+        accepted into that state.  True (the value of a final result): the empty region's fitting
+        term is 0 whatever its constant, so J is finite, and the undefined constant is reported
+        equal to the other one.
 
     Returns
     -------
     Evaluation
-        ``energy`` is ``inf`` when the curves enclose no area or the whole domain and a constant
-        must be optimised (6.42 is undefined there).
     """
     channels = model.n_channels
     area, length, s1, s2 = _moments(model, points, next_index)
@@ -178,10 +182,17 @@ def evaluate(model, points, next_index, params, *, gradient=False):
     outside_area = total_area - area
     c_in = params.constant("c_in", channels)
     c_out = params.constant("c_out", channels)
-    degenerate = area <= 1e-9 or outside_area <= 1e-9
-    if degenerate and (c_in is None or c_out is None):
-        nan = np.full(channels, np.nan)
-        return Evaluation(np.inf, nan, nan, area, length, None)
+    empty_in, empty_out = area <= 1e-9, outside_area <= 1e-9
+    if (empty_in and c_in is None) or (empty_out and c_out is None):
+        if not empty_ok:
+            nan = np.full(channels, np.nan)
+            return Evaluation(np.inf, nan, nan, area, length, None)
+        if empty_in:  # the whole image is outside (or, below, inside)
+            c_out = total1 / total_area if c_out is None else c_out
+            c_in = c_out if c_in is None else c_in
+        else:
+            c_in = total1 / total_area if c_in is None else c_in
+            c_out = c_in if c_out is None else c_out
     if c_in is None:
         c_in = s1 / area
     if c_out is None:
@@ -298,7 +309,8 @@ def chan_vese_energy(image, contours, *, mu=0.2, omega=0.0, lambda_in=1.0, lambd
     ----------
     image : ndarray (M, N) or (M, N, C)
     contours : list of ndarray (K, 2)
-        Closed curves in (row, col), outer boundaries positive, holes negative.
+        Closed curves in (row, col), outer boundaries positive, holes negative.  An empty list is
+        the empty set: J is then the outside term alone.
     mu, omega, lambda_in, lambda_out : float
         Weights of (6.38).
     c_in, c_out : float, optional
@@ -326,7 +338,7 @@ def chan_vese_energy(image, contours, *, mu=0.2, omega=0.0, lambda_in=1.0, lambd
     for i, curve in enumerate(curves):
         _check_in_domain(curve, model.bounds, f"contours[{i}]")
     points, next_index, _ = stack_curves(curves)
-    return evaluate(model, points, next_index, params).energy
+    return evaluate(model, points, next_index, params, empty_ok=True).energy
 
 
 def _check_in_domain(curve, bounds, name):

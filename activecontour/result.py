@@ -6,7 +6,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult"]
+from activecontour.curve import clean
+from activecontour.energy import evaluate, stack_curves
+from activecontour.raster import rasterize
+
+__all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
 #: Status codes and their messages, shared by every backend.
 STATUS_MESSAGES = {
@@ -102,3 +106,54 @@ class FlowState:
 def _scalar_if_gray(value):
     value = np.asarray(value, dtype=np.float64)
     return float(value.reshape(-1)[0]) if value.size == 1 else value
+
+
+#: Energies that agree to this relative tolerance are the same number computed twice.
+_SAME_ENERGY = 1e-9
+
+
+def build_result(model, params, contours, *, energies, n_iter, status, backend, phi=None):
+    """The one way a backend makes its result, so that every result obeys the same invariants.
+
+    * contours are cleaned (:func:`activecontour.curve.clean`): no repeated vertices, zero-width
+      spikes, fewer than 3 vertices or zero area;
+    * ``energy`` is (6.38) of exactly these contours by the common evaluator
+      (:func:`activecontour.energy.chan_vese_energy`), and ``energies`` ends with it;
+    * when a converged flow ends above the energy of the empty set (a local minimum worse than
+      no object at all), or the backend reports a collapse, the result is the empty set, status 3;
+    * ``mask`` is the inside of the contours (:func:`activecontour.raster.rasterize`);
+    * ``c_in``, ``c_out`` are finite: the constant of an empty region is reported equal to the
+      other one (its fitting term is 0 whatever it is).
+
+    Parameters
+    ----------
+    model : ImageModel
+    params : ChanVeseParameters
+    contours : list of ndarray (K, 2)
+    energies : sequence of float
+        The backend's energy history (before the first iteration, then one per iteration).
+    n_iter, status, backend, phi
+        As in :class:`SegmentationResult`.
+    """
+    cleaned = [] if status == 3 else [c for c in map(clean, contours) if c is not None]
+    final = _evaluate(model, params, cleaned)
+    empty = _evaluate(model, params, [])
+    if cleaned and status in (0, 4) and empty.energy < final.energy:
+        cleaned, final = [], empty
+    if not cleaned:
+        status = 3
+    energies = list(energies)
+    if energies and abs(energies[-1] - final.energy) <= _SAME_ENERGY * max(abs(final.energy), 1.0):
+        energies[-1] = final.energy
+    else:
+        energies.append(final.energy)
+    return SegmentationResult(
+        mask=rasterize(cleaned, model.shape), contours=cleaned, c_in=final.c_in, c_out=final.c_out,
+        energy=final.energy, energies=energies, n_iter=n_iter, status=status, backend=backend,
+        phi=phi,
+    )
+
+
+def _evaluate(model, params, contours):
+    points, next_index, _ = stack_curves(contours)
+    return evaluate(model, points, next_index, params, empty_ok=True)
