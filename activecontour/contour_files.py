@@ -182,7 +182,8 @@ def _metadata_of(contours, metadata, image_shape):
     if hasattr(contours, "contours") and hasattr(contours, "mask"):
         result = contours
         meta["image_shape"] = list(np.shape(result.mask))
-        for name in ("backend", "n_iter", "energy", "c_in", "c_out", "success", "status", "message"):
+        for name in ("backend", "n_iter", "energy", "mu", "c_in", "c_out", "success", "status",
+                     "message"):
             if hasattr(result, name):
                 meta[name] = getattr(result, name)
     if image_shape is not None:
