@@ -279,7 +279,7 @@ def _segment_one(image_path, stem, batch, progress=None):
 
     with _interrupt_at_once():
         image = activecontour.load_image(image_path)
-        _check_image(image, image_path, batch.init, batch.settings)
+        _check_image(image_path, batch.init, batch.settings, image=image)
         init = list(batch.init) if isinstance(batch.init, _ContourInit) else batch.init
         started = time.perf_counter()
         result = activecontour.segment(image, init, callback=progress, **batch.settings)
@@ -508,10 +508,15 @@ def _plan_outputs(images, output, formats):
     return plans
 
 
-def _check_image(image, image_path, init, settings):
-    """Check that a loaded image and the init are usable together (no segmentation yet)."""
+def _check_image(image_path, init, settings, image=None):
+    """Check that the image (read from ``image_path`` unless given) and the init are usable
+    together (no segmentation yet)."""
+    import activecontour
     from activecontour.image import normalize_image
     from activecontour.initial import initial_curves
+
+    if image is None:
+        image = activecontour.load_image(image_path)
 
     try:
         channels = normalize_image(image, color=settings["color"]).shape[2]
