@@ -227,8 +227,8 @@ def _run_segment(args):
     plans = _plan_outputs(args.images, args.output, args.formats)
     color = _overlay_color(args.overlay_color)
     _check_can_create(args.output)
-    batch = _Batch(init, init_description, settings, args.formats, color,
-                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet)
+    common = _Common(init, init_description, settings, args.formats, color,
+                     protect=[p for p, _ in plans])
     progress = (_Progress(len(plans)) if not args.quiet and _is_terminal(sys.stderr) else None)
     failures = 0
     try:
@@ -236,7 +236,7 @@ def _run_segment(args):
             if progress is not None:
                 progress.start(number, image_path)
             try:
-                line = _segment_one(image_path, stem, batch, progress)
+                line = _segment_one(image_path, stem, common, progress)
             except (UsageError, FileNotFoundError, ValueError, TypeError, OSError) as exc:
                 failures += 1
                 _report(progress, f"{PROG}: error: {_naming(image_path, exc)}", sys.stderr)
@@ -246,30 +246,28 @@ def _run_segment(args):
     finally:
         if progress is not None:
             progress.close()
-        _remove_if_empty(batch.created)
+        _remove_if_empty(common.created)
     if failures and len(plans) > 1:
         print(f"{PROG}: error: {failures} of {len(plans)} images failed; the others were written",
               file=sys.stderr)
     return EXIT_USAGE if failures else 0
 
 
-class _Batch:
+class _Common:
     """What every image of a ``segment`` run shares: the init, the settings and the outputs."""
 
-    def __init__(self, init, init_description, settings, formats, color, *, protect, output, quiet):
+    def __init__(self, init, init_description, settings, formats, color, *, protect):
         self.init = init
         self.init_description = init_description
         self.settings = settings
         self.formats = formats
         self.color = color
         self.protect = protect
-        self.output = output
-        self.quiet = quiet
         #: (leaf, topmost) of every output directory this run created
         self.created = []
 
 
-def _segment_one(image_path, stem, batch, progress=None):
+def _segment_one(image_path, stem, common, progress=None):
     """Load, check, segment and save one image (its files all or none); return its summary line.
 
     Raises the library's ValueError/TypeError/OSError or a UsageError for this image only.
@@ -279,20 +277,20 @@ def _segment_one(image_path, stem, batch, progress=None):
 
     with _interrupt_at_once():
         image = activecontour.load_image(image_path)
-        _check_image(image_path, batch.init, batch.settings, image=image)
-        init = list(batch.init) if isinstance(batch.init, _ContourInit) else batch.init
+        _check_image(image_path, common.init, common.settings, image=image)
+        init = list(common.init) if isinstance(common.init, _ContourInit) else common.init
         started = time.perf_counter()
-        result = activecontour.segment(image, init, callback=progress, **batch.settings)
+        result = activecontour.segment(image, init, callback=progress, **common.settings)
         elapsed = time.perf_counter() - started
     metadata = {
         "image": os.fspath(image_path),
-        "init": batch.init_description,
-        "parameters": batch.settings,
+        "init": common.init_description,
+        "parameters": common.settings,
         "wall_time_s": elapsed,
     }
-    _make_directory(Path(stem).parent, batch.created)
-    written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
-                             color=batch.color, protect=batch.protect)
+    _make_directory(Path(stem).parent, common.created)
+    written = io.save_result(result, image, stem, common.formats, metadata=metadata,
+                             color=common.color, protect=common.protect)
     return _summary(Path(image_path).name, result, elapsed, written)
 
 
