@@ -315,7 +315,8 @@ class _Movement:
 
     def add(self, geometry):
         points, next_index, offsets = geometry
-        if self.start is None or points.shape != self.start.shape or not np.array_equal(offsets, self.offsets):
+        same = self.start is not None and points.shape == self.start.shape
+        if not (same and np.array_equal(offsets, self.offsets)):
             self.start, self.offsets, self.count = points.copy(), offsets.copy(), 0
             return
         self.count += 1
