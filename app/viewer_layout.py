@@ -147,7 +147,7 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     """
     ax_image, init_lines, contour_lines = _image_axes(fig, display)
     x0 = _PANEL_X
-    readout = fig.text(x0, 0.985, "", fontsize=9, family="monospace", va="top")
+    readout = fig.text(x0, 0.985, "", fontsize=8.5, family="monospace", va="top")
     ax_energy, energy_line, energy_note = _energy_axes(fig, x0)
     sliders, step_sliders, step_labels = _sliders(fig, x0, values, step_values)
     maxiter_box, tol_box = _fields(fig, x0, max_num_iter, tol)
