@@ -58,6 +58,7 @@ import numpy as np
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
 from activecontour.initial import initial_curves
+from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
 from app.viewer_layout import (
     CONTOUR_COLOR,
@@ -67,6 +68,7 @@ from app.viewer_layout import (
     build_layout,
     new_figure,
     refit_texts,
+    set_slider_value,
     show_energy,
     show_image,
 )
@@ -96,6 +98,8 @@ SHORTCUTS = (
     ("g", "g", "gray/colour"),
     ("q", "q", "quit"),
 )
+
+_SLIDER_LABELS = {name: label for name, label, *_ in SLIDERS}
 
 _STATUS_WORDS = {0: "converged", 1: "max_num_iter reached", 2: "paused", 3: "collapsed",
                  4: "stationary"}
@@ -178,6 +182,10 @@ class Viewer:
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         display = normalize_image(self.image, color="vector")  # validates the image, too
         self.shape = display.shape[:2]
+        # mu="auto": the slider shows the value segment(mu="auto") would use, until it is moved
+        self._mu_auto = is_auto(settings["mu"])
+        if self._mu_auto:
+            settings["mu"] = self._auto_mu()
         self.image_path = None if image_path is None else Path(image_path)
         # Save's relative stems start here, wherever the working directory goes later
         self._image_folder = None if image_path is None else Path(os.path.abspath(image_path)).parent
@@ -228,6 +236,7 @@ class Viewer:
         self.drawer = CurveDrawer(self.ax_image, self._on_drawn_curve, self._set_message, self._redraw,
                                   color=PREVIEW_COLOR)
         self.ax_image.format_coord = self.format_coord
+        self._show_mu_mode()
         self._show_step_slider(settings["backend"])
         if not self.live:
             for widget in layout.widgets:
@@ -379,6 +388,7 @@ class Viewer:
             return False
         previous = self.image, self.shape, self.init, self.init_curves
         self.image, self.shape = np.asarray(image), display.shape[:2]
+        self._refresh_auto_mu()
         if not isinstance(self.init, str):
             self.init = None
         problem = self._preview_init()
@@ -387,6 +397,7 @@ class Viewer:
             problem = self._preview_init()
         if problem is not None:
             self.image, self.shape, self.init, self.init_curves = previous
+            self._refresh_auto_mu()
             self._set_message(f"image not opened: {problem}")
             return False
         self.image_path = Path(path).expanduser()
@@ -596,6 +607,7 @@ class Viewer:
         canvas.mpl_connect("resize_event", lambda _event: refit_texts(self.layout))
         for slider in (*self.sliders.values(), *self.step_sliders.values()):
             slider.on_changed(self._on_slider)
+        self.sliders["mu"].on_changed(self._on_mu_slider)
         self.maxiter_box.on_submit(lambda text: self._on_field("max iter", self.maxiter_box, text))
         self.tol_box.on_submit(lambda text: self._on_field("tol", self.tol_box, text))
         self.backend_radio.on_clicked(self._on_backend_radio)
@@ -663,9 +675,29 @@ class Viewer:
             self._set_message("the image is gray: there is no colour to switch to")
             return
         self.color = "vector" if self.color == "gray" else "gray"
+        self._refresh_auto_mu()
         problem = self._refresh_named_init()
         self._set_message(f"colour: {'each channel (vector)' if self.color == 'vector' else 'gray'}"
                           f"; applies to the next run (space){problem}")
+
+    def _auto_mu(self):
+        return auto_mu(normalize_image(self.image, color=self.color))
+
+    def _refresh_auto_mu(self):
+        """While mu is automatic, show the value the current image (and colour mode) gets."""
+        if self._mu_auto:
+            self._mu_auto = False  # set_val below notifies _on_mu_slider, which would clear it
+            set_slider_value(self.sliders["mu"], self._auto_mu())
+            self._mu_auto = True
+            self._show_mu_mode()
+
+    def _show_mu_mode(self):
+        self.slider_labels["mu"].set_text("mu (auto)" if self._mu_auto else _SLIDER_LABELS["mu"])
+
+    def _on_mu_slider(self, _value):
+        if self._mu_auto:
+            self._mu_auto = False  # moved by hand: the value is the user's from now on
+            self._show_mu_mode()
 
     def _on_slider(self, _value):
         if self.running or self.result is not None:
@@ -696,7 +728,7 @@ class Viewer:
         for name, slider in self.step_sliders.items():
             slider.ax.set_visible(name == backend)
             slider.set_active(name == backend)
-            self.step_labels[name].set_visible(name == backend)
+            self.slider_labels[name].set_visible(name == backend)
 
     def _on_backend_radio(self, label):
         self._show_step_slider(label)
@@ -883,6 +915,8 @@ def _settings(**given):
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {settings['backend']!r}")
     for name in ("mu", "omega", "lambda_in", "lambda_out", "tol"):
         value = settings[name]
+        if name == "mu" and is_auto(value):
+            continue
         if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
                 or not np.isfinite(value):
             raise ValueError(f"{name} must be a finite number, got {value!r}")

@@ -30,7 +30,8 @@ import numpy as np
 from app.viewer_tools import INIT_MODES, TextField
 
 __all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS",
-           "Layout", "build_layout", "fit_text", "refit_texts", "show_energy", "show_image"]
+           "Layout", "build_layout", "fit_text", "refit_texts", "set_slider_value", "show_energy",
+           "show_image"]
 
 #: Colour of the current contour: the default overlay colour of :func:`activecontour.io.save_result`.
 CONTOUR_COLOR = (1.0, 0.0, 0.0)
@@ -80,7 +81,7 @@ class Layout:
     energy_note: object
     sliders: dict
     step_sliders: dict
-    step_labels: dict
+    slider_labels: dict
     maxiter_box: object
     tol_box: object
     backend_radio: object
@@ -149,7 +150,7 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     x0 = _PANEL_X
     readout = fig.text(x0, 0.985, "", fontsize=8.5, family="monospace", va="top")
     ax_energy, energy_line, energy_note = _energy_axes(fig, x0)
-    sliders, step_sliders, step_labels = _sliders(fig, x0, values, step_values)
+    sliders, step_sliders, slider_labels = _sliders(fig, x0, values, step_values)
     maxiter_box, tol_box = _fields(fig, x0, max_num_iter, tol)
     backend_radio, mode_radio = _radios(fig, x0, backends, backend)
     run_button, step_button, reset_button = _run_buttons(fig, x0)
@@ -157,7 +158,7 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     status_text = fig.text(_TEXT_X, 0.047, "", fontsize=9, color="0.1", va="center")
     help_text = fig.text(_TEXT_X, 0.016, "", fontsize=_LABEL_SIZE, color="0.35", va="center")
     layout = Layout(ax_image, init_lines, contour_lines, readout, ax_energy, energy_line,
-                    energy_note, sliders, step_sliders, step_labels, maxiter_box, tol_box,
+                    energy_note, sliders, step_sliders, slider_labels, maxiter_box, tol_box,
                     backend_radio, mode_radio, run_button, step_button, reset_button, *file_rows,
                     status_text, help_text)
     fit_text(help_text, help_line, _TEXT_X, _TEXT_RIGHT)
@@ -292,7 +293,7 @@ def _sliders(fig, x0, values, step_values):
     rows = [(name, label, low, high, values[name]) for name, label, low, high in SLIDERS]
     rows += [(backend, label, low, high, step_values[backend])
              for backend, (_option, label, low, high) in STEP_OPTIONS.items() if backend in step_values]
-    sliders, step_sliders, step_labels = {}, {}, {}
+    sliders, step_sliders, labels = {}, {}, {}
     for row, (name, label, low, high, value) in enumerate(rows):
         y = 0.655 - 0.042 * min(row, len(SLIDERS))  # the step sliders share one row
         low, high = min(low, value), max(high, value)
@@ -300,11 +301,17 @@ def _sliders(fig, x0, values, step_values):
                         valfmt="%.3g")
         slider.valtext.set_fontsize(_LABEL_SIZE)
         text = fig.text(x0, y + 0.015, label, fontsize=_LABEL_SIZE, va="center")
-        if name in STEP_OPTIONS:
-            step_sliders[name], step_labels[name] = slider, text
-        else:
-            sliders[name] = slider
-    return sliders, step_sliders, step_labels
+        (step_sliders if name in STEP_OPTIONS else sliders)[name] = slider
+        labels[name] = text
+    return sliders, step_sliders, labels
+
+
+def set_slider_value(slider, value):
+    """Move a slider to ``value``, widening its range to include it."""
+    if value > slider.valmax or value < slider.valmin:
+        slider.valmin, slider.valmax = min(slider.valmin, value), max(slider.valmax, value)
+        slider.ax.set_xlim(slider.valmin, slider.valmax)
+    slider.set_val(value)
 
 
 def _fields(fig, x0, max_num_iter, tol):

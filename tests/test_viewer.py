@@ -832,3 +832,22 @@ def test_a_long_status_line_is_fitted_into_the_window(disk_image, make_viewer, t
     box = viewer.status_text.get_window_extent()
     assert box.x1 <= viewer.fig.bbox.x1
     assert viewer.status_text.get_text().endswith("\N{HORIZONTAL ELLIPSIS}")
+
+
+def test_automatic_mu_follows_the_image_until_the_slider_is_moved(disk_image, make_viewer,
+                                                                 tmp_path):
+    noisy = tmp_path / "noisy.png"
+    clean = tmp_path / "clean.png"
+    first = _write_png(noisy, np.clip(disk_image[0], 0, 1))
+    second = _write_png(clean, disk_image[1] * 0.8 + 0.1)
+    viewer = make_viewer(first, image_path=noisy, max_num_iter=1)
+    mu = viewer.sliders["mu"]
+    assert viewer.slider_labels["mu"].get_text() == "mu (auto)"
+    assert mu.val == pytest.approx(ac.segment(first, max_num_iter=0).mu)
+    viewer.open_image(clean)
+    assert mu.val == pytest.approx(ac.segment(second, max_num_iter=0).mu)
+    assert ac.segment(second, max_num_iter=0).mu != ac.segment(first, max_num_iter=0).mu
+    set_slider(viewer, mu, 1.5)
+    assert viewer.slider_labels["mu"].get_text() == "mu (length)"
+    viewer.open_image(noisy)
+    assert viewer.parameters()["mu"] == pytest.approx(1.5, abs=1e-9)  # the user's value stays
