@@ -208,6 +208,8 @@ def refit_texts(layout):
     """Fit the layout's variable texts again (after the window changed size)."""
     for text, left, right in layout.fitted_texts:
         fit_text(text, getattr(text, "_fit_string", text.get_text()), left, right)
+    for box in layout.text_boxes:
+        box.align_to_fit()
 
 
 def _cut(line, keep):

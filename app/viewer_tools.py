@@ -3,7 +3,9 @@
 :class:`TextField` is matplotlib's ``TextBox`` with fixes that matter for a tool: Enter ends the
 editing (so the keyboard shortcuts work again); a click elsewhere does not redraw the whole figure
 when the field was not being edited (``TextBox`` redraws synchronously, once per field, on every
-click anywhere); and setting the text from code neither shows a cursor nor forces a redraw.
+click anywhere); setting the text from code neither shows a cursor nor forces a redraw; and a text
+longer than the field stays inside it, showing its end (where a path has its file name and where
+one types).
 
 :class:`CurveDrawer` is a small state machine fed with matplotlib mouse and key events; it shows a
 dashed preview while the user drags or clicks, and hands the finished curve, in (row, col), to a
@@ -182,7 +184,23 @@ class TextField(TextBox):
     def __init__(self, ax, initial=""):
         super().__init__(ax, "", initial)
         self.text_disp.set_fontsize(8)
+        for artist in (self.text_disp, self.cursor):
+            artist.set_clip_box(ax.bbox)
+            artist.set_clip_on(True)
         self.on_submit(self._end_editing)
+        self.align_to_fit()
+
+    def align_to_fit(self):
+        """Left-aligned when the text fits the field, else right-aligned (its end shown)."""
+        self.text_disp.set_horizontalalignment("left")
+        self.text_disp.set_x(0.05)
+        if self.text_disp.get_window_extent().width > 0.9 * self.ax.bbox.width:
+            self.text_disp.set_horizontalalignment("right")
+            self.text_disp.set_x(0.95)
+
+    def _rendercursor(self):
+        self.align_to_fit()
+        super()._rendercursor()
 
     def stop_typing(self):
         if self.capturekeystrokes or self.cursor.get_visible():
@@ -198,6 +216,7 @@ class TextField(TextBox):
         if self.text == text:
             return
         self.text_disp.set_text(text)
+        self.align_to_fit()
         if self.drawon:
             self.ax.get_figure(root=True).canvas.draw_idle()
         if self.eventson:

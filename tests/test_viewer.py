@@ -792,7 +792,8 @@ def _area(a, b):
     return width * height if width > 0.5 and height > 0.5 else 0.0
 
 
-@pytest.mark.parametrize("size", [(9.0, 6.0), DEFAULT_SIZE, (16.0, 9.0)])
+# 900 x 550 is a 900 x 600 window less the toolbar of TkAgg
+@pytest.mark.parametrize("size", [(9.0, 6.0), (9.0, 5.5), DEFAULT_SIZE, (16.0, 9.0)])
 def test_no_text_overlaps_another_or_leaves_the_window(make_viewer, tmp_path, size):
     image, _ = synthetic.equal_gray_colour()
     viewer = make_viewer(image, color="vector", image_path=tmp_path / "a_long_file_name_for_x.png")
@@ -817,6 +818,13 @@ def test_no_text_overlaps_another_or_leaves_the_window(make_viewer, tmp_path, si
     for button in viewer.layout.buttons:
         inner, outer = button.label.get_window_extent(), button.ax.get_window_extent()
         assert outer.x0 < inner.x0 and inner.x1 < outer.x1, button.label.get_text()
+    # a field's text stays in its field (clipped), showing the end of a long one
+    viewer.image_box.set_val(str(tmp_path / "folder" / ("a_long_name_" * 8 + "end.png")))
+    viewer.fig.canvas.draw()
+    for box in viewer.layout.text_boxes:
+        field, shown = box.ax.get_window_extent(), box.text_disp.get_window_extent()
+        assert box.text_disp.get_clip_on() and box.text_disp.get_clip_box() is box.ax.bbox
+        assert field.x0 < shown.x1 < field.x1, box.text
     shot = tmp_path / f"viewer_{int(size[0] * 100)}x{int(size[1] * 100)}.png"
     viewer.fig.savefig(shot)
     assert plt.imread(shot).shape[:2] == (round(size[1] * 100), round(size[0] * 100))
