@@ -413,10 +413,21 @@ def test_shortcuts_are_off_while_typing_in_a_field(disk_image, make_viewer):
     viewer = make_viewer(image)
     viewer.save_box.set_val("")
     click_axes(viewer, viewer.save_box.ax)
+    gui_like(viewer)  # draw_idle only asks for a draw, as on a GUI canvas
+    draws = []
+    real_draw = viewer.fig.canvas.draw
+    viewer.fig.canvas.draw = lambda: (draws.append(1), real_draw())
     for name in "s ":  # save, run
         key(viewer, name)
     assert viewer.save_box.text == "s " and viewer.result is None
     assert "saved" not in viewer.message
+    assert draws == []  # a key typed asks for a redraw; it does not draw the figure at once
+    (cursor,) = viewer.save_box.cursor.get_segments()
+    text = viewer.save_box.text_disp
+    text.set_text("s")  # the cursor stands after what was typed (the trailing space has a width)
+    assert cursor[0, 0] > text.get_window_extent().x1
+    text.set_text("s ")
+    del viewer.fig.canvas.draw
     key(viewer, "enter")
     assert not viewer.save_box.capturekeystrokes
 
