@@ -661,6 +661,14 @@ class Viewer:
     def _on_release(self, event):
         if not self.running and self.drawer.busy:
             self.drawer.release(event)
+        if self._start_stale and not self.running:
+            self._start_stale = False
+            if self.init is None or isinstance(self.init, str):
+                problem = self._refresh_named_init()
+                if problem:
+                    self._set_message(problem.removeprefix("; "))
+                else:
+                    self._redraw()
 
     def _on_close(self, _event):
         self.closed = True
@@ -698,6 +706,9 @@ class Viewer:
         if self._mu_auto:
             self._mu_auto = False  # moved by hand: the value is the user's from now on
             self._show_mu_mode()
+        # the library's start depends on mu (specks the length term removes): shown anew once
+        # the mouse is released, not for every value a drag passes
+        self._start_stale = True
 
     def _on_slider(self, _value):
         if self.running or self.result is not None:
@@ -740,6 +751,7 @@ class Viewer:
         """Set :attr:`init_curves` to what a fresh run starts from: the init's curves, or for None
         and a named init the library's start (its result after zero iterations, so that the
         viewer never reimplements it).  Returns None, or the library's message refusing it."""
+        self._start_stale = False
         if not (self.init is None or isinstance(self.init, str)):
             self.init_curves = self.init
             return None

@@ -870,3 +870,15 @@ def test_automatic_mu_follows_the_image_until_the_slider_is_moved(disk_image, ma
     assert viewer.slider_labels["mu"].get_text() == "mu (length)"
     viewer.open_image(noisy)
     assert viewer.parameters()["mu"] == pytest.approx(1.5, abs=1e-9)  # the user's value stays
+
+
+def test_the_shown_start_follows_mu_as_the_librarys_does(coins_image, make_viewer):
+    image, _ = coins_image
+    viewer = make_viewer(image)
+    mu = viewer.sliders["mu"]
+    before = ac.segment(image, max_num_iter=0, mu=mu.val).contours
+    assert_same_contours(viewer.init_curves, before)
+    set_slider(viewer, mu, 1.0)  # press and release on the slider
+    after = ac.segment(image, max_num_iter=0, mu=viewer.parameters()["mu"]).contours
+    assert len(after) != len(before)  # on this image the start depends on mu
+    assert_same_contours(viewer.init_curves, after)
