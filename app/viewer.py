@@ -842,7 +842,8 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
     image_path : str or os.PathLike
         Any image :func:`activecontour.load_image` reads.
     backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats
-        See :class:`Viewer` (None: the library's default); ``init`` may be a mask file's path.
+        See :class:`Viewer` (None: the library's default); ``init`` may also be a name from
+        :data:`NAMED_INITS` (``"grid"``, ``"checkerboard"``) or a mask file's path.
 
     Returns
     -------
