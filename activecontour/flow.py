@@ -48,6 +48,7 @@ _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
 _WINDOW = 5  # iterations over which the movement is averaged for the stopping test
 _MEMORY = 8  # step pairs of the L-BFGS acceleration
+_CURVE_STEP = 0.25  # a trial step moves a curve by at most this fraction of its radius (RMS)
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
 _MIN_EDGE = 1e-9
@@ -281,6 +282,7 @@ class _Flow:
             # a quasi-Newton step in the same metric: its natural length is 1
             v = accelerated
             dt = min(1.0, self.max_step / np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2)))
+        dt = min(dt, _size_limit(geometry, v))
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
@@ -353,6 +355,20 @@ class _Movement:
 
     def clear(self):
         self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
+
+
+def _size_limit(geometry, v):
+    """The largest dt that moves no curve by more than a quarter of its radius (RMS).
+
+    A first trial that jumps a small curve across itself (or shrinks it to nothing in one go)
+    can pass the descent test and still land far from where the flow was going.
+    """
+    points, next_index, offsets = geometry
+    d = points[next_index] - points
+    radius = np.add.reduceat(np.hypot(d[:, 0], d[:, 1]), offsets[:-1]) / (2 * np.pi)
+    rms = np.sqrt(np.add.reduceat(v[:, 0] ** 2 + v[:, 1] ** 2, offsets[:-1]) / np.diff(offsets))
+    moving = rms > 0
+    return float(np.min(_CURVE_STEP * radius[moving] / rms[moving])) if moving.any() else np.inf
 
 
 class _Memory:
