@@ -712,7 +712,7 @@ def _run_view(args):
     shape = image.shape[:2]
     if isinstance(init, _ContourInit):
         init = list(init)
-    if init is not None:
+    if init is not None and not isinstance(init, str):  # "grid" and "checkerboard" fit any image
         try:
             initial_curves(init, shape)
         except (ValueError, TypeError) as exc:
