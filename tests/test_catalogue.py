@@ -14,8 +14,7 @@ fix lands, and the mark is then removed.
 """
 
 import json
-import subprocess
-import sys
+import time
 from pathlib import Path
 
 import cv2
@@ -34,7 +33,6 @@ from app import cli
 
 SHAPE = (48, 64)
 CENTER, RADIUS = (23.0, 33.5), 13.0
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def lead(reason):
@@ -410,14 +408,24 @@ def test_cli_microaneurysms_with_grid_writes_every_backend(tmp_path, capsys):
         assert all(abs(entry["signed_area"]) > 0 for entry in document["contours"])
 
 
-@lead("a speckle mask init takes 30-115 s on coins (303 x 384): bound it")
-def test_speckle_mask_init_on_coins_finishes_in_seconds(tmp_path):
-    script = (
-        "import numpy as np, skimage.data, activecontour as ac\n"
-        "image = skimage.data.coins()\n"
-        "ac.segment(image, np.random.default_rng(0).random(image.shape) > 0.5)\n"
-    )
+@lead("a speckle mask init takes 30-115 s on coins (303 x 384): bound it (merge or validate)")
+def test_speckle_mask_init_on_coins_takes_seconds_of_cpu():
+    image = skimage.data.coins()
+    speckle = np.random.default_rng(0).random(image.shape) > 0.5
+    budget = 3.0  # seconds of CPU (not wall time: the machine is shared); today it takes about 6
+    started = time.process_time()
+    over = []
+
+    def stop_when_over_budget(state):
+        if time.process_time() - started > budget:
+            over.append(state.iteration)
+            return True
+        return False
+
     try:
-        subprocess.run([sys.executable, "-c", script], cwd=ROOT, timeout=15, check=True)
-    except subprocess.TimeoutExpired:
-        pytest.fail("a speckle init on a 303 x 384 image ran for more than 15 s")
+        result = ac.segment(image, speckle, callback=stop_when_over_budget)
+    except ValueError as exc:  # or refuse it, saying why
+        assert "init" in str(exc)
+        return
+    assert not over, f"still running after {budget} s of CPU, at iteration {over[0]}"
+    assert_usable(image, result)
