@@ -301,8 +301,9 @@ def _interrupt_at_once():
     Python turns SIGINT into KeyboardInterrupt only between bytecodes, and a compiled kernel
     holds the interpreter for as long as it runs (20 s in ``topology.winding_number`` on a
     speckle init).  Nothing is being written in this phase (the files of an image are written
-    after it, all or none), so the signal's default action, ending the process, loses nothing that
-    was finished.  Left alone when SIGINT is not Python's default (ignored, or the caller's).
+    after it, all or none; numba's cache files are written to a temporary name and renamed too),
+    so the signal's default action, ending the process, loses nothing that was finished.  Left
+    alone when SIGINT is not Python's default (ignored, or the caller's).
     """
     if (threading.current_thread() is not threading.main_thread()
             or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
