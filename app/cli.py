@@ -625,9 +625,11 @@ class _Progress:
     """One status line on stderr, redrawn in place at most ten times a second.
 
     It shows the file (k/N) and its name, ``loading`` while the file is read, then the iteration,
-    the energy, the time since the run started and an estimate of the time left: the mean time of
-    the images finished so far times the images left (``?`` before the first one finishes).
-    Used as the ``callback`` of :func:`activecontour.segment`.
+    the energy, the time since the run started and an estimate of the time left: ``~`` the mean
+    time of the images finished so far times the images left; for a single image, ``<=`` the time
+    its remaining iterations up to ``max_num_iter`` take at the rate so far (it usually converges
+    sooner); ``?`` when neither is known yet.  Used as the ``callback`` of
+    :func:`activecontour.segment`.
     """
 
     width = 20
@@ -641,6 +643,7 @@ class _Progress:
         self.number = 0
         self.name = ""
         self.image_started = self.started
+        self._rate = None  # (time, iteration) of this image's first callback, and its latest state
         self._last = -math.inf
         self._drawn = False
 
@@ -650,6 +653,7 @@ class _Progress:
         if self.number:
             self.finished += 1
         self.number, self.name, self.image_started = number, Path(path).name, now
+        self._rate = None
         try:
             size = f" ({os.path.getsize(path) / 1e6:.1f} MB)"
         except OSError:
@@ -658,6 +662,8 @@ class _Progress:
 
     def __call__(self, state):
         now = self.clock()
+        first = (now, state.iteration) if self._rate is None else self._rate[0]
+        self._rate = (first, (now, state.iteration, state.max_num_iter))
         if now - self._last < 0.1 and state.iteration < state.max_num_iter:
             return None
         total = max(int(state.max_num_iter), 1)
@@ -667,18 +673,22 @@ class _Progress:
         return None
 
     def remaining(self, now):
-        """Seconds left for the whole batch, or None before an image has finished."""
-        if not self.finished:
-            return None
-        per_image = (self.image_started - self.started) / self.finished
-        left = per_image * (self.total - self.number) + max(0.0, per_image - (now - self.image_started))
-        return left
+        """``"~M:SS"`` (an estimate), ``"<=M:SS"`` (a bound) or ``"?"``: the time left."""
+        if self.finished:
+            per_image = (self.image_started - self.started) / self.finished
+            left = per_image * (self.total - self.number) + max(0.0, per_image - (now - self.image_started))
+            return "~" + _clock(left)
+        if self.total == 1 and self._rate is not None:
+            (start, first), (latest, iteration, max_num_iter) = self._rate
+            if iteration > first:
+                per_iteration = (latest - start) / (iteration - first)
+                return "<=" + _clock(per_iteration * (max_num_iter - iteration))
+        return "?"
 
     def _draw(self, text, now):
-        left = self.remaining(now)
         self.stream.write(
             f"\r\033[K[{self.number}/{self.total}] {self.name}: {text} "
-            f"elapsed {_clock(now - self.started)} left {'?' if left is None else '~' + _clock(left)}"
+            f"elapsed {_clock(now - self.started)} left {self.remaining(now)}"
         )
         self.stream.flush()
         self._last = now

@@ -388,6 +388,21 @@ def test_progress_shows_file_k_of_n_elapsed_and_time_left():
     assert stream.getvalue().endswith("\r\033[K")
 
 
+def test_progress_of_a_single_image_bounds_the_time_left_by_the_iteration_rate():
+    import io as stdio
+
+    now = [0.0]
+    stream = stdio.StringIO()
+    progress = cli._Progress(1, stream=stream, clock=lambda: now[0])
+    progress.start(1, "/data/a.png")
+    now[0] = 2.0  # loaded; the first iteration reports at 2 s
+    progress(types.SimpleNamespace(iteration=1, max_num_iter=101, energy=3.0))
+    assert stream.getvalue().endswith("elapsed 0:02 left ?")
+    now[0] = 6.0  # 4 s for 20 iterations: the 80 left up to max_num_iter take at most 16 s
+    progress(types.SimpleNamespace(iteration=21, max_num_iter=101, energy=2.0))
+    assert stream.getvalue().endswith("elapsed 0:06 left <=0:16")
+
+
 def test_interrupt_while_writing_restores_everything(small, tmp_path, capsys, monkeypatch):
     path, _ = small
     out = tmp_path / "out"
