@@ -277,6 +277,8 @@ def _segment_one(image_path, stem, common, progress=None):
 
     with _interrupt_at_once():
         image = activecontour.load_image(image_path)
+        if progress is not None:
+            progress.note(f"setting up ({' x '.join(map(str, image.shape))})")
         _check_image(image_path, common.init, common.settings, image=image)
         init = list(common.init) if isinstance(common.init, _ContourInit) else common.init
         started = time.perf_counter()
@@ -624,7 +626,8 @@ def _format_constant(value):
 class _Progress:
     """One status line on stderr, redrawn in place at most ten times a second.
 
-    It shows the file (k/N) and its name, ``loading`` while the file is read, then the iteration,
+    It shows the file (k/N) and its name, ``loading`` while the file is read, ``setting up`` until
+    the first iteration (the image's tables and its default start), then the iteration,
     the energy, the time since the run started and an estimate of the time left: ``~`` the mean
     time of the images finished so far times the images left; for a single image, ``<=`` the time
     its remaining iterations up to ``max_num_iter`` take at the rate so far (it usually converges
@@ -659,6 +662,10 @@ class _Progress:
         except OSError:
             size = ""
         self._draw(f"loading{size}", now)
+
+    def note(self, text):
+        """Show what the current image is doing before its first iteration (``setting up``)."""
+        self._draw(text, self.clock())
 
     def __call__(self, state):
         now = self.clock()

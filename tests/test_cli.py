@@ -121,6 +121,7 @@ def test_progress_bar_only_on_a_terminal(small, tmp_path, capsys, monkeypatch):
     status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "a", "--max-iter", 3)
     assert status == 0
     assert "\r" in stderr and "[" in stderr and "/3" in stderr
+    assert "[1/1] disk.png: loading" in stderr and f"setting up ({SIZE[0]} x {SIZE[1]})" in stderr
     assert len(stdout.splitlines()) == 1
     status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "b", "--quiet")
     assert (status, stdout, stderr) == (0, "", "")
