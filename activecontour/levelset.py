@@ -97,9 +97,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from activecontour.energy import evaluate
 from activecontour.initial import initial_curves
 from activecontour.raster import level_curves, rasterize
-from activecontour.result import FlowState, SegmentationResult
+from activecontour.result import FlowState, build_result
 
 __all__ = [
     "DEFAULT_OPTIONS",
@@ -110,15 +111,14 @@ __all__ = [
     "level_set_contours",
     "segment_levelset",
     "signed_distance",
-    "smoothed_delta",
+    "zero_set_edges",
 ]
 
 #: The backend-specific keywords of :func:`segment_levelset` and their defaults.
 DEFAULT_OPTIONS = {
-    "dt": 64.0,
-    "dt_min": 4.0,
-    "dt_max": 256.0,
-    "epsilon": 1.0,
+    "dt": 16.0,
+    "dt_min": 1.0,
+    "dt_max": 64.0,
     "band": 4.0,
     "checkerboard_period": 16.0,
     "max_backtracks": 5,
@@ -130,8 +130,7 @@ INIT_STRINGS = ("checkerboard", "grid")
 _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in float32
 _ONE_SWEEP_BAND = 8.0  # bands up to this half-width (pixels) need one sweep per ring
 _STAGE_TOL = 10.0  # a smoothed-force stage ends at 10 tol: the next, finer one moves faster
-_PATIENCE = 3  # iterations in a row below tol (pixels) that count as a stall
-_ENERGY_WINDOW = 5  # the final stall test averages the energy decrease over this many iterations
+_WINDOW = 3  # stages end when Gamma's mean displacement over this many iterations is small
 _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 
 
@@ -146,22 +145,16 @@ def heaviside(phi, epsilon=1.0):
     return np.where(s >= 1.0, 1.0, np.where(s <= -1.0, 0.0, ramp))
 
 
-def smoothed_delta(phi, epsilon=1.0):
-    """``delta_eps = H_eps'``: ``(1 + cos(pi phi / eps)) / (2 eps)`` for ``|phi| < eps``, else 0."""
-    s = np.clip(np.asarray(phi, dtype=np.float64) / epsilon, -1.0, 1.0)
-    return (1.0 + np.cos(np.pi * s)) / (2.0 * epsilon)
-
 
 # --------------------------------------------------------------------------------------------
 # Signed distance to the zero level set (reinitialisation), in a narrow band
 
 
 class _Redistanced:
-    """A band-clipped signed distance with what the energy needs: the band and Gamma's length."""
+    """A band-clipped signed distance and the pixels of its band (for the swept area)."""
 
-    def __init__(self, phi, length, positive, near_flat, near_distance):
+    def __init__(self, phi, positive, near_flat, near_distance):
         self.phi = phi  # (M, N) float64, exact within the band, +-band beyond
-        self.length = length  # length of the marching-squares zero set
         self.positive = positive  # phi > 0
         self.near_flat = near_flat  # flat indices of the pixels whose distance was computed
         self.near_distance = near_distance  # their signed distances
@@ -199,7 +192,7 @@ def _redistance(phi, band):
     positive = phi > 0
     front = np.flatnonzero(_front_pixels(positive))
     if front.size == 0:
-        return _Redistanced(_clipped(positive, band), 0.0, positive, np.zeros(0, dtype=np.intp),
+        return _Redistanced(_clipped(positive, band), positive, np.zeros(0, dtype=np.intp),
                             np.zeros(0))
     rows, cols = np.divmod(front, phi.shape[1])
     segments, nearest = _front_segments(phi, positive, rows, cols)
@@ -342,8 +335,6 @@ class _Segments:
     """
 
     def __init__(self, segments, links):
-        valid = ~np.isnan(segments[:, 0, 0])
-        self.length = float(np.sum(np.hypot(*(segments[valid, 1] - segments[valid, 0]).T)))
         start = np.nan_to_num(segments[:, 0], nan=_FAR)
         direction = np.nan_to_num(segments[:, 1] - segments[:, 0])
         length_sq = np.sum(direction * direction, axis=1)
@@ -429,7 +420,7 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     signed = np.where(positive.ravel()[flat], distance, -distance)
     phi = _clipped(positive, band)
     phi.ravel()[flat] = np.clip(signed, -band, band)
-    return _Redistanced(phi, segments.length, positive, flat, signed)
+    return _Redistanced(phi, positive, flat, signed)
 
 
 def curves_level_set(curves, shape, band=np.inf):
@@ -538,17 +529,60 @@ def level_set_contours(phi):
     """The zero level set of phi as closed sub-pixel curves in the DESIGN.md convention.
 
     Marching squares (``skimage.measure.find_contours``) on phi padded by one pixel of
-    ``-|phi|``: a region that touches the image border closes along the domain edge, half a
-    pixel outside the outermost pixel centres, so every curve is closed.  With
-    ``positive_orientation="high"`` outer boundaries have positive signed area and holes
+    ``-|phi|`` (:func:`_closed_padding`): a region that touches the image border closes along the
+    domain edge, half a pixel outside the outermost pixel centres, so every curve is closed.
+    With ``positive_orientation="high"`` outer boundaries have positive signed area and holes
     negative.  Each vertex is stored once.
     """
-    phi = np.asarray(phi, dtype=np.float64)
-    padded = np.pad(phi, 1, mode="edge")
+    return level_curves(_closed_padding(phi), 0.0)
+
+
+def _closed_padding(phi):
+    """phi padded by one pixel of ``-|phi|``: the zero set closes on the domain edge (inside only)."""
+    padded = np.pad(np.asarray(phi, dtype=np.float64), 1, mode="edge")
     padded[0], padded[-1] = -np.abs(padded[0]), -np.abs(padded[-1])
     padded[:, 0], padded[:, -1] = -np.abs(padded[:, 0]), -np.abs(padded[:, -1])
     padded[padded == 0] = -1e-300  # phi = 0 is outside, as in the mask phi > 0
-    return level_curves(padded, 0.0)
+    return padded
+
+
+def zero_set_edges(phi):
+    """The segments of :func:`level_set_contours`, oriented but not chained: ``(S, 2 ends, 2)``.
+
+    The same marching-squares segments (the saddle rule of :func:`_cell_segments`, the closing
+    along the domain edge of :func:`_closed_padding`), each directed so that the inside lies on
+    its left, i.e. its normal ``nu = (t_c, -t_r)`` points out of the inside as for the polygons.
+    Region and length integrals are sums over edges (Green's theorem), so the common evaluator
+    scores this soup exactly as it scores the chained contours, without the O(M N) Python work of
+    chaining them.
+    """
+    padded = _closed_padding(phi)
+    positive = padded > 0
+    corner = positive[:-1, :-1]
+    change = (corner != positive[:-1, 1:]) | (corner != positive[1:, 1:]) | (corner != positive[1:, :-1])
+    cell_r, cell_c = np.nonzero(change)
+    segments, _ = _cell_segments(padded, positive, cell_r, cell_c)
+    corners = np.stack([positive[cell_r, cell_c], positive[cell_r, cell_c + 1],
+                        positive[cell_r + 1, cell_c + 1], positive[cell_r + 1, cell_c]], axis=1)
+    offsets = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]])
+    base = np.column_stack([cell_r, cell_c]).astype(np.float64)
+    # a point on the inside of each segment: the mean of the inside corners of a simple cell;
+    # in a saddle each segment cuts off one inside corner (a and c, or b and d)
+    reference = np.repeat((base + corners @ offsets / corners.sum(axis=1)[:, None])[:, None], 2, axis=1)
+    saddle = corners.sum(axis=1) == 2
+    saddle &= corners[:, 0] == corners[:, 2]
+    a_in = corners[saddle, 0][:, None]
+    reference[saddle, 0] = base[saddle] + np.where(a_in, offsets[0], offsets[1])
+    reference[saddle, 1] = base[saddle] + np.where(a_in, offsets[2], offsets[3])
+    segments, reference = segments.reshape(-1, 2, 2), reference.reshape(-1, 2)
+    valid = ~np.isnan(segments[:, 0, 0])
+    segments, reference = segments[valid], reference[valid]
+    tangent = segments[:, 1] - segments[:, 0]
+    offset = reference - segments[:, 0]
+    # inside on the left: (x - p) . nu < 0 for the inside point x
+    flip = offset[:, 0] * tangent[:, 1] - offset[:, 1] * tangent[:, 0] > 0
+    segments[flip] = segments[flip, ::-1]
+    return segments - 1.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -556,24 +590,21 @@ def level_set_contours(phi):
 
 
 class _Problem:
-    """Image, parameters and the precomputed pieces of E, f and the operator S."""
+    """Image, parameters and the pieces of the energy, the force f and the operator S."""
 
     def __init__(self, model, params, settings):
-        values = model.values
+        self.model = model
         self.shape = tuple(model.shape)
-        self.n_channels = values.shape[2]
-        self.values = values
-        flat = values.reshape(-1, self.n_channels)
-        # columns 1, I, I^2 per channel: the moments of a region are one matrix-vector product
-        self.moments_matrix = np.ascontiguousarray(np.vstack([np.ones(len(flat)), flat.T, (flat * flat).T]))
-        self.totals = self.moments_matrix.sum(axis=1)
-        self.intensity_sq = np.sum(values * values, axis=2)
+        self.n_channels = model.n_channels
+        self.values = model.values
         self.params = params
-        self.fixed_in = params.constant("c_in", self.n_channels)
-        self.fixed_out = params.constant("c_out", self.n_channels)
-        self.epsilon = settings["epsilon"]
+        self.lambda_in, self.lambda_out = params.weights(self.n_channels)
+        if np.any(self.lambda_in != self.lambda_out):
+            self.intensity_sq = self.values * self.values @ (self.lambda_in - self.lambda_out)
         self.band = settings["band"]
         m, n = self.shape
+        stride = max(1, int(np.sqrt(m * n / 2.0**16)))
+        self.sample = (slice(stride // 2, None, stride), slice(stride // 2, None, stride))
         # eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis
         wave_r = 4.0 * np.sin(np.pi * np.arange(m) / (2.0 * m)) ** 2
         wave_c = 4.0 * np.sin(np.pi * np.arange(n) / (2.0 * n)) ** 2
@@ -582,51 +613,55 @@ class _Problem:
     def redistance(self, phi):
         return _redistance(phi, self.band)
 
-    def energy(self, state):
-        """E of a redistanced state with the optimal (or fixed) constants (6.42).
+    def evaluate(self, state):
+        """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
 
-        Returns ``(E, c_in, c_out)``; a constant is NaN when its region is empty (6.42 is then
-        undefined) and its fitting term is 0.
+        The zero set is the segment soup of :func:`zero_set_edges`: the returned contours, closed
+        along the domain edge.  An empty region has the evaluator's value for the empty set.
         """
-        channels = self.n_channels
-        moments = self.moments_matrix @ state.positive.ravel().astype(np.float64)
-        near = np.abs(state.near_distance) < self.epsilon
-        if near.any():
-            d = state.near_distance[near]
-            correction = heaviside(d, self.epsilon) - (d > 0)
-            moments = moments + self.moments_matrix[:, state.near_flat[near]] @ correction
-        area, s1, s2 = moments[0], moments[1 : 1 + channels], moments[1 + channels :]
-        total_area = self.totals[0]
-        t1, t2 = self.totals[1 : 1 + channels], self.totals[1 + channels :]
-        outside = total_area - area
-        c_in, c_out = self.fixed_in, self.fixed_out
-        if c_in is None:
-            c_in = s1 / area if area > 1e-12 else np.full(channels, np.nan)
-        if c_out is None:
-            c_out = (t1 - s1) / outside if outside > 1e-12 else np.full(channels, np.nan)
-        p = self.params
-        fit_in = float(np.sum(s2 - 2.0 * c_in * s1 + c_in * c_in * area)) if area > 1e-12 else 0.0
-        fit_out = (
-            float(np.sum((t2 - s2) - 2.0 * c_out * (t1 - s1) + c_out * c_out * outside))
-            if outside > 1e-12 else 0.0
-        )
-        energy = p.mu * state.length + p.omega * area + p.lambda_in * fit_in + p.lambda_out * fit_out
-        return float(energy), c_in, c_out
+        points = zero_set_edges(state.phi).reshape(-1, 2)
+        next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
+        return evaluate(self.model, points, next_index, self.params, empty_ok=True)
 
     def force(self, c_in, c_out):
-        """f = omega + lambda_in sum (I - c_in)^2 - lambda_out sum (I - c_out)^2, per pixel (6.41)."""
+        """f of (6.41) per pixel and its contrast scale.
+
+        ``f = omega + lambda_in sum (I - c_in)^2 - lambda_out sum (I - c_out)^2``, plus ``mu`` per
+        side of the image that a pixel lies on: a region that covers a border pixel closes along
+        the domain edge there, and the evaluator counts that length (the wall term).  The scale
+        is the mean ``|f|`` over the pixels (a regular sample of about 2^16 of them): about
+        ``|c_in - c_out|^2`` once the regions have settled, the size of the force of every pixel
+        before that (a checkerboard start, where ``c_in ~ c_out``).  Time steps are measured in
+        pixels of travel at that force.
+        """
         p = self.params
         c_in = np.nan_to_num(np.asarray(c_in, dtype=np.float64))
         c_out = np.nan_to_num(np.asarray(c_out, dtype=np.float64))
-        linear = -2.0 * (p.lambda_in * c_in - p.lambda_out * c_out)
-        constant = p.omega + p.lambda_in * float(c_in @ c_in) - p.lambda_out * float(c_out @ c_out)
-        if self.n_channels == 1:
-            f = self.values[:, :, 0] * linear[0] + constant
-        else:
-            f = self.values @ linear + constant
-        if p.lambda_in != p.lambda_out:
-            f += (p.lambda_in - p.lambda_out) * self.intensity_sq
-        return f
+        linear = -2.0 * (self.lambda_in * c_in - self.lambda_out * c_out)
+        constant = p.omega + self.lambda_in @ (c_in * c_in) - self.lambda_out @ (c_out * c_out)
+        f = self.values @ linear + constant
+        if hasattr(self, "intensity_sq"):
+            f += self.intensity_sq
+        if p.mu > 0:
+            for edge in (f[0], f[-1], f[:, 0], f[:, -1]):
+                edge += p.mu
+        return f, max(float(np.mean(np.abs(f[self.sample]))), 1e-12)
+
+    def time_step(self, step, scale, current):
+        """tau for a step of ``step`` pixels at the force ``scale``, with a bounded smoothing length.
+
+        ``tau = step / scale``: a front at a pixel of typical force moves ``step`` pixels.  The
+        smoothing length ``sqrt(tau mu)`` of S is kept below ``step`` and below the width of the
+        regions (the smaller of their areas over the length of Gamma): this binds where the force
+        is weak against the length term (a checkerboard start, whose constants hardly differ),
+        where S would otherwise flatten phi, and its shape, at once.
+        """
+        tau = step / scale
+        if self.params.mu <= 0:
+            return tau
+        width = min(current.area, self.model.totals[0] - current.area) / max(current.length, 1.0)
+        smoothing = min(step, max(width, 1.0))
+        return min(tau, smoothing * smoothing / self.params.mu)
 
     def step(self, phi, force, tau, smooth_force):
         """Step (a) ``S (phi - tau f)`` with ``smooth_force``, else (b) ``S phi - tau f``.
@@ -645,6 +680,19 @@ class _Problem:
         return out
 
 
+def _swept_area(old, new):
+    """Area between the zero sets of two redistanced states, ``sum_px |H_eps(new) - H_eps(old)|``.
+
+    With eps = 1 the integer translates of H_eps sum to the exact length of a half-line (module
+    docstring), so this is the exact area between two parallel straight fronts at any sub-pixel
+    offset, and second-order accurate for curved ones.  Only pixels in either band can differ.
+    """
+    if old.near_flat.size == 0 or new.near_flat.size == 0:
+        return float(np.count_nonzero(old.positive != new.positive))
+    flat = np.unique(np.concatenate([old.near_flat, new.near_flat]))
+    return float(np.sum(np.abs(heaviside(new.phi.ravel()[flat]) - heaviside(old.phi.ravel()[flat]))))
+
+
 def _parse_options(options):
     unknown = sorted(set(options) - set(DEFAULT_OPTIONS))
     if unknown:
@@ -653,7 +701,7 @@ def _parse_options(options):
             f"the valid options are {', '.join(sorted(DEFAULT_OPTIONS))}"
         )
     settings = {**DEFAULT_OPTIONS, **options}
-    for name in ("dt", "dt_min", "dt_max", "epsilon", "band", "checkerboard_period"):
+    for name in ("dt", "dt_min", "dt_max", "band", "checkerboard_period"):
         value = settings[name]
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise TypeError(f"option {name!r} must be a number, got {type(value).__name__}")
@@ -675,10 +723,8 @@ def _parse_options(options):
             f"options must satisfy dt_min <= dt <= dt_max, got dt_min={settings['dt_min']}, "
             f"dt={settings['dt']}, dt_max={settings['dt_max']}"
         )
-    if settings["band"] < settings["epsilon"] + 1.0:
-        raise ValueError(
-            f"option 'band' ({settings['band']}) must be at least epsilon + 1 ({settings['epsilon'] + 1})"
-        )
+    if settings["band"] < 2.0:
+        raise ValueError(f"option 'band' must be at least 2 (pixels), got {settings['band']}")
     return settings
 
 
@@ -686,90 +732,8 @@ def _parse_options(options):
 # The backend
 
 
-def _stalled(energies, stage_start, tol):
-    """Mean relative decrease of E over the last iterations of the stage below tol."""
-    if len(energies) - stage_start <= _ENERGY_WINDOW:
-        return False
-    decrease = (energies[-1 - _ENERGY_WINDOW] - energies[-1]) / _ENERGY_WINDOW
-    return decrease < tol * max(abs(energies[-1]), 1e-300)
-
-
 def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **options):
-    """Minimise the Chan-Vese functional (6.38) with a level set over the pixel grid.
-
-    Called by :func:`activecontour.segment` with ``backend="levelset"``; the keywords under
-    Other Parameters are passed there as ``options={...}``.  The scheme, the regularised
-    Heaviside/delta and the discrete energy are described in :mod:`activecontour.levelset`.
-
-    Parameters
-    ----------
-    model : activecontour.image.ImageModel
-    init : None, ndarray (K, 2), list of them, bool ndarray (M, N), SegmentationResult, or str
-        None: the default circle (:func:`activecontour.initial.default_init`).  Curves, masks
-        and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are
-        inside).  A result of either backend: its ``phi`` when it has one, else its contours.
-        ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels
-        (:func:`checkerboard_level_set`); it has no preferred phase, so when the functional is
-        symmetric (omega = 0, lambda_in = lambda_out, c free) and the final inside covers most of
-        the image border, the phases are swapped (phi -> -phi, E unchanged) so that the inside is
-        the object rather than the background.
-    params : activecontour.energy.ChanVeseParameters
-        mu, omega, lambda_in, lambda_out and optional fixed c_in, c_out of (6.38), as for the
-        polygon backend.
-    max_num_iter : int
-    tol : float
-        As for the polygon backend: the final stage stalls, which is convergence (status 0), when
-        the relative decrease of E per iteration, averaged over the last five iterations, falls
-        below ``tol`` (the end of the slow tail of noisy images), or when the zero level set moves
-        less than ``tol`` pixels (largest change of the signed distance within a pixel of Gamma)
-        three iterations in a row.  A smoothed-force stage (module docstring) ends at 10 tol, or
-        at the same displacement test.  The run also ends when no step, down to the current one
-        halved ``max_backtracks`` times, decreases E (status 4: stationary to working precision).
-    callback : callable or None
-        Called with a :class:`~activecontour.result.FlowState` (contours and ``phi``) after every
-        iteration; returning True stops the flow (status 2).
-
-    Other Parameters
-    ----------------
-    dt : float, default 64.0
-        First time step tau, in pixels per unit of intensity^2: a front in a force ``|f| = 1``
-        moves about tau pixels.  It doubles after each accepted step until a step is rejected
-        (then it is halved) or ``dt_max`` is reached.  Large steps let whole regions flip at once
-        (holes open, far objects appear); the energy test rejects those that do not pay.
-    dt_min : float, default 4.0
-        The smoothed-force stage divides tau by 4 at every stall down to ``dt_min`` (its fixed
-        point is biased by the smoothing length ``sqrt(tau mu)``); the final, unsmoothed stage
-        keeps tau <= ``dt_min``, which must stay below ``band / max|f|`` so that no single pixel
-        flips.
-    dt_max : float, default 256.0
-        Largest time step.  A ``dt`` outside ``[dt_min, dt_max]`` widens the defaults; bounds given
-        explicitly must satisfy ``dt_min <= dt <= dt_max``.
-    epsilon : float, default 1.0
-        Half-width (pixels) of the regularised Heaviside/delta of E.  Use an integer or a
-        half-integer >= 1 (exact areas, see the module docstring).
-    band : float, default 4.0
-        Narrow band: phi is the signed distance up to ``band`` pixels from Gamma and is clipped to
-        ``+-band`` beyond.  Must be >= epsilon + 1.
-    checkerboard_period : float, default 16.0
-        Side (pixels) of the squares of the ``"checkerboard"`` start.
-    max_backtracks : int, default 5
-        Halvings of the time step before an iteration counts as stationary.
-
-    Returns
-    -------
-    SegmentationResult
-        ``mask = phi > 0``, ``contours`` the zero level set (marching squares, outer boundaries
-        positive, holes negative), ``phi`` the final signed distance (clipped to the band), and
-        ``energies`` the discrete energy E before the first and after every iteration (not
-        increasing).
-
-    Raises
-    ------
-    TypeError
-        For an unknown option (the message lists the valid ones) or an option of the wrong type.
-    ValueError
-        For an unknown ``init`` string, a mask of the wrong shape, an init with nothing inside or
-        nothing outside, or an option out of range.
+    """DOCSTRING
     """
     settings = _parse_options(options)
     shape = tuple(model.shape)
@@ -779,84 +743,88 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     else:
         phi = initial_level_set(init, shape, band=settings["band"], values=model.values)
     state = problem.redistance(phi)
-    energy, c_in, c_out = problem.energy(state)
-    energies = [energy]
-    tau, grow, smooth_force = settings["dt"], True, True
-    status, n_iter, quiet, stage_start = 1, 0, 0, 0
+    current = problem.evaluate(state)
+    energies, moves = [current.energy], []
+    step, grow, smooth_force = settings["dt"], True, True
+    status, n_iter, stage_start = 1, 0, 0
     for k in range(1, max_num_iter + 1):
         if not state.positive.any():
             status = 3
             break
-        force = problem.force(c_in, c_out)
+        force, scale = problem.force(current.c_in, current.c_out)
+        if not smooth_force:
+            # unsmoothed, a pixel far from Gamma (phi = -+band) flips on its own when
+            # tau |f| > band: keep below that, so that no noise pixel nucleates
+            step = min(step, settings["band"] * scale / max(float(np.max(np.abs(force))), 1e-300))
+        tau = problem.time_step(step, scale, current)
         first_try = True
         for _ in range(settings["max_backtracks"] + 1):
             trial = problem.redistance(problem.step(state.phi, force, tau, smooth_force))
-            trial_energy, trial_in, trial_out = problem.energy(trial)
+            evaluation = problem.evaluate(trial)
             # A large step uses the constants of the old region; one that empties a region jumps
             # past what c would have followed, so emptying is left to small steps.
-            degenerate = tau > settings["dt_min"] and (
+            degenerate = step > settings["dt_min"] and (
                 not trial.positive.any() or trial.positive.all())
-            if trial_energy <= energy and not degenerate:
+            if evaluation.energy <= current.energy and not degenerate:
                 break
-            tau *= 0.5
+            step, tau = 0.5 * step, 0.5 * tau
             grow = first_try = False
         else:
-            status = 4
-            break
+            if not smooth_force:
+                status = 4
+                break
+            # the smoothed force has no descent step left: its biased fixed point is near, so
+            # go on with the unsmoothed one
+            smooth_force, step, stage_start = False, settings["dt_min"], len(moves)
+            continue
         n_iter = k
-        near = (np.abs(trial.phi) < 1.0) | (np.abs(state.phi) < 1.0)
-        displacement = float(np.max(np.abs(trial.phi - state.phi)[near], initial=0.0))
-        decrease = (energy - trial_energy) / max(abs(trial_energy), 1e-300)
-        state, energy, c_in, c_out = trial, trial_energy, trial_in, trial_out
-        energies.append(energy)
-        quiet = quiet + 1 if displacement < tol else 0
+        # mean normal displacement of Gamma in this iteration, pixels: swept area over length
+        moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+        state, current = trial, evaluation
+        energies.append(current.energy)
         if callback is not None:
             flow_state = FlowState(
-                iteration=k, contours=level_set_contours(state.phi), energy=energy, c_in=c_in,
-                c_out=c_out, shape=shape, max_num_iter=max_num_iter, phi=state.phi,
+                iteration=k, contours=level_set_contours(state.phi), energy=current.energy,
+                c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
+                phi=state.phi,
             )
             if callback(flow_state):
                 status = 2
                 break
+        window = moves[stage_start:][-_WINDOW:]
+        moving = len(window) < _WINDOW or np.mean(window) >= (_STAGE_TOL if smooth_force else 1.0) * tol
         if smooth_force:
-            if grow and tau < settings["dt_max"]:
-                tau = min(2.0 * tau, settings["dt_max"])  # no rejection yet: still speeding up
-                continue
-            if decrease >= _STAGE_TOL * tol and quiet < _PATIENCE:
-                continue
-            # the smoothed-force step has stalled at this tau; its fixed point is biased by the
-            # smoothing of width sqrt(tau mu), so go on with a smaller tau, then unsmoothed
-            if tau > settings["dt_min"]:
-                tau = max(0.25 * tau, settings["dt_min"])
-            else:
-                smooth_force, tau = False, settings["dt_min"]
-            quiet, stage_start = 0, len(energies) - 1
-        elif quiet >= _PATIENCE or _stalled(energies, stage_start, tol):
+            if grow and step < settings["dt_max"]:
+                step = min(2.0 * step, settings["dt_max"])  # no rejection yet: still speeding up
+            elif not moving:
+                # the smoothed-force step has settled at this step; its fixed point is biased by
+                # the smoothing of width sqrt(tau mu), so go on with a smaller one, then unsmoothed
+                if step > settings["dt_min"]:
+                    step = max(0.25 * step, settings["dt_min"])
+                else:
+                    smooth_force, step = False, settings["dt_min"]
+                stage_start = len(moves)
+        elif not moving:
             status = 0
             break
         elif first_try:
-            # the unsmoothed force moves single pixels: tau stays below dt_min, so that no
-            # noise pixel can cross the band (|tau f| < band) and nucleate
-            tau = min(1.5 * tau, settings["dt_min"])
+            step = min(1.5 * step, settings["dt_min"])
     phi = state.phi
-    if isinstance(init, str) and init == "checkerboard" and _symmetric(params) and _border_inside(phi):
-        # The checkerboard has no preferred phase and, for this symmetric functional, neither
-        # has E (H_eps(-d) = 1 - H_eps(d)): return the phase whose inside is not the background,
-        # taken to be the region that covers most of the image border.  E is unchanged.
-        phi, c_in, c_out = -phi, c_out, c_in
-    if not np.any(phi > 0):
-        status = 3
-    return SegmentationResult(
-        mask=phi > 0, contours=level_set_contours(phi), c_in=c_in, c_out=c_out, energy=energy,
-        energies=energies, n_iter=n_iter, status=status, backend="levelset", phi=phi,
-    )
+    if isinstance(init, str) and init == "checkerboard" and _symmetric(params):
+        # The checkerboard has no preferred phase and the symmetric functional prefers one only
+        # through the length along the image border, which the inside pays: take the phase of
+        # lower energy (-phi is stationary too, but for that border term).
+        flipped = problem.evaluate(problem.redistance(-phi))
+        if flipped.energy < current.energy:
+            phi = -phi
+            energies.append(flipped.energy)
+    result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
+                          status=status, backend="levelset", phi=phi)
+    if not result.mask.any():  # collapsed, or the empty set is lower: phi says the same
+        result.phi = np.full(shape, -settings["band"])
+    return result
 
 
 def _symmetric(params):
     return (params.omega == 0 and params.lambda_in == params.lambda_out
             and params.c_in is None and params.c_out is None)
-
-
-def _border_inside(phi):
-    border = np.concatenate([phi[0], phi[-1], phi[1:-1, 0], phi[1:-1, -1]])
-    return np.count_nonzero(border > 0) > border.size / 2

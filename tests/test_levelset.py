@@ -23,7 +23,6 @@ from activecontour.levelset import (
     initial_level_set,
     level_set_contours,
     signed_distance,
-    smoothed_delta,
 )
 
 MU = 0.5
@@ -43,24 +42,13 @@ def _levelset(image, init=None, **kwargs):
 # The regularised Heaviside and delta
 
 
-@pytest.mark.parametrize("epsilon", [0.5, 1.0, 2.0])
-def test_delta_is_the_derivative_of_the_heaviside(epsilon):
-    s = np.linspace(-3.0, 3.0, 1201)
-    h = 1e-6
-    numeric = (heaviside(s + h, epsilon) - heaviside(s - h, epsilon)) / (2 * h)
-    np.testing.assert_allclose(numeric, smoothed_delta(s, epsilon), atol=1e-6)
-    assert heaviside(-epsilon, epsilon) == 0.0 and heaviside(epsilon, epsilon) == 1.0
-    assert heaviside(0.0, epsilon) == 0.5
-
-
 @pytest.mark.parametrize("epsilon", [1.0, 1.5, 2.0])
 def test_integer_translates_give_exact_length_and_area(epsilon):
-    # The Fourier transform of delta_eps vanishes at 2 pi k for integer or half-integer eps >= 1,
-    # so sum_j delta_eps(s - j) = 1 and sum_j H_eps(s - j) = the exact length of {x < s}.
+    # The Fourier transform of H_eps' vanishes at 2 pi k for integer or half-integer eps >= 1,
+    # so sum_j H_eps(s - j) = the exact length of {x < s}: what the swept area relies on.
     offsets = np.random.default_rng(0).uniform(-0.5, 0.5, size=50)
     grid = np.arange(-20, 21)
     for s in offsets:
-        assert np.sum(smoothed_delta(s - grid, epsilon)) == pytest.approx(1.0, abs=1e-12)
         # cells [j - 1/2, j + 1/2] for j = -20..20 cover [-20.5, 20.5]; {x < s} has length s + 20.5
         assert np.sum(heaviside(s - grid, epsilon)) == pytest.approx(s + 20.5, abs=1e-12)
 
@@ -119,7 +107,7 @@ def test_energy_does_not_change_under_reinitialisation():
     distance = _circle_distance((96, 96), (42.0, 44.0), 25.0)
     state = _redistance(distance * (1.0 + 0.5 * np.cos(np.indices((96, 96))[0] / 6.0)) ** 2, 4.0)
     again = _redistance(state.phi, 4.0)
-    first, second = problem.energy(state)[0], problem.energy(again)[0]
+    first, second = problem.evaluate(state).energy, problem.evaluate(again).energy
     # E depends on phi through its zero set only, and a reinitialisation moves that set by at
     # most the chord error h^2 / (8 R) < 0.005 px; |f| <= 0.6^2 and mu, so E moves by at most
     # (0.36 + mu / R) |Gamma| 0.005 with |Gamma| = 2 pi 25
@@ -333,7 +321,7 @@ def test_callback_sees_every_iteration_and_can_stop(noisy_disk):
     result = _levelset(image, callback=callback)
     assert result.status == 2 and not result.success
     assert result.n_iter == 3 and [s.iteration for s in seen] == [1, 2, 3]
-    assert seen[-1].energy == result.energy
+    assert seen[-1].energy == pytest.approx(result.energy, rel=1e-9)  # the same contours
     np.testing.assert_array_equal(seen[-1].mask, result.mask)
     assert len(seen[-1].contours) == len(result.contours)
 
@@ -405,7 +393,7 @@ def test_wrong_phi_shape():
     [
         ({"dt": -1.0}, ValueError, "'dt' must be a positive"),
         ({"band": "wide"}, TypeError, "'band' must be a number"),
-        ({"band": 1.5}, ValueError, "'band' .* must be at least epsilon"),
+        ({"band": 1.5}, ValueError, "'band' must be at least 2"),
         ({"max_backtracks": 2.5}, ValueError, "'max_backtracks' must be an integer"),
         ({"dt_max": 1.0}, ValueError, "dt_min <= dt <= dt_max"),
         ({"dt": 8.0, "dt_min": 16.0}, ValueError, "dt_min <= dt <= dt_max"),
