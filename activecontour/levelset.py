@@ -647,21 +647,16 @@ class _Problem:
                 edge += p.mu
         return f, max(float(np.mean(np.abs(f[self.sample]))), 1e-12)
 
-    def time_step(self, step, scale, current):
-        """tau for a step of ``step`` pixels at the force ``scale``, with a bounded smoothing length.
+    def time_step(self, step, scale):
+        """tau for a step of ``step`` pixels at the force ``scale``: ``step / scale``.
 
-        ``tau = step / scale``: a front at a pixel of typical force moves ``step`` pixels.  The
-        smoothing length ``sqrt(tau mu)`` of S is kept below ``step`` and below the width of the
-        regions (the smaller of their areas over the length of Gamma): this binds where the force
-        is weak against the length term (a checkerboard start, whose constants hardly differ),
-        where S would otherwise flatten phi, and its shape, at once.
+        A front at a pixel of typical force moves ``step`` pixels.  The smoothing length
+        ``sqrt(tau mu)`` of S is kept below ``step``: that binds where the force is weak against
+        the length term (a checkerboard start, whose constants hardly differ), where S would
+        otherwise flatten phi over the whole image at once.
         """
         tau = step / scale
-        if self.params.mu <= 0:
-            return tau
-        width = min(current.area, self.model.totals[0] - current.area) / max(current.length, 1.0)
-        smoothing = min(step, max(width, 1.0))
-        return min(tau, smoothing * smoothing / self.params.mu)
+        return min(tau, step * step / self.params.mu) if self.params.mu > 0 else tau
 
     def step(self, phi, force, tau, smooth_force):
         """Step (a) ``S (phi - tau f)`` with ``smooth_force``, else (b) ``S phi - tau f``.
@@ -745,9 +740,14 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     state = problem.redistance(phi)
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
-    step, grow, smooth_force = settings["dt"], True, True
+    # step: pixels of travel at the typical force; ceiling: the largest step of this stage.  The
+    # first step is at most the width of the start's regions (the smaller area over the length):
+    # a larger one jumps past the start's own shapes into whatever basin it lands in.
+    width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
+    step = min(settings["dt"], max(0.5 * width, settings["dt_min"])) if "dt" not in options else settings["dt"]
+    ceiling, grow, smooth_force = settings["dt_max"], True, True
     status, n_iter, stage_start = 1, 0, 0
-    for k in range(1, max_num_iter + 1):
+    for _ in range(max_num_iter):
         if not state.positive.any():
             status = 3
             break
@@ -756,15 +756,14 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             # unsmoothed, a pixel far from Gamma (phi = -+band) flips on its own when
             # tau |f| > band: keep below that, so that no noise pixel nucleates
             step = min(step, settings["band"] * scale / max(float(np.max(np.abs(force))), 1e-300))
-        tau = problem.time_step(step, scale, current)
+        tau = problem.time_step(step, scale)
         first_try = True
         for _ in range(settings["max_backtracks"] + 1):
             trial = problem.redistance(problem.step(state.phi, force, tau, smooth_force))
             evaluation = problem.evaluate(trial)
-            # A large step uses the constants of the old region; one that empties a region jumps
-            # past what c would have followed, so emptying is left to small steps.
-            degenerate = step > settings["dt_min"] and (
-                not trial.positive.any() or trial.positive.all())
+            # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
+            # does it has flattened phi rather than followed the force.
+            degenerate = smooth_force and (not trial.positive.any() or trial.positive.all())
             if evaluation.energy <= current.energy and not degenerate:
                 break
             step, tau = 0.5 * step, 0.5 * tau
@@ -777,14 +776,14 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             # go on with the unsmoothed one
             smooth_force, step, stage_start = False, settings["dt_min"], len(moves)
             continue
-        n_iter = k
+        n_iter += 1
         # mean normal displacement of Gamma in this iteration, pixels: swept area over length
         moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
         state, current = trial, evaluation
         energies.append(current.energy)
         if callback is not None:
             flow_state = FlowState(
-                iteration=k, contours=level_set_contours(state.phi), energy=current.energy,
+                iteration=n_iter, contours=level_set_contours(state.phi), energy=current.energy,
                 c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
                 phi=state.phi,
             )
@@ -794,16 +793,19 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         window = moves[stage_start:][-_WINDOW:]
         moving = len(window) < _WINDOW or np.mean(window) >= (_STAGE_TOL if smooth_force else 1.0) * tol
         if smooth_force:
-            if grow and step < settings["dt_max"]:
-                step = min(2.0 * step, settings["dt_max"])  # no rejection yet: still speeding up
-            elif not moving:
-                # the smoothed-force step has settled at this step; its fixed point is biased by
-                # the smoothing of width sqrt(tau mu), so go on with a smaller one, then unsmoothed
-                if step > settings["dt_min"]:
-                    step = max(0.25 * step, settings["dt_min"])
-                else:
+            if not moving:
+                # the smoothed-force flow has settled at this step size; its fixed point is
+                # biased by the smoothing of width sqrt(tau mu), so go on with smaller steps,
+                # then unsmoothed
+                ceiling *= 0.25
+                if ceiling < settings["dt_min"]:
                     smooth_force, step = False, settings["dt_min"]
+                else:
+                    step = min(step, ceiling)
                 stage_start = len(moves)
+            elif first_try:
+                # accepted at once: speed up, doubling until the first rejection
+                step = min(step * (2.0 if grow else 1.25), ceiling)
         elif not moving:
             status = 0
             break
