@@ -121,7 +121,7 @@ DEFAULT_OPTIONS = {
     "dt_max": 64.0,
     "band": 4.0,
     "checkerboard_period": 16.0,
-    "max_backtracks": 5,
+    "max_backtracks": 3,
 }
 
 #: The strings ``init`` may be, besides None, curves, masks and results.
@@ -131,6 +131,7 @@ _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in fl
 _ONE_SWEEP_BAND = 8.0  # bands up to this half-width (pixels) need one sweep per ring
 _STAGE_TOL = 10.0  # a smoothed-force stage ends at 10 tol: the next, finer one moves faster
 _WINDOW = 3  # stages end when Gamma's mean displacement over this many iterations is small
+_SETTLED = 0.02  # a smoothed-force stage has settled when Gamma moves < 2% of the step per iteration
 _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 
 
@@ -744,9 +745,9 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     # first step is at most the width of the start's regions (the smaller area over the length):
     # a larger one jumps past the start's own shapes into whatever basin it lands in.
     width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
-    step = min(settings["dt"], max(0.5 * width, settings["dt_min"])) if "dt" not in options else settings["dt"]
+    step = settings["dt"] if "dt" in options else min(settings["dt"], max(0.5 * width, settings["dt_min"]))
     ceiling, grow, smooth_force = settings["dt_max"], True, True
-    status, n_iter, stage_start = 1, 0, 0
+    status, n_iter, stage_start, streak = 1, 0, 0, 0
     for _ in range(max_num_iter):
         if not state.positive.any():
             status = 3
@@ -757,8 +758,9 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             # tau |f| > band: keep below that, so that no noise pixel nucleates
             step = min(step, settings["band"] * scale / max(float(np.max(np.abs(force))), 1e-300))
         tau = problem.time_step(step, scale)
-        first_try = True
-        for _ in range(settings["max_backtracks"] + 1):
+        # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
+        tries = 3 if smooth_force else settings["max_backtracks"] + 1
+        for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
             trial = problem.redistance(problem.step(state.phi, force, tau, smooth_force))
             evaluation = problem.evaluate(trial)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
@@ -766,51 +768,50 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             degenerate = smooth_force and (not trial.positive.any() or trial.positive.all())
             if evaluation.energy <= current.energy and not degenerate:
                 break
-            step, tau = 0.5 * step, 0.5 * tau
-            grow = first_try = False
+            step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
             if not smooth_force:
                 status = 4
                 break
-            # the smoothed force has no descent step left: its biased fixed point is near, so
-            # go on with the unsmoothed one
-            smooth_force, step, stage_start = False, settings["dt_min"], len(moves)
-            continue
-        n_iter += 1
-        # mean normal displacement of Gamma in this iteration, pixels: swept area over length
-        moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
-        state, current = trial, evaluation
-        energies.append(current.energy)
-        if callback is not None:
-            flow_state = FlowState(
-                iteration=n_iter, contours=level_set_contours(state.phi), energy=current.energy,
-                c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
-                phi=state.phi,
-            )
-            if callback(flow_state):
-                status = 2
-                break
+            evaluation = None
+        if evaluation is not None:
+            n_iter += 1
+            # mean normal displacement of Gamma in this iteration, pixels: swept area over length
+            moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+            state, current = trial, evaluation
+            energies.append(current.energy)
+            streak = streak + 1 if attempt == 0 else 0
+            if callback is not None:
+                flow_state = FlowState(
+                    iteration=n_iter, contours=level_set_contours(state.phi), energy=current.energy,
+                    c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
+                    phi=state.phi,
+                )
+                if callback(flow_state):
+                    status = 2
+                    break
         window = moves[stage_start:][-_WINDOW:]
-        moving = len(window) < _WINDOW or np.mean(window) >= (_STAGE_TOL if smooth_force else 1.0) * tol
         if smooth_force:
-            if not moving:
-                # the smoothed-force flow has settled at this step size; its fixed point is
-                # biased by the smoothing of width sqrt(tau mu), so go on with smaller steps,
-                # then unsmoothed
-                ceiling *= 0.25
+            # a smoothed-force stage has settled when Gamma moves by less than a small fraction
+            # of the step (or 10 tol) per iteration; its fixed point is biased by the smoothing
+            # of width sqrt(tau mu), so go on with a 4x smaller step, then unsmoothed
+            settled = evaluation is None or (
+                len(window) == _WINDOW and np.mean(window) < max(_STAGE_TOL * tol, _SETTLED * step))
+            if settled:
+                ceiling = 0.25 * min(ceiling, 2.0 * step)
                 if ceiling < settings["dt_min"]:
                     smooth_force, step = False, settings["dt_min"]
                 else:
                     step = min(step, ceiling)
-                stage_start = len(moves)
-            elif first_try:
+                stage_start, streak = len(moves), 0
+            elif grow or streak >= 2:
                 # accepted at once: speed up, doubling until the first rejection
                 step = min(step * (2.0 if grow else 1.25), ceiling)
-        elif not moving:
+        elif len(window) == _WINDOW and np.mean(window) < tol:
             status = 0
             break
-        elif first_try:
-            step = min(1.5 * step, settings["dt_min"])
+        elif streak >= 2:
+            step = min(1.25 * step, settings["dt_min"])
     phi = state.phi
     if isinstance(init, str) and init == "checkerboard" and _symmetric(params):
         # The checkerboard has no preferred phase and the symmetric functional prefers one only
