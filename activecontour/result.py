@@ -49,6 +49,11 @@ class SegmentationResult:
     backend : str
     phi : ndarray (M, N) or None
         The level-set function (``backend="levelset"``), None for the polygon backend.
+    mu : float or None
+        The length weight used (the value ``mu="auto"`` chose), set by :func:`activecontour.segment`.
+    c_in_image, c_out_image : float or ndarray (C,) or None
+        ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
+        normalised units the functional uses), set by :func:`activecontour.segment`.
     """
 
     mask: np.ndarray
@@ -61,6 +66,9 @@ class SegmentationResult:
     status: int
     backend: str
     phi: np.ndarray | None = None
+    mu: float | None = None
+    c_in_image: object = None
+    c_out_image: object = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
@@ -68,8 +76,8 @@ class SegmentationResult:
         self.success = self.status in (0, 4)
         self.message = STATUS_MESSAGES[self.status]
         self.energies = np.asarray(self.energies, dtype=np.float64)
-        self.c_in = _scalar_if_gray(self.c_in)
-        self.c_out = _scalar_if_gray(self.c_out)
+        self.c_in = scalar_if_gray(self.c_in)
+        self.c_out = scalar_if_gray(self.c_out)
 
     def __repr__(self):
         return (
@@ -103,7 +111,7 @@ class FlowState:
         return rasterize(self.contours, self.shape)
 
 
-def _scalar_if_gray(value):
+def scalar_if_gray(value):
     value = np.asarray(value, dtype=np.float64)
     return float(value.reshape(-1)[0]) if value.size == 1 else value
 

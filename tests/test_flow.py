@@ -69,9 +69,12 @@ def test_result_follows_the_conventions():
     assert result.mask.dtype == bool and result.mask.shape == SIZE
     assert all(signed_area(c) > 0 for c in result.contours)
     np.testing.assert_array_equal(result.mask, rasterize(result.contours, SIZE))
-    # c_in, c_out are the region means (6.42), here close to the rendered intensities
-    assert result.c_in == pytest.approx(0.7, abs=0.02)
-    assert result.c_out == pytest.approx(0.3, abs=0.02)
+    # c_in, c_out are the region means (6.42): in the input's units close to the rendered
+    # intensities, and in the normalised units the same affine map of them
+    assert result.c_in_image == pytest.approx(0.7, abs=0.02)
+    assert result.c_out_image == pytest.approx(0.3, abs=0.02)
+    low, high = image.min(), image.max()
+    assert result.c_in == pytest.approx((result.c_in_image - low) / (high - low), rel=1e-12)
     assert "SegmentationResult" in repr(result)
 
 
@@ -97,9 +100,9 @@ def test_a_length_weight_above_the_objects_gain_gives_the_empty_set():
     image, truth = shape_image("star")
     area, total = truth.sum(), truth.size
     gain = area * (1 - area / total) * (0.7 - 0.3) ** 2
-    perimeter = ac.segment(image, OUTER_INIT, mu=0.01).contours
+    perimeter = ac.segment(image, OUTER_INIT, mu=0.01, normalize=None).contours
     mu = 1.5 * gain / sum(np.sum(np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)) for c in perimeter)
-    result = ac.segment(image, OUTER_INIT, mu=mu)
+    result = ac.segment(image, OUTER_INIT, mu=mu, normalize=None)
     assert result.status == 3 and result.contours == [] and not result.mask.any()
     empty = np.sum((image - image.mean()) ** 2)
     # the pixel sum approximates the bilinear integral up to the anti-aliased rim (~1 %)
