@@ -12,84 +12,85 @@ can start from the other's result (level set for the topology, polygon for a sub
 
 One iteration
 -------------
-1. ``c_in, c_out`` by (6.42), with the regularised Heaviside of the signed distance as the weight
-   (unless they are fixed).
+1. ``c_in, c_out`` by (6.42) for the current zero set, from the common evaluator (below), unless
+   they are fixed.
 2. A semi-implicit step of the level-set form of the gradient flow of (6.38).  Every level line
    moves with the normal velocity ``-(mu kappa + f)``, where ``f = omega + lambda_in sum (I -
    c_in)^2 - lambda_out sum (I - c_out)^2`` is the integrand of (6.41); in level-set form
    ``phi_t = |grad phi| (mu div(grad phi / |grad phi|) - f)``, and as phi is kept a signed
    distance (``|grad phi| = 1``) this is ``phi_t = mu Laplace(phi) - f``.  (With delta(phi) in place
    of |grad phi| it would be the equation of Chan & Vese 2001; |grad phi| makes it the level-set
-   motion of Osher & Sethian 1988, which moves every level line, not only those near Gamma.)  Two
-   forms of the step, with ``S = (1 - tau mu Laplace)^{-1}``:
+   motion of Osher & Sethian 1988, which moves every level line, not only those near Gamma.)  The
+   pixels on the image border carry ``mu`` more per border side in f: a region that covers them
+   closes along the domain edge, and (6.38) of the returned contours counts that length, as the
+   polygon backend does.  Two forms of the step, with ``S = (1 - tau mu Laplace)^{-1}``:
 
    (a) smoothed force: ``phi^{k+1} = S (phi^k - tau f)``, i.e. the velocity
        ``S (mu Laplace(phi) - f)``: a Sobolev (H^1-type) gradient with smoothing length
        ``l = sqrt(tau mu)``, the level-set counterpart of the polygon's H^1 velocity (6.39).
        It moves whole regions at once and, with large tau, flips regions far from Gamma (see
-       below); but its fixed point (``S (mu Laplace(phi) - f) = 0`` on Gamma) is biased by the
-       smoothing, so it is only the first stage;
+       below); but its fixed point is biased by the smoothing, so it is only the first stage;
    (b) unsmoothed force: ``phi^{k+1} = S phi^k - tau f``: implicit curvature, explicit force, the
        L^2 flow (6.25) whose fixed point is ``mu kappa + f = 0`` on Gamma, i.e. (6.41) = 0.
 
    ``S`` has constant coefficients: one pair of discrete cosine transforms applies it exactly
-   (Neumann boundary), unconditionally stable, with none of the splitting error of additive
-   operator splitting (AOS, Weickert, ter Haar Romeny & Viergever 1998), which is what a
-   variable-coefficient curvature operator would need.
+   (Neumann boundary), unconditionally stable.
 3. Reinitialisation: phi is replaced by the signed distance to its zero level set, computed in a
    narrow band ``|phi| < band`` only and clipped to ``+-band`` beyond (:func:`signed_distance`).
-4. The step is accepted if the discrete energy E below decreases; otherwise tau is halved and the
-   step retried (backtracking).
+4. The step is accepted if (6.38) of the new zero set, by the common evaluator, is not larger;
+   otherwise tau is halved and the step retried (backtracking).
 
-The schedule, coarse to fine like the polygon's smoothing length: tau starts at ``dt`` and doubles
-after every accepted step until a step is rejected or ``dt_max`` is reached; whenever stage (a)
-stalls, tau is divided by 4, down to ``dt_min``; then stage (b) runs with tau <= ``dt_min`` until
-the convergence test (the polygon backend's: see ``tol`` in :func:`segment_levelset`).
+Steps in pixels
+---------------
+A step is given as ``step`` pixels of travel: ``tau = step / |f|_typ`` with ``|f|_typ`` the mean
+``|f|`` over the pixels (about ``(c_in - c_out)^2`` once the regions have formed), so that a front
+at a pixel of typical force moves ``step`` pixels whatever the image's contrast or the parameters'
+scale; the smoothing length ``sqrt(tau mu)`` is kept below ``step`` (that binds only where the
+force is weak against the length term, as on a checkerboard start).  The first step is ``dt``,
+but at most half the width (area over length) of the start's regions; it doubles after every
+accepted step until the first rejection, then grows by 1.25 after two first-try acceptances in a
+row.  Coarse to fine, like the polygon's smoothing length: a smoothed-force stage runs with steps
+up to a ceiling (first ``dt_max``) and has settled when Gamma moves less than 2 % of the step (or
+10 tol) per iteration, averaged over 3 iterations, or when two halvings of its step find no
+descent; the ceiling is then divided by 4, and below ``dt_min`` stage (b) follows, with steps
+``<= dt_min`` and ``tau |f| <= band`` everywhere so that no pixel far from Gamma flips on its own.
+Stage (b) converges (status 0) when Gamma moves less than ``tol`` pixels per iteration on average
+over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find no descent.
+
+How far Gamma moved is measured geometrically, in pixels: the area between the old and the new
+zero set, ``sum_px |H_eps(d_new) - H_eps(d_old)|`` over the band, divided by the length of Gamma,
+i.e. the mean normal displacement.  ``H_eps`` is the cosine-regularised Heaviside of Zhao, Chan,
+Merriman & Osher (1996),
+
+    H_eps(s) = (1 + s/eps + sin(pi s/eps)/pi) / 2  for |s| < eps (0 and 1 beyond),  eps = 1,
+
+whose integer translates sum to the exact length of a half-line at any sub-pixel offset (its
+derivative's Fourier transform vanishes at every non-zero multiple of 2 pi): the swept area is exact
+for straight fronts and second-order accurate for curved ones.  Unlike a relative energy decrease
+(the energy holds the noise energy sigma^2 |D|, which grows with the pixel count) this means the
+same on every image size.
 
 Why large steps are safe and useful: ``S`` is stable for every tau, and the backtracking keeps every
 accepted step a descent step.  Far from Gamma phi sits at ``+-band``, and a step (a) moves it by
 about ``-tau f`` smoothed over ``l``: where a whole region inside Gamma looks like the outside (the
 hole of an annulus) phi crosses zero and a hole opens without a seed, while single noisy pixels
 are held by the smoothing; the energy test accepts such a change only when it pays, length
-included.  A compactly supported delta(phi) in the flow would never do that, and the arctan delta
-of Chan & Vese 2001 does it slowly and at the price of biased areas.  In stage (b) tau <=
-``dt_min`` keeps ``tau |f|`` within the band for intensities in [0, 1], so no pixel far from
-Gamma flips on its own there.
+included.
 
 Cost: an iteration is one DCT pair over the image (O(MN log MN), float32), a few vectorised passes
-over the image, and the reinitialisation and the energy on the pixels of the narrow band only
-(O(band |Gamma|)).  On 512 x 512 the DCT pair is about 5 ms of a trial step's 30-50 ms, so a
-band-restricted solve (which would need a solver for varying geometry instead of the DCT) would
-not pay; the band pays in the reinitialisation, which dominates.
+over the image, and the reinitialisation on the pixels of the narrow band only.
 
-The discrete energy
--------------------
-The energy history is this backend's discrete energy of the zero level set Gamma of phi,
-
-    E = mu L(Gamma) + sum_px H_eps(d) (omega + lambda_in sum_ch (I - c_in)^2)
-                    + sum_px (1 - H_eps(d)) lambda_out sum_ch (I - c_out)^2
-
-with ``d`` the signed distance to Gamma, ``L`` the exact length of the marching-squares polylines
-(the returned contours, without the parts that close along the image border: the flow has a
-Neumann condition there) and ``I`` the pixel values.  The regularised Heaviside and delta are the
-cosine pair of Zhao, Chan, Merriman & Osher (1996)
-
-    H_eps(s) = (1 + s/eps + sin(pi s/eps)/pi) / 2,   delta_eps(s) = (1 + cos(pi s/eps)) / (2 eps)
-
-for ``|s| < eps`` (0 and 1 beyond).  Why this pair: delta_eps has compact support, so only pixels
-within eps of Gamma enter (the narrow band), and for integer or half-integer ``eps >= 1`` its
-integer translates sum to exactly 1 (its Fourier transform vanishes at every non-zero multiple of
-2 pi), so ``sum_px H_eps(d)`` is the exact area of a half-plane at any sub-pixel offset and a
-second-order accurate one for curved Gamma; the pixel area fractions are smooth in Gamma.  The
-arctan pair of Chan & Vese 2001 never vanishes and biases area and length.
-
-Because E depends on phi only through its zero level set, a reinitialisation leaves it unchanged
-(up to the O(h^2 kappa) chord error of re-deriving Gamma from a distance function), and every
-iteration's acceptance test compares energies *after* the reinitialisation: the history is
-non-increasing at every iteration, reinitialisations included.  That is how they are accounted
-for.  E approximates (6.38) with the pixel values as a piecewise-constant image; it is not the
-common evaluator :func:`activecontour.energy.chan_vese_energy`, which integrates the bilinear
-image exactly along polygon contours: use that one to compare backends.
+The energy
+----------
+The energy of every iterate, the acceptance test and ``res.energy`` are one number: (6.38) of the
+zero set by the common evaluator :func:`activecontour.energy.evaluate`, exact for the bilinear
+image.  The zero set is taken as the marching-squares segments of phi padded by ``-|phi|``
+(:func:`zero_set_edges`, the segments of :func:`level_set_contours`, closed along the domain edge
+where a region touches it), scored as an unchained soup of oriented edges: Green's theorem makes
+region and length integrals sums over edges, so this costs O(|Gamma|) after the O(MN) sign test.
+A reinitialisation changes the energy only through the O(h^2 kappa) chord error of re-deriving
+Gamma from a distance function, and every acceptance test compares energies after it: the history
+is non-increasing at every iteration, reinitialisations included.
 """
 
 from __future__ import annotations
@@ -136,7 +137,7 @@ _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1,
 
 
 # --------------------------------------------------------------------------------------------
-# Regularised Heaviside and delta
+# Regularised Heaviside (the swept-area measure)
 
 
 def heaviside(phi, epsilon=1.0):
@@ -587,7 +588,7 @@ def zero_set_edges(phi):
 
 
 # --------------------------------------------------------------------------------------------
-# The energy E, the force f of (6.41) and the steps (a), (b)
+# The energy by the common evaluator, the force f of (6.41) and the steps (a), (b)
 
 
 class _Problem:
@@ -729,7 +730,76 @@ def _parse_options(options):
 
 
 def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **options):
-    """DOCSTRING
+    """Minimise the Chan-Vese functional (6.38) with a level set over the pixel grid.
+
+    Called by :func:`activecontour.segment` with ``backend="levelset"``; the keywords under
+    Other Parameters are passed there as ``options={...}``.  The scheme, the step schedule and the
+    energy are described in :mod:`activecontour.levelset`.
+
+    Parameters
+    ----------
+    model : activecontour.image.ImageModel
+    init : None, ndarray (K, 2), list of them, bool ndarray (M, N), SegmentationResult, or str
+        None: the default start (:func:`activecontour.initial.initial_curves`).  Curves, masks
+        and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are
+        inside).  A result of either backend: its ``phi`` when it has one, else its contours.
+        ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels
+        (:func:`checkerboard_level_set`); it has no preferred phase, so when the functional is
+        symmetric (omega = 0, lambda_in = lambda_out, c free) the phase of lower energy is
+        returned (phi or -phi: they differ by the length along the image border, which the
+        inside pays), i.e. the one whose inside touches the border less.
+    params : activecontour.energy.ChanVeseParameters
+        mu, omega, lambda_in, lambda_out and optional fixed c_in, c_out of (6.38), as for the
+        polygon backend.
+    max_num_iter : int
+        Largest number of step attempts (accepted iterations, and stage changes without one).
+    tol : float
+        Pixels: the flow has converged (status 0) when the zero level set moves less than
+        ``tol`` pixels per iteration (swept area over length, the mean normal displacement),
+        averaged over the last three iterations of the final, unsmoothed stage.  The run also ends
+        when no step, down to the current one halved ``max_backtracks`` times, decreases the
+        energy (status 4: stationary to working precision).  Either way, continuing with a
+        smaller tol changes neither the energy nor the mask measurably.
+    callback : callable or None
+        Called with a :class:`~activecontour.result.FlowState` (contours and ``phi``) after every
+        accepted iteration; returning True stops the flow (status 2).
+
+    Other Parameters
+    ----------------
+    dt : float, default 16.0
+        First step, pixels of travel at the typical force (module docstring).  By default it is
+        at most half the width of the start's regions; a ``dt`` given explicitly is used as is.
+    dt_min : float, default 1.0
+        Below this ceiling the smoothed-force stages end and the unsmoothed stage (b) runs, with
+        steps up to ``dt_min`` (and ``tau |f| <= band``, so that no single pixel flips).
+    dt_max : float, default 64.0
+        Largest step (pixels), the ceiling of the first stage.  A ``dt`` outside
+        ``[dt_min, dt_max]`` widens the defaults; bounds given explicitly must satisfy
+        ``dt_min <= dt <= dt_max``.
+    band : float, default 4.0
+        Narrow band: phi is the signed distance up to ``band`` pixels from Gamma and is clipped to
+        ``+-band`` beyond.  At least 2.
+    checkerboard_period : float, default 16.0
+        Side (pixels) of the squares of the ``"checkerboard"`` start.
+    max_backtracks : int, default 3
+        Halvings of the step of the final stage before an iteration counts as stationary.
+
+    Returns
+    -------
+    SegmentationResult
+        Built by :func:`activecontour.result.build_result`: ``contours`` the zero level set
+        (marching squares, outer boundaries positive, holes negative), ``mask`` their inside,
+        ``energy`` (6.38) of the contours by the common evaluator, ``energies`` the same energy
+        before the first and after every iteration (not increasing), and ``phi`` the final
+        signed distance (clipped to the band; ``-band`` everywhere when the result is empty).
+
+    Raises
+    ------
+    TypeError
+        For an unknown option (the message lists the valid ones) or an option of the wrong type.
+    ValueError
+        For an unknown ``init`` string, a mask of the wrong shape, an init with nothing inside or
+        nothing outside, or an option out of range.
     """
     settings = _parse_options(options)
     shape = tuple(model.shape)
