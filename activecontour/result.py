@@ -14,7 +14,7 @@ __all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
 #: Status codes and their messages, shared by every backend.
 STATUS_MESSAGES = {
-    0: "Converged: the relative energy decrease and the largest displacement fell below tol.",
+    0: "Converged: the contour moves less than tol pixels per iteration.",
     1: "Reached max_num_iter before converging.",
     2: "Stopped by the callback.",
     3: "The contour collapsed: nothing left inside (try a smaller mu or another init).",

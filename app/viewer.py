@@ -158,12 +158,13 @@ class Viewer:
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         display = normalize_image(self.image, color="vector")  # validates the image, too
         self.shape = display.shape[:2]
+        values = normalize_image(self.image, color=color)
         if is_auto(settings["mu"]):  # the slider starts at the value segment(mu="auto") would use
-            settings["mu"] = auto_mu(normalize_image(self.image, color=color))
+            settings["mu"] = auto_mu(values)
         self.image_path = None if image_path is None else Path(image_path)
         self.formats = formats
         self.redraw_every = int(redraw_every)
-        self.init_curves = default_init(self.shape)
+        self.init_curves = default_init(self.shape, values, settings["mu"])  # segment's init=None
         if init is not None:  # a bad init is an error here, before any window exists
             if isinstance(init, (str, os.PathLike)):
                 init = _read_mask_file(init)
