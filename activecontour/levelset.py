@@ -53,7 +53,8 @@ row.  Coarse to fine, like the polygon's smoothing length: a smoothed-force stag
 up to a ceiling (first ``dt_max``) and has settled when Gamma moves less than 2 % of the step (or
 10 tol) per iteration, averaged over 3 iterations, or when two halvings of its step find no
 descent; the ceiling is then divided by 4, and below ``dt_min`` stage (b) follows, with steps
-``<= dt_min`` and ``tau |f| <= band`` everywhere so that no pixel far from Gamma flips on its own.
+``<= dt_min`` and the force applied within the band only, so that no pixel far from Gamma (at
+``+-band``) flips on its own.
 Stage (b) converges (status 0) when Gamma moves less than ``tol`` pixels per iteration on average
 over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find no descent.
 
@@ -673,7 +674,10 @@ class _Problem:
             rhs = scipy.fft.idctn(spectrum, norm="ortho")
         out = rhs.astype(np.float64)
         if not smooth_force:
-            out -= tau * force
+            # the force acts within the band only: a pixel at +-band is far from Gamma and must
+            # not flip on its own (no nucleation of noise pixels)
+            near = np.abs(phi) < self.band
+            out[near] -= tau * force[near]
         return out
 
 
@@ -771,7 +775,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         at most half the width of the start's regions; a ``dt`` given explicitly is used as is.
     dt_min : float, default 1.0
         Below this ceiling the smoothed-force stages end and the unsmoothed stage (b) runs, with
-        steps up to ``dt_min`` (and ``tau |f| <= band``, so that no single pixel flips).
+        steps up to ``dt_min`` and the force within the band only (no single pixel far from
+        Gamma flips).
     dt_max : float, default 64.0
         Largest step (pixels), the ceiling of the first stage.  A ``dt`` outside
         ``[dt_min, dt_max]`` widens the defaults; bounds given explicitly must satisfy
@@ -823,10 +828,6 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             status = 3
             break
         force, scale = problem.force(current.c_in, current.c_out)
-        if not smooth_force:
-            # unsmoothed, a pixel far from Gamma (phi = -+band) flips on its own when
-            # tau |f| > band: keep below that, so that no noise pixel nucleates
-            step = min(step, settings["band"] * scale / max(float(np.max(np.abs(force))), 1e-300))
         tau = problem.time_step(step, scale)
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
