@@ -155,25 +155,31 @@ def _scaled_scene(size):
     return sy.add_noise(image, 0.15, seed=11), truth, start
 
 
-def _scale_dice(sizes):
+def _scale_dice(sizes, defaults=False):
+    """Dice per size, from the scaled start circle (mu = 0.2) or with every default (no init)."""
     out = {}
     for size in sizes:
         image, truth, start = _scaled_scene(size)
-        result = ac.segment(image, start, backend="levelset", mu=0.2)
+        if defaults:
+            result = ac.segment(image, backend="levelset")
+        else:
+            result = ac.segment(image, start, backend="levelset", mu=0.2)
         assert result.success
         out[size] = sy.dice(result.mask, truth)
     return out
 
 
-def test_same_scene_at_256_to_1024_px_gives_the_same_dice():
-    dice = _scale_dice((256, 512, 1024))
+@pytest.mark.parametrize("defaults", [False, True], ids=["circle", "defaults"])
+def test_same_scene_at_256_to_1024_px_gives_the_same_dice(defaults):
+    dice = _scale_dice((256, 512, 1024), defaults)
     assert max(dice.values()) - min(dice.values()) <= 0.003, dice
     assert min(dice.values()) >= 0.99, dice
 
 
 @pytest.mark.slow
-def test_same_scene_at_2048_px_gives_the_same_dice():
-    dice = _scale_dice((256, 2048))
+@pytest.mark.parametrize("defaults", [False, True], ids=["circle", "defaults"])
+def test_same_scene_at_2048_px_gives_the_same_dice(defaults):
+    dice = _scale_dice((256, 2048), defaults)
     assert abs(dice[2048] - dice[256]) <= 0.003, dice
 
 
