@@ -56,7 +56,11 @@ descent; the ceiling is then divided by 4, and below ``dt_min`` stage (b) follow
 ``<= dt_min`` and the force applied within the band only, so that no pixel far from Gamma (at
 ``+-band``) flips on its own.
 Stage (b) converges (status 0) when Gamma moves less than ``tol`` pixels per iteration on average
-over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find no descent.
+over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find no descent.  Its
+steps are explicit on the band when ``tau mu <= 1/4`` (stable, no DCT).  The unsmoothed flow can
+stop in a pixel-scale local minimum that a smoothed step leaves (a continued run would then move
+on), so when it ends a smoothed stage of the first step size is tried, up to twice: if its first
+step finds no descent the end stands, otherwise the stages run on from there.
 
 How far Gamma moved is measured geometrically, in pixels: the area between the old and the new
 zero set, ``sum_px |H_eps(d_new) - H_eps(d_old)|`` over the band, divided by the length of Gamma,
@@ -134,6 +138,7 @@ _ONE_SWEEP_BAND = 8.0  # bands up to this half-width (pixels) need one sweep per
 _STAGE_TOL = 10.0  # a smoothed-force stage ends at 10 tol: the next, finer one moves faster
 _WINDOW = 3  # stages end when Gamma's mean displacement over this many iterations is small
 _SETTLED = 0.02  # a smoothed-force stage has settled when Gamma moves < 2% of the step per iteration
+_RECHECKS = 2  # smoothed steps tried after the unsmoothed stage ends (see segment_levelset)
 _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 
 
@@ -661,12 +666,19 @@ class _Problem:
         tau = step / scale
         return min(tau, step * step / self.params.mu) if self.params.mu > 0 else tau
 
-    def step(self, phi, force, tau, smooth_force):
+    def step(self, state, force, tau, smooth_force):
         """Step (a) ``S (phi - tau f)`` with ``smooth_force``, else (b) ``S phi - tau f``.
 
         ``S = (1 - tau mu Laplace)^{-1}`` by DCT-II in float32 (phi is a distance of a few pixels:
-        its rounding, ~1e-6 px, is far below what matters).
+        its rounding, ~1e-6 px, is far below what matters).  In step (b) the force acts within the
+        band only, so that no pixel far from Gamma (at +-band) flips on its own; and when
+        ``tau mu <= 1/4`` the explicit step ``phi + tau mu Laplace(phi) - tau f`` is stable and has
+        the same fixed point, so it is taken on the band's pixels alone (O(band) instead of a DCT
+        pair over the image).
         """
+        if not smooth_force and tau * self.params.mu <= 0.25:
+            return self._explicit_step(state, force, tau)
+        phi = state.phi
         rhs = (phi - tau * force if smooth_force else phi).astype(np.float32)
         if self.params.mu > 0:
             spectrum = scipy.fft.dctn(rhs, norm="ortho")
@@ -674,10 +686,25 @@ class _Problem:
             rhs = scipy.fft.idctn(spectrum, norm="ortho")
         out = rhs.astype(np.float64)
         if not smooth_force:
-            # the force acts within the band only: a pixel at +-band is far from Gamma and must
-            # not flip on its own (no nucleation of noise pixels)
             near = np.abs(phi) < self.band
             out[near] -= tau * force[near]
+        return out
+
+    def _explicit_step(self, state, force, tau):
+        """``phi + tau mu Laplace(phi) - tau f`` on the band (5-point, Neumann: a mirrored pixel)."""
+        m, n = self.shape
+        flat = state.near_flat
+        values = state.phi.ravel()
+        centre = values[flat]
+        row, col = np.divmod(flat, n)
+        laplace = (values[np.where(row > 0, flat - n, flat)] + values[np.where(row < m - 1, flat + n, flat)]
+                   + values[np.where(col > 0, flat - 1, flat)] + values[np.where(col < n - 1, flat + 1, flat)]
+                   - 4.0 * centre)
+        moved = centre + (tau * self.params.mu) * laplace
+        near = np.abs(centre) < self.band
+        moved[near] -= tau * force.ravel()[flat[near]]
+        out = state.phi.copy()
+        out.ravel()[flat] = moved
         return out
 
 
@@ -821,8 +848,11 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     # a larger one jumps past the start's own shapes into whatever basin it lands in.
     width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
     step = settings["dt"] if "dt" in options else min(settings["dt"], max(0.5 * width, settings["dt_min"]))
-    ceiling, grow, smooth_force = settings["dt_max"], True, True
+    first_step, ceiling, grow, smooth_force = step, settings["dt_max"], True, True
     status, n_iter, stage_start, streak = 1, 0, 0, 0
+    # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):
+    # the unsmoothed flow stops at pixel-scale local minima that a smoothed step can leave.
+    rechecks, pending = 0, None  # pending: the end status while a recheck runs
     for _ in range(max_num_iter):
         if not state.positive.any():
             status = 3
@@ -832,7 +862,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
         for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
-            trial = problem.redistance(problem.step(state.phi, force, tau, smooth_force))
+            trial = problem.redistance(problem.step(state, force, tau, smooth_force))
             evaluation = problem.evaluate(trial)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
             # does it has flattened phi rather than followed the force.
@@ -842,7 +872,15 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
             if not smooth_force:
+                if rechecks < _RECHECKS:
+                    rechecks, pending, smooth_force = rechecks + 1, 4, True
+                    step = ceiling = first_step
+                    stage_start, streak = len(moves), 0
+                    continue
                 status = 4
+                break
+            if pending is not None and len(moves) == stage_start:
+                status = pending  # the recheck found no descent: the end stands
                 break
             evaluation = None
         if evaluation is not None:
@@ -869,6 +907,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             settled = evaluation is None or (
                 len(window) == _WINDOW and np.mean(window) < max(_STAGE_TOL * tol, _SETTLED * step))
             if settled:
+                pending = None  # a recheck that moved on is a new descent, ended as usual
                 ceiling = 0.25 * min(ceiling, 2.0 * step)
                 if ceiling < settings["dt_min"]:
                     smooth_force, step = False, settings["dt_min"]
@@ -879,6 +918,11 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
                 # accepted at once: speed up, doubling until the first rejection
                 step = min(step * (2.0 if grow else 1.25), ceiling)
         elif len(window) == _WINDOW and np.mean(window) < tol:
+            if rechecks < _RECHECKS:
+                rechecks, pending, smooth_force = rechecks + 1, 0, True
+                step = ceiling = first_step
+                stage_start, streak = len(moves), 0
+                continue
             status = 0
             break
         elif streak >= 2:
