@@ -41,6 +41,11 @@ border before scoring.
 The ratios printed per case are the wall time of ``chan_vese`` (and ``morph_cv``) over that of
 ``levelset``, the Dice differences and the energy ratios (< 1: the level set is lower).
 
+``--defaults`` runs every method with its own defaults and its own start instead: ours
+``segment(image, backend=...)`` (init=None, mu="auto"), ``chan_vese(image)``,
+``morphological_chan_vese(image, 250)`` (num_iter has no default); the energies are still scored
+with mu = MU.
+
 Run ``python benchmarks/bench_levelset.py`` (about a minute per case, mostly ``chan_vese``), or
 ``--quick`` for 256 x 256 images.
 """
