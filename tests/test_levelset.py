@@ -433,3 +433,39 @@ def test_beats_skimage_chan_vese_from_the_same_start(case):
     assert sy.dice(ours.mask, truth) >= sy.dice(phi > 0, truth)
     assert ac.chan_vese_energy(image, ours.contours, mu=mu) <= ac.chan_vese_energy(
         image, level_set_contours(phi), mu=mu)
+
+
+# ---------------------------------------------------------------------------------------------
+# The zero set as an edge soup, and the swept area
+
+
+def test_edge_soup_scores_exactly_as_the_chained_contours():
+    # random phi: many components, holes, saddles and regions on the border; Green's theorem
+    # makes (6.38) a sum over edges, so the unchained, oriented soup gives the same energy, area
+    # and length as the marching-squares contours
+    from activecontour.energy import evaluate, stack_curves
+    from activecontour.levelset import zero_set_edges
+
+    rng = np.random.default_rng(4)
+    phi = rng.normal(size=(40, 50))
+    model = ImageModel(rng.uniform(size=(40, 50, 1)))
+    params = ChanVeseParameters(mu=0.3)
+    points, next_index, _ = stack_curves(level_set_contours(phi))
+    chained = evaluate(model, points, next_index, params)
+    soup = zero_set_edges(phi).reshape(-1, 2)
+    edges = evaluate(model, soup, np.repeat(np.arange(1, len(soup), 2), 2), params)
+    assert edges.energy == pytest.approx(chained.energy, rel=1e-12)
+    assert edges.area == pytest.approx(chained.area, rel=1e-12)
+    assert edges.length == pytest.approx(chained.length, rel=1e-12)
+
+
+@pytest.mark.parametrize("shift", [0.1, 0.37, 1.5])
+def test_swept_area_of_a_straight_front_is_exact(shift):
+    # a vertical front moved by `shift` pixels sweeps shift x (number of rows), at any offset
+    from activecontour.levelset import _swept_area
+
+    shape = (30, 40)
+    cols = np.indices(shape, dtype=np.float64)[1]
+    old = _redistance(17.3 - cols, 4.0)
+    new = _redistance(17.3 + shift - cols, 4.0)
+    assert _swept_area(old, new) == pytest.approx(shift * shape[0], rel=1e-9)
