@@ -100,6 +100,7 @@ is non-increasing at every iteration, reinitialisations included.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import scipy.fft
 
@@ -302,7 +303,7 @@ def _front_segments(phi, positive, rows, cols):
     segments, keys = _cell_segments(phi, positive, cells // (n - 1), cells % (n - 1))
     segments, keys = segments.reshape(-1, 2, 2), keys.reshape(-1, 2)
     # the cells around every front pixel, as slots into ``cells`` (-1: none, or no sign change)
-    slot = np.full(m * n, -1, dtype=np.intp)  # indexed by cell row * n + cell col
+    slot = np.full(m * n, -1, dtype=np.int32)  # indexed by cell row * n + cell col (int32: half the traffic)
     slot[(cells // (n - 1)) * n + cells % (n - 1)] = np.arange(cells.size)
     around = []
     for dr, dc in ((-1, -1), (-1, 0), (0, -1), (0, 0)):
@@ -367,60 +368,26 @@ class _Segments:
         off_r += off_c
         return off_r
 
-    def walk(self, point_r, point_c, own, best):
-        """The nearest point of Gamma may lie on a segment next to ``own``: step along Gamma."""
-        for _ in range(2):
-            for side in (0, 1):
-                candidate = self.links[own, side]
-                trial = self.squared_gap(point_r, point_c, candidate)
-                better = trial < best
-                own = np.where(better, candidate, own)
-                best = np.where(better, trial, best)
-        return own, best
-
 
 def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
-    eight neighbours' segments, then walks along Gamma while that gets nearer."""
+    eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
+    :func:`_grow_band`, O(pixels in the band))."""
     m, n = positive.shape
     width = n + 2  # a one-pixel frame, marked visited, spares every bounds check
     visited = np.zeros((m + 2, width), dtype=bool)
     visited[0], visited[-1], visited[:, 0], visited[:, -1] = True, True, True, True
     visited = visited.ravel()
-    owner = np.full((m + 2) * width, -1, dtype=np.intp)
-    stamp = np.zeros((m + 2) * width, dtype=np.intp)
+    owner = np.full((m + 2) * width, -1, dtype=np.int32)  # segment ids; -1 is the far sentinel
     steps = np.array([dr * width + dc for dr, dc in _NEIGHBOURS], dtype=np.intp)
-    ring = (rows + 1) * width + cols + 1
+    ring = ((rows + 1) * width + cols + 1).astype(np.intp)
     owner[ring] = nearest
     visited[ring] = True
-    flats = [ring]
     # a pixel k rings away from the front pixels is at least k - 1 from Gamma
     max_rings = int(np.ceil(band)) + 1 if np.isfinite(band) else m + n
-    for _ring in range(max_rings):
-        fresh = (ring[:, None] + steps).ravel()
-        fresh = fresh[~visited[fresh]]
-        if fresh.size == 0:
-            break
-        # drop duplicates without sorting: the last writer of each pixel keeps it
-        stamp[fresh] = np.arange(fresh.size)
-        fresh = fresh[stamp[fresh] == np.arange(fresh.size)]
-        visited[fresh] = True
-        pr, pc = np.divmod(fresh, width)
-        pr, pc = (pr - 1).astype(np.float32), (pc - 1).astype(np.float32)
-        neighbours = fresh[:, None] + steps
-        # the nearest of the neighbours' segments, then a walk along Gamma from it; a second
-        # sweep lets a ring learn from itself (short segments, far distances)
-        for _sweep in range(sweeps):
-            candidates = owner[neighbours]
-            trial = segments.squared_gap(pr[:, None], pc[:, None], candidates)
-            pick = np.argmin(trial, axis=1)
-            own = candidates[np.arange(fresh.size), pick]
-            best = trial[np.arange(fresh.size), pick]
-            own, best = segments.walk(pr, pc, own, best)
-            owner[fresh] = own
-        flats.append(fresh)
-        ring = fresh
-    flat = np.concatenate(flats)
+    start_r, start_c, dir_r, dir_c, inverse = segments.columns
+    flat = _grow_band(visited, owner, ring, steps, width, max_rings, sweeps, start_r, start_c,
+                      dir_r, dir_c, inverse, segments.links)
     r, c = np.divmod(flat, width)
     distance = np.sqrt(segments.squared_gap((r - 1).astype(np.float64), (c - 1).astype(np.float64),
                                             owner[flat], exact=True))
@@ -429,6 +396,71 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     phi = _clipped(positive, band)
     phi.ravel()[flat] = np.clip(signed, -band, band)
     return _Redistanced(phi, positive, flat, signed)
+
+
+@numba.njit(cache=True)
+def _gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse):
+    """Squared distance from (pr, pc) to segment k (the last one is a far sentinel)."""
+    off_r, off_c = pr - start_r[k], pc - start_c[k]
+    t = min(max((off_r * dir_r[k] + off_c * dir_c[k]) * inverse[k], 0.0), 1.0)
+    off_r -= t * dir_r[k]
+    off_c -= t * dir_c[k]
+    return off_r * off_r + off_c * off_c
+
+
+@numba.njit(cache=True)
+def _grow_band(visited, owner, ring, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
+               dir_c, inverse, links):
+    """The rings of :func:`_propagate`: returns the band's flat (framed) indices, fills ``owner``.
+
+    Each ring's pixels first take the nearest of their neighbours' segments as of the previous
+    sweep (a second sweep lets a ring learn from itself), then walk twice along Gamma to both
+    neighbouring segments while that is nearer.
+    """
+    sentinel = start_r.size - 1
+    out = np.empty(visited.size, dtype=np.intp)
+    out[: ring.size] = ring
+    count, begin = ring.size, 0
+    for _ring in range(max_rings):
+        end = count
+        for i in range(begin, end):
+            for step in steps:
+                q = out[i] + step
+                if not visited[q]:
+                    visited[q] = True
+                    out[count] = q
+                    count += 1
+        if count == end:
+            break
+        fresh = out[end:count]
+        chosen = np.empty(fresh.size, dtype=np.int32)
+        for _sweep in range(sweeps):
+            for i in range(fresh.size):
+                p = fresh[i]
+                pr, pc = float(p // width - 1), float(p % width - 1)
+                own, best = -1, np.inf
+                for step in steps:
+                    k = owner[p + step]
+                    if k < 0:
+                        continue
+                    gap = _gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
+                    if gap < best:
+                        own, best = k, gap
+                for _walk in range(2):
+                    for side in range(2):
+                        if own < 0:
+                            break
+                        k = links[own, side]
+                        if k < 0 or k == sentinel:
+                            continue
+                        gap = _gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
+                        if gap < best:
+                            own, best = k, gap
+                chosen[i] = own
+            for i in range(fresh.size):
+                owner[fresh[i]] = chosen[i]
+        begin = end
+    return out[:count].copy()
 
 
 def curves_level_set(curves, shape, band=np.inf):
@@ -717,7 +749,9 @@ def _swept_area(old, new):
     """
     if old.near_flat.size == 0 or new.near_flat.size == 0:
         return float(np.count_nonzero(old.positive != new.positive))
-    flat = np.unique(np.concatenate([old.near_flat, new.near_flat]))
+    seen = np.zeros(old.phi.size, dtype=bool)  # each band holds its pixels once: mark, not sort
+    seen[old.near_flat] = True
+    flat = np.concatenate([old.near_flat, new.near_flat[~seen[new.near_flat]]])
     return float(np.sum(np.abs(heaviside(new.phi.ravel()[flat]) - heaviside(old.phi.ravel()[flat]))))
 
 
