@@ -832,8 +832,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     Other Parameters
     ----------------
     dt : float, default 16.0
-        First step, pixels of travel at the typical force (module docstring).  By default it is
-        at most half the width of the start's regions; a ``dt`` given explicitly is used as is.
+        First step, pixels of travel at the typical force (module docstring), at most half the
+        width of the start's regions (but not below ``dt_min``).
     dt_min : float, default 1.0
         Below this ceiling the smoothed-force stages end and the unsmoothed stage (b) runs, with
         steps up to ``dt_min`` and the force within the band only (no single pixel far from
@@ -881,7 +881,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     # first step is at most the width of the start's regions (the smaller area over the length):
     # a larger one jumps past the start's own shapes into whatever basin it lands in.
     width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
-    step = settings["dt"] if "dt" in options else min(settings["dt"], max(0.5 * width, settings["dt_min"]))
+    step = min(settings["dt"], max(0.5 * width, settings["dt_min"]))
     first_step, ceiling, grow, smooth_force = step, settings["dt_max"], True, True
     status, n_iter, stage_start, streak = 1, 0, 0, 0
     # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):
