@@ -88,6 +88,7 @@ def _clockwise_outline():
     return curve
 
 
+
 API_USABLE = {
     "float64 noisy disk, default init": lambda: usable(IMAGE),
     "float32 image": lambda: usable(IMAGE.astype(np.float32)),
@@ -111,8 +112,8 @@ API_USABLE = {
     "repeated closing vertex": lambda: usable(IMAGE, np.vstack([ac.circle(CENTER, 9),
                                                                 ac.circle(CENTER, 9)[:1]])),
     "bool mask init": lambda: usable(IMAGE, synthetic.render(synthetic.disk(CENTER, 8), SHAPE)[1]),
-    "previous polygon result into the level set": lambda: usable(IMAGE, ac.segment(IMAGE),
-                                                                 backend="levelset"),
+    "previous polygon result into the level set":
+        lambda: usable(IMAGE, ac.segment(IMAGE), backend="levelset"),
     "level set, default init": lambda: usable(IMAGE, backend="levelset"),
     "grid init on coins": lambda: usable(skimage.data.coins()[::4, ::4], "grid"),
     "max_num_iter=0": lambda: usable(IMAGE, max_num_iter=0),
@@ -136,8 +137,8 @@ API_USABLE = {
     "uint8 0/255 mask as init": lambda: usable(IMAGE, (TRUTH * 255).astype(np.uint8)),
     "constant image, level set": lambda: usable(np.full((32, 32), 0.5), backend="levelset"),
     "spacing of 1e-3 px": lambda: _tiny_spacing_is_refused_or_bounded(),
-    "microaneurysms, grid init, level set": lambda: usable(skimage.data.microaneurysms(), "grid",
-                                                           backend="levelset"),
+    "microaneurysms, grid init, level set":
+        lambda: usable(skimage.data.microaneurysms(), "grid", backend="levelset"),
 }
 
 
