@@ -4,7 +4,8 @@ Usage
 -----
 ::
 
-    activecontour segment IMAGE [IMAGE ...] [-o DIR] [--format json,geojson,svg,csv,npz]
+    activecontour segment IMAGE|FOLDER|'GLOB' [...] [-o DIR] [--jobs N]
+                          [--format json,geojson,svg,csv,npz]
                           [--backend {polygon,levelset}] [--mu MU] [--omega OMEGA]
                           [--lambda-in L] [--lambda-out L] [--max-iter N] [--tol TOL]
                           [--c-in C] [--c-out C] [--color {gray,vector}]
@@ -17,8 +18,13 @@ Usage
 ``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
 (the contour drawn on the image) and ``<DIR>/<name>_contours.<fmt>`` for each format, where
 ``<name>`` is the image's file name without its suffix.  ``DIR`` defaults to the directory of each
-image and is created when missing.  A progress bar is drawn on stderr when it is a terminal; one
-summary line per image goes to stdout (``--quiet`` silences both).
+image and is created when missing.  A FOLDER stands for the images in it and a quoted GLOB
+(``'data/**/*.tif'``) for the files it matches, both sorted, without this tool's own outputs
+(:func:`activecontour.batch.image_files`).  ``--jobs N`` (default: every core) segments N images at
+a time in worker processes (:mod:`app.batch`); the files are the same as with ``--jobs 1``.  A
+progress display is drawn on stderr when it is a terminal (the iterations of a single image, or
+the images done of a batch, the elapsed and the remaining time); one summary line per image goes
+to stdout as it finishes (``--quiet`` silences both).
 
 Errors
 ------
@@ -28,8 +34,9 @@ the output directory can hold the files, and no output would overwrite an input 
 output.  Any problem prints one line ``activecontour: error: ...`` on stderr and exits with status
 2.  Each image's files are written as a group, all or none (:func:`activecontour.io.save_result`),
 so an interrupted or failed run never leaves a half-written file; images finished before a failure
-keep their complete outputs.  A run that reaches ``--max-iter`` without converging is not an error:
-its summary says ``success=False``.
+keep their complete outputs.  An image that fails while it is segmented or written gets one
+error line and the other images go on; the exit status is then 2.  A run that reaches
+``--max-iter`` without converging is not an error: its summary says ``success=False``.
 """
 
 from __future__ import annotations
@@ -110,10 +117,19 @@ def build_parser():
         description="Segment each IMAGE; write <name>_mask.png, <name>_overlay.png and "
         "<name>_contours.<fmt> into the output directory.",
     )
-    segment.add_argument("images", nargs="+", metavar="IMAGE", help="image files (PNG, TIFF, JPEG, ...)")
+    segment.add_argument(
+        "images", nargs="+", metavar="IMAGE",
+        help="image files (PNG, TIFF, JPEG, ...), folders (the images in them) or quoted glob "
+        "patterns such as 'data/*.tif'",
+    )
     segment.add_argument(
         "-o", "--output", metavar="DIR", type=Path,
         help="output directory, created if missing (default: the directory of each image)",
+    )
+    segment.add_argument(
+        "-j", "--jobs", type=_positive_int, default=None, metavar="N",
+        help="segment N images at a time in worker processes; 1 runs them one after another "
+        "(default: every core)",
     )
     segment.add_argument(
         "--format", dest="formats", type=_formats, default=["json"], metavar="FMT[,FMT...]",
@@ -201,43 +217,38 @@ def _add_parameter_options(parser):
 
 
 def _run_segment(args):
-    import activecontour
-    from activecontour import io
+    from activecontour.batch import default_jobs, image_files
+    from app import batch
 
     settings = _settings(args)
     init, init_description = _load_init(args)
-    plans = _plan_outputs(args.images, args.output, args.formats)
+    plans = _plan_outputs(image_files(*args.images), args.output, args.formats)
     color = _overlay_color(args.overlay_color)
     for image_path, _ in plans:
         _check_image(image_path, init, settings)
     created = _make_directory(args.output)
-    show_progress = not args.quiet and _is_terminal(sys.stderr)
-    init_argument = list(init) if isinstance(init, _ContourInit) else init
+    task = batch.SaveTask(
+        init=list(init) if isinstance(init, _ContourInit) else init, settings=settings,
+        formats=tuple(args.formats), color=color, init_description=init_description,
+        protect=tuple(p for p, _ in plans),
+    )
     try:
-        for image_path, stem in plans:
-            image = activecontour.load_image(image_path)
-            progress = _Progress(Path(image_path).name) if show_progress else None
-            started = time.perf_counter()
-            try:
-                result = activecontour.segment(image, init_argument, callback=progress, **settings)
-            finally:
-                if progress is not None:
-                    progress.close()
-            elapsed = time.perf_counter() - started
-            metadata = {
-                "image": os.fspath(image_path),
-                "init": init_description,
-                "parameters": settings,
-                "wall_time_s": elapsed,
-            }
-            written = io.save_result(result, image, stem, args.formats, metadata=metadata,
-                                     color=color, protect=[p for p, _ in plans])
-            if not args.quiet:
-                print(_summary(Path(image_path).name, result, elapsed, written), flush=True)
+        failures = batch.run(
+            task, plans, jobs=args.jobs or default_jobs(), summary=_summary,
+            report_error=_report_image_error, quiet=args.quiet,
+            show_progress=_is_terminal(sys.stderr), image_progress=_Progress,
+        )
     except BaseException:
         _remove_if_empty(created)
         raise
+    if failures:
+        _remove_if_empty(created)
+        return EXIT_USAGE
     return 0
+
+
+def _report_image_error(image_path, exc):
+    print(f"{PROG}: error: {os.fspath(image_path)}: {_one_line(exc)}", file=sys.stderr, flush=True)
 
 
 def _settings(args):
@@ -572,6 +583,16 @@ def _nonnegative_int(text):
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
     return value
 
 
