@@ -126,8 +126,8 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
             sources[index] = _source_of(item)
             yield item
 
-    for index, (value, error) in map_unordered(task, _sized(items(), images), jobs=jobs, context=context):
-        yield BatchResult(index, sources.pop(index), value, error)
+    outcomes = map_unordered(task, _sized(items(), images), jobs=jobs, context=context)
+    return (BatchResult(index, sources.pop(index), value, error) for index, (value, error) in outcomes)
 
 
 def segment_dask(images, init=None, *, client=None, **segment_kwargs):
@@ -184,17 +184,7 @@ def segment_dask(images, init=None, *, client=None, **segment_kwargs):
         _check_images_argument(images)
         sources = list(images)
         futures = client.map(task, sources, pure=False)
-    positions = {future.key: index for index, future in enumerate(futures)}
-    remaining = set(positions)
-    try:
-        for future in distributed.as_completed(futures):
-            index = positions[future.key]
-            remaining.discard(future.key)
-            result, error = _outcome(future)
-            source = _source_of(sources[index]) if sources is not None else None
-            yield BatchResult(index, source, result, error)
-    finally:
-        client.cancel([f for f in futures if f.key in remaining])
+    return _gather_as_completed(client, futures, sources)
 
 
 def map_unordered(function, items, *, jobs=None, context=None):
@@ -221,8 +211,11 @@ def map_unordered(function, items, *, jobs=None, context=None):
     if isinstance(items, Sized):
         jobs = min(jobs, max(len(items), 1))
     if jobs == 1:
-        yield from _map_here(function, items)
-        return
+        return _map_here(function, items)
+    return _map_in_pool(function, items, jobs, start_method)
+
+
+def _map_in_pool(function, items, jobs, start_method):
     # imported when used: a single segment() call never pays for them
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
@@ -317,6 +310,23 @@ def _segment_one(item, *, init, segment_kwargs):
     """Read the image if it is a path, and segment it (what every worker runs)."""
     image = load_image(item) if isinstance(item, (str, os.PathLike)) else item
     return segment(image, init, **segment_kwargs)
+
+
+def _gather_as_completed(client, futures, sources):
+    """BatchResults of Dask futures as they finish; what is left is cancelled when the caller stops."""
+    import distributed
+
+    positions = {future.key: index for index, future in enumerate(futures)}
+    remaining = set(positions)
+    try:
+        for future in distributed.as_completed(futures):
+            index = positions[future.key]
+            remaining.discard(future.key)
+            result, error = _outcome(future)
+            source = _source_of(sources[index]) if sources is not None else None
+            yield BatchResult(index, source, result, error)
+    finally:
+        client.cancel([f for f in futures if f.key in remaining])
 
 
 def _segment_block(block, *, task):
