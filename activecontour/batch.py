@@ -81,7 +81,7 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
     images : iterable of ndarray or path
         Images as arrays, or files (str or os.PathLike) that the workers read with
         :func:`activecontour.load_image`.  For folders and glob patterns use :func:`image_files`.
-        A generator is consumed lazily: at most ``2 * jobs`` images are in flight at a time.
+        A generator is consumed lazily: at most ``jobs`` images are in flight at a time.
     init : optional
         The initial curve of every image, anything :func:`activecontour.segment` accepts (None, a
         curve, a list of curves, a mask, ``"grid"``, ...).
@@ -196,7 +196,7 @@ def map_unordered(function, items, *, jobs=None, context=None):
         Picklable (a module-level function, or a :func:`functools.partial` of one) when it runs in
         other processes.
     items : iterable
-        Picklable arguments; a generator is consumed lazily, at most ``2 * jobs`` in flight.
+        Picklable arguments; a generator is consumed lazily, at most ``jobs`` in flight.
     jobs, context
         As in :func:`segment_many`; ``jobs=1`` (or a single item) runs in this process.
 
@@ -223,7 +223,9 @@ def _map_in_pool(function, items, jobs, start_method):
     with ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_ignore_interrupts) as pool:
         pending = {}
         try:
-            for index, item in itertools.islice(numbered, 2 * jobs):
+            # one item per worker and none queued: an interrupt then stops every item in flight,
+            # and a generator is not read ahead of the workers
+            for index, item in itertools.islice(numbered, jobs):
                 pending[_submit(pool, function, item)] = index
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)

@@ -101,7 +101,7 @@ def test_jobs_1_runs_in_order_in_this_process():
     assert outcomes[1][1][0] is None and isinstance(outcomes[1][1][1], ZeroDivisionError)
 
 
-def test_a_generator_is_consumed_at_most_two_items_per_worker_ahead():
+def test_a_generator_is_consumed_one_item_per_worker_at_a_time():
     pulled = []
 
     def numbers():
@@ -111,7 +111,7 @@ def test_a_generator_is_consumed_at_most_two_items_per_worker_ahead():
 
     outcomes = batch.map_unordered(abs, numbers(), jobs=2)
     first = next(outcomes)
-    assert len(pulled) <= 2 * 2
+    assert len(pulled) <= 2
     rest = list(outcomes)
     assert sorted([first[0]] + [index for index, _ in rest]) == list(range(12))
     assert all(value == index and error is None for index, (value, error) in [first, *rest])
