@@ -36,7 +36,7 @@ from activecontour.curve import resample
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
-from activecontour.result import FlowState, SegmentationResult
+from activecontour.result import FlowState, build_result
 
 __all__ = ["segment_polygon"]
 
@@ -156,11 +156,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
                 status = 0
                 break
             quiet, stage_start = 0, len(energies) - 1
-    contours = _split(*geometry[::2])
-    return SegmentationResult(
-        mask=rasterize(contours, shape), contours=contours, c_in=current.c_in, c_out=current.c_out,
-        energy=current.energy, energies=energies, n_iter=n_iter, status=status, backend="polygon",
-    )
+    return build_result(model, params, _split(*geometry[::2]), energies=energies, n_iter=n_iter,
+                        status=status, backend="polygon")
 
 
 class _Flow:

@@ -51,6 +51,7 @@ import numpy as np
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
 from activecontour.initial import default_init, initial_curves
+from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
 from app.viewer_layout import (
     CONTOUR_COLOR,
@@ -157,6 +158,8 @@ class Viewer:
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         display = normalize_image(self.image, color="vector")  # validates the image, too
         self.shape = display.shape[:2]
+        if is_auto(settings["mu"]):  # the slider starts at the value segment(mu="auto") would use
+            settings["mu"] = auto_mu(normalize_image(self.image, color=color))
         self.image_path = None if image_path is None else Path(image_path)
         self.formats = formats
         self.redraw_every = int(redraw_every)
@@ -735,6 +738,8 @@ def _settings(**given):
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {settings['backend']!r}")
     for name in ("mu", "omega", "lambda_in", "lambda_out", "tol"):
         value = settings[name]
+        if name == "mu" and is_auto(value):
+            continue
         if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
                 or not np.isfinite(value):
             raise ValueError(f"{name} must be a finite number, got {value!r}")
