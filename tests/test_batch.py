@@ -1,5 +1,6 @@
 """Many images at once: segment_many equals the serial loop, per-image errors, pickling, image_files."""
 
+import dataclasses
 import functools
 import os
 import pickle
@@ -28,13 +29,15 @@ def disk_images(count, *, noise=0.08):
 def assert_same_result(a, b):
     """Every field of two SegmentationResults is equal, arrays exactly."""
     assert type(a) is type(b)
-    for name in ("mask", "energies", "phi"):
-        first, second = getattr(a, name), getattr(b, name)
-        assert (first is None and second is None) or np.array_equal(first, second), name
-    assert len(a.contours) == len(b.contours)
-    assert all(np.array_equal(p, q) for p, q in zip(a.contours, b.contours, strict=True))
-    for name in ("c_in", "c_out", "energy", "n_iter", "status", "success", "message", "backend"):
-        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    for field in dataclasses.fields(a):
+        first, second = getattr(a, field.name), getattr(b, field.name)
+        if field.name == "contours":
+            assert len(first) == len(second)
+            assert all(np.array_equal(p, q) for p, q in zip(first, second, strict=True))
+        elif first is None or second is None:
+            assert first is None and second is None, field.name
+        else:
+            assert np.array_equal(first, second), field.name
 
 
 @pytest.mark.parametrize("backend", ["polygon", "levelset"])
