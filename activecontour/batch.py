@@ -29,7 +29,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from activecontour.image import load_image
 from activecontour.result import SegmentationResult
 from activecontour.segment import segment
 
@@ -100,8 +99,9 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
     BatchResult
         In the order the images finish (use ``index`` or ``source`` to match them to the input).
         An image that raised has ``error`` set and ``result=None``; the others are unaffected.
-        A worker process that dies (killed, out of memory) fails the images it and its pool had
-        in flight, and the rest, with :class:`concurrent.futures.process.BrokenProcessPool`.
+        A worker process that dies (killed, out of memory) breaks the pool: the images in flight
+        and those not yet started then fail with
+        :class:`concurrent.futures.process.BrokenProcessPool` (a Python exception never does).
 
     Raises
     ------
@@ -305,13 +305,7 @@ def _segment_task(init, segment_kwargs):
         inspect.signature(segment).bind(None, init, **segment_kwargs)
     except TypeError as exc:
         raise TypeError(f"segment_many/segment_dask: {exc}") from None
-    return functools.partial(_segment_one, init=init, segment_kwargs=segment_kwargs)
-
-
-def _segment_one(item, *, init, segment_kwargs):
-    """Read the image if it is a path, and segment it (what every worker runs)."""
-    image = load_image(item) if isinstance(item, (str, os.PathLike)) else item
-    return segment(image, init, **segment_kwargs)
+    return functools.partial(segment, init=init, **segment_kwargs)  # segment() reads a path itself
 
 
 def _gather_as_completed(client, futures, sources):
