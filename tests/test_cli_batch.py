@@ -41,13 +41,14 @@ def contour_metadata(path):
     return meta
 
 
-def test_jobs_2_writes_the_same_files_as_jobs_1(folder, tmp_path, capsys):
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_jobs_2_writes_the_same_files_as_jobs_1(folder, tmp_path, capsys, backend):
     path, truths = folder
     outputs = {}
     for jobs in (1, 2):
         out = tmp_path / f"out{jobs}"
         status, stdout, stderr = run(capsys, "segment", path, "-o", out, "--jobs", jobs,
-                                     "--format", "json,npz")
+                                     "--format", "json,npz", "--backend", backend)
         assert status == 0 and stderr == ""
         lines = stdout.splitlines()
         assert sorted(line.split(":")[0] for line in lines) == [f"disk{k}.png" for k in range(4)]
