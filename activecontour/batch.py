@@ -88,8 +88,9 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
         Worker processes; None uses every core this process may run on.  ``jobs=1`` segments the
         images one after another in this process.  Never more workers than images.
     context : {"spawn", "fork", "forkserver"} or multiprocessing context, optional
-        How workers start; None takes the platform's default (:func:`multiprocessing.get_context`).
-        Every method gives the same results: nothing but the arguments reaches a worker.
+        How workers start; None takes the platform's default (:func:`multiprocessing.get_context`),
+        except that a process running threads is not forked (``"forkserver"`` instead).  Every
+        method gives the same results: nothing but the arguments reaches a worker.
     **segment_kwargs
         Keyword arguments of :func:`activecontour.segment` (``backend``, ``mu``, ``options``, ...),
         the same for every image.  ``callback`` is not accepted: the images run in other processes.
@@ -427,9 +428,14 @@ def _check_jobs(jobs):
 
 def _start_context(context):
     import multiprocessing
+    import threading
 
     if context is None:
-        return multiprocessing.get_context()
+        default = multiprocessing.get_context()
+        if (default.get_start_method() == "fork" and threading.active_count() > 1
+                and "forkserver" in multiprocessing.get_all_start_methods()):
+            return multiprocessing.get_context("forkserver")  # forking a threaded process can deadlock
+        return default
     if isinstance(context, str):
         methods = multiprocessing.get_all_start_methods()
         if context not in methods:

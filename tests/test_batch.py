@@ -186,6 +186,24 @@ def test_image_files_lists_folders_and_expands_patterns(tmp_path):
         batch.image_files(empty)
 
 
+def test_a_process_with_threads_is_not_forked():
+    import multiprocessing
+    import threading
+
+    if multiprocessing.get_start_method() != "fork":
+        pytest.skip("the platform does not fork by default")
+    assert batch._start_context(None).get_start_method() == (
+        "fork" if threading.active_count() == 1 else "forkserver")
+    stop = threading.Event()
+    thread = threading.Thread(target=stop.wait)
+    thread.start()
+    try:
+        assert batch._start_context(None).get_start_method() == "forkserver"
+    finally:
+        stop.set()
+        thread.join()
+
+
 def test_default_jobs_is_the_usable_cores():
     expected = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     assert batch.default_jobs() == expected
