@@ -150,6 +150,7 @@ def main():
 
 def bench_dask(paths, reference, pool_time, cli2):
     try:
+        import dask
         from distributed import Client, LocalCluster
     except ModuleNotFoundError:
         print("\nDask: not installed (pip install 'activecontour[dask]'), skipped")
@@ -157,22 +158,30 @@ def bench_dask(paths, reference, pool_time, cli2):
     from activecontour.batch import segment_dask
 
     n = len(paths)
-    started = time.perf_counter()
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
-        start_up = time.perf_counter() - started
-        warm_started = time.perf_counter()
-        client.run(warm_up)  # every worker loads the compiled kernels once
-        warm = time.perf_counter() - warm_started
-        dask_time, _, items = timed(lambda: list(segment_dask(paths, client=client)))
-        equal = all(item.ok and np.array_equal(item.result.mask, reference[item.index].mask)
-                    and item.result.energy == reference[item.index].energy for item in items)
     print("\nsegment_dask over the files on LocalCluster(n_workers=2, threads_per_worker=1):")
-    print(f"  cluster start {start_up:.2f} s, loading the kernels on the workers {warm:.2f} s")
-    print(f"  batch: {dask_time:6.2f} s ({n / dask_time:.2f} images/s) = {pool_time / dask_time:.2f}x the "
-          f"throughput of segment_many(jobs=2); with the cluster start and warm-up "
-          f"{start_up + warm + dask_time:.2f} s vs the command line --jobs 2 {cli2:.2f} s; "
-          f"identical: {equal}")
+    # Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536 (to hand memory back); measured
+    # with it, and with it unset (glibc's default, as in segment_many's workers)
+    for label, trim in (("Dask's default environment", {}),
+                        ("MALLOC_TRIM_THRESHOLD_ unset", {TRIM_KEY: None})):
+        started = time.perf_counter()
+        cluster_options = {"n_workers": 2, "threads_per_worker": 1, "processes": True,
+                           "dashboard_address": None}
+        with dask.config.set(trim), LocalCluster(**cluster_options) as cluster, Client(cluster) as client:
+            start_up = time.perf_counter() - started
+            warm_started = time.perf_counter()
+            client.run(warm_up)  # every worker loads the compiled kernels once
+            warm = time.perf_counter() - warm_started
+            dask_time, _, items = timed(lambda client=client: list(segment_dask(paths, client=client)))
+            equal = all(item.ok and np.array_equal(item.result.mask, reference[item.index].mask)
+                        and item.result.energy == reference[item.index].energy for item in items)
+        print(f"  {label}: cluster start {start_up:.2f} s, kernels loading on the workers {warm:.2f} s")
+        print(f"    batch {dask_time:6.2f} s ({n / dask_time:.2f} images/s) = {pool_time / dask_time:.2f}x "
+              f"the throughput of segment_many(jobs=2); with the start and warm-up "
+              f"{start_up + warm + dask_time:.2f} s (command line --jobs 2: {cli2:.2f} s); "
+              f"identical: {equal}")
+
+
+TRIM_KEY = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
 
 
 def warm_up():
