@@ -18,6 +18,7 @@ BatchResult    one image's outcome
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import glob
 import inspect
@@ -221,23 +222,31 @@ def _map_in_pool(function, items, jobs, start_method):
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     numbered = enumerate(items)
-    with ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_ignore_interrupts) as pool:
-        pending = {}
-        try:
+    stop = start_method.Event()  # set when this generator ends early: queued items are skipped
+    pool, pending = None, {}
+    try:
+        with _interrupts_held():  # the workers start with Ctrl-C held back, not in the middle of it
+            pool = ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_start_worker,
+                                       initargs=(stop,))
             # one item per worker and none queued: an interrupt then stops every item in flight,
             # and a generator is not read ahead of the workers
             for index, item in itertools.islice(numbered, jobs):
                 pending[_submit(pool, function, item)] = index
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in sorted(done, key=pending.get):
-                    index = pending.pop(future)
-                    yield index, _outcome(future)
-                    for next_index, item in itertools.islice(numbered, 1):
-                        pending[_submit(pool, function, item)] = next_index
-        finally:
-            for future in pending:
-                future.cancel()
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in sorted(done, key=pending.get):
+                index = pending.pop(future)
+                yield index, _outcome(future)
+                for next_index, item in itertools.islice(numbered, 1):
+                    pending[_submit(pool, function, item)] = next_index
+    except BaseException:  # Ctrl-C, or the caller closing the generator (GeneratorExit)
+        stop.set()
+        raise
+    finally:
+        for future in pending:
+            future.cancel()
+        if pool is not None:
+            pool.shutdown(wait=True)
 
 
 def image_files(*sources):
@@ -448,13 +457,36 @@ def _start_context(context):
     return context
 
 
-def _ignore_interrupts():
+@contextlib.contextmanager
+def _interrupts_held():
+    """Block SIGINT in this thread (it stays pending); workers started meanwhile inherit the block."""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+#: In a worker process: the parent's "stop" event (set by :func:`_start_worker`).
+_worker_stop = None
+
+
+def _start_worker(stop):
     """Worker initialiser: an idle worker ignores Ctrl-C (the parent decides what stops)."""
+    global _worker_stop
+    _worker_stop = stop
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # one held back is dropped
 
 
 def _interruptible(function, item):
     """Run one item in a worker with Ctrl-C enabled, so an interrupt stops the work at once."""
+    if _worker_stop is not None and _worker_stop.is_set():
+        return None  # the parent has stopped: nobody waits for this item
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         return function(item)

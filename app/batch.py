@@ -16,7 +16,7 @@ import sys
 import time
 from dataclasses import dataclass
 
-__all__ = ["BatchProgress", "SaveTask", "run"]
+__all__ = ["BatchProgress", "SaveTask", "check_all", "run"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,20 @@ class SaveTask:
         written = io.save_result(result, image, stem, list(self.formats), metadata=metadata,
                                  color=self.color, protect=list(self.protect))
         return result, elapsed, written
+
+
+def check_all(check, image_paths, *, jobs):
+    """Run ``check(image_path)`` on every image, ``jobs`` at a time; raise the first failure.
+
+    Checking reads every image, so a batch of many files is checked in parallel too.  Of several
+    bad inputs, the first in the input order is raised, as a serial loop would.
+    """
+    from activecontour.batch import map_unordered
+
+    failures = [(index, error) for index, (_, error) in map_unordered(check, image_paths, jobs=jobs)
+                if error is not None]
+    if failures:
+        raise min(failures, key=lambda failure: failure[0])[1]
 
 
 def run(task, plans, *, jobs, summary, report_error, quiet=False, show_progress=False,

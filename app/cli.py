@@ -42,6 +42,7 @@ error line and the other images go on; the exit status is then 2.  A run that re
 from __future__ import annotations
 
 import argparse
+import functools
 import inspect
 import math
 import os
@@ -224,8 +225,9 @@ def _run_segment(args):
     init, init_description = _load_init(args)
     plans = _plan_outputs(image_files(*args.images), args.output, args.formats)
     color = _overlay_color(args.overlay_color)
-    for image_path, _ in plans:
-        _check_image(image_path, init, settings)
+    jobs = args.jobs or default_jobs()
+    batch.check_all(functools.partial(_check_image, init=init, settings=settings),
+                    [image_path for image_path, _ in plans], jobs=jobs)
     created = _make_directory(args.output)
     task = batch.SaveTask(
         init=list(init) if isinstance(init, _ContourInit) else init, settings=settings,
@@ -234,7 +236,7 @@ def _run_segment(args):
     )
     try:
         failures = batch.run(
-            task, plans, jobs=args.jobs or default_jobs(), summary=_summary,
+            task, plans, jobs=jobs, summary=_summary,
             report_error=_report_image_error, quiet=args.quiet,
             show_progress=_is_terminal(sys.stderr), image_progress=_Progress,
         )

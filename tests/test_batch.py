@@ -4,6 +4,7 @@ import dataclasses
 import functools
 import os
 import pickle
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -207,3 +208,42 @@ def test_a_process_with_threads_is_not_forked():
 def test_default_jobs_is_the_usable_cores():
     expected = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     assert batch.default_jobs() == expected
+
+
+INTERRUPTED_BATCH = """
+import sys, time
+import numpy as np
+import activecontour as ac
+if __name__ == "__main__":
+    images = [np.random.default_rng(k).random((48, 56)) for k in range(4)]
+    started = time.monotonic()
+    try:
+        list(ac.segment_many(images, jobs=2, context="spawn", max_num_iter=10**6, tol=0))
+    except KeyboardInterrupt:
+        print(f"interrupted {time.monotonic() - started:.1f}")
+"""
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="process groups are POSIX")
+def test_ctrl_c_while_spawned_workers_start_stops_them_quietly(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "interrupted.py"
+    script.write_text(INTERRUPTED_BATCH)
+    root = Path(__file__).resolve().parents[1]
+    process = subprocess.Popen([sys.executable, str(script)], cwd=root,
+                               env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        time.sleep(2.0)  # the parent has started the pool; the workers are still importing
+        os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: every process of the group
+        stdout, stderr = process.communicate(timeout=60)  # an image alone would take minutes
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert stdout.startswith("interrupted"), (stdout, stderr)
+    assert "Traceback" not in stderr, stderr

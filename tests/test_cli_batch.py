@@ -117,6 +117,7 @@ def test_a_failing_image_is_reported_and_the_others_are_written(folder, tmp_path
         ("jobs 0", ["--jobs", ">= 1"]),
         ("jobs not a number", ["--jobs", "two"]),
         ("unreadable image in the folder", ["cannot read", "bad.png"]),
+        ("two unreadable images", ["cannot read", "disk1.png"]),  # the first in the input order
     ],
 )
 def test_bad_batch_input_exits_2_before_any_work(folder, tmp_path, capsys, case, words):
@@ -131,6 +132,10 @@ def test_bad_batch_input_exits_2_before_any_work(folder, tmp_path, capsys, case,
         argv += ["--jobs", "0"]
     elif case == "jobs not a number":
         argv += ["--jobs", "two"]
+    elif case == "two unreadable images":
+        for name in ("disk3.png", "disk1.png"):
+            (path / name).write_text("this is not an image\n")
+        argv += ["--jobs", "2"]
     else:
         (path / "bad.png").write_text("this is not an image\n")
     status, stdout, stderr = run(capsys, *argv)
