@@ -12,7 +12,7 @@ Parts
 segment_many   worker processes (``concurrent.futures``) on this machine
 segment_dask   the workers of a ``dask.distributed`` cluster (the ``activecontour[dask]`` extra)
 map_unordered  the process pool under :func:`segment_many`, for any picklable function
-image_files    the image files of folders and glob patterns, sorted
+find_images    the image files of folders and glob patterns, sorted
 BatchResult    one image's outcome
 """
 
@@ -33,15 +33,13 @@ import numpy as np
 from activecontour.result import SegmentationResult
 from activecontour.segment import segment
 
-__all__ = ["IMAGE_SUFFIXES", "BatchResult", "default_jobs", "image_files", "map_unordered",
+__all__ = ["INPUT_SUFFIXES", "BatchResult", "default_jobs", "find_images", "map_unordered",
            "segment_dask", "segment_many"]
 
 #: File name suffixes taken as images when a folder is listed (compared in lower case).
-IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp", ".gif", ".webp", ".pgm", ".ppm",
+INPUT_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp", ".gif", ".webp", ".pgm", ".ppm",
                   ".pnm")
 
-#: The suffixes of the files ``activecontour segment`` writes next to an image ``<name>.*``.
-_OUTPUT_SUFFIXES = ("_mask.png", "_overlay.png")
 
 _GLOB_CHARACTERS = frozenset("*?[")
 
@@ -80,7 +78,7 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
     ----------
     images : iterable of ndarray or path
         Images as arrays, or files (str or os.PathLike) that the workers read with
-        :func:`activecontour.load_image`.  For folders and glob patterns use :func:`image_files`.
+        :func:`activecontour.load_image`.  For folders and glob patterns use :func:`find_images`.
         A generator is consumed lazily: at most ``jobs`` images are in flight at a time.
     init : optional
         The initial curve of every image, anything :func:`activecontour.segment` accepts (None, a
@@ -115,8 +113,8 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
 
     Examples
     --------
-    >>> from activecontour.batch import image_files, segment_many
-    >>> for item in segment_many(image_files("micrographs/"), jobs=4, mu=0.1):  # doctest: +SKIP
+    >>> from activecontour.batch import find_images, segment_many
+    >>> for item in segment_many(find_images("micrographs/"), jobs=4, mu=0.1):  # doctest: +SKIP
     ...     print(item.source, item.result.n_iter if item.ok else item.error)
     """
     _check_images_argument(images)
@@ -141,7 +139,7 @@ def segment_dask(images, init=None, *, client=None, **segment_kwargs):
     ----------
     images : folder, glob pattern, sequence of paths or arrays, or dask.array
         Files are read by the workers (the paths must be readable there: a shared file system).  A
-        folder or a pattern is expanded here by :func:`image_files`.  A ``dask.array`` of shape
+        folder or a pattern is expanded here by :func:`find_images`.  A ``dask.array`` of shape
         (n, M, N) or (n, M, N, C) is a stack of n images: each is computed on a worker straight
         from its chunks and segmented there, so the stack never has to fit on this machine.
     init : optional
@@ -182,7 +180,7 @@ def segment_dask(images, init=None, *, client=None, **segment_kwargs):
         futures, sources = _submit_stack(client, task, images), None
     else:
         if isinstance(images, (str, os.PathLike)):
-            images = image_files(images)
+            images = find_images(images)
         _check_images_argument(images)
         sources = list(images)
         futures = client.map(task, sources, pure=False)
@@ -249,14 +247,14 @@ def _map_in_pool(function, items, jobs, start_method):
             pool.shutdown(wait=True)
 
 
-def image_files(*sources):
+def find_images(*sources):
     """The image files named by paths, folders and glob patterns, in order, each once.
 
     Parameters
     ----------
     *sources : str or os.PathLike
         A file is taken as it is.  A folder gives the files in it (not in its sub-folders) whose
-        suffix is one of :data:`IMAGE_SUFFIXES`, sorted by name.  A pattern with ``*``, ``?`` or
+        suffix is one of :data:`INPUT_SUFFIXES`, sorted by name.  A pattern with ``*``, ``?`` or
         ``[`` that is not an existing file is expanded by :func:`glob.glob` (``**`` spans folders),
         sorted, files only.  From folders and patterns, the outputs of ``activecontour segment``
         (``<name>_mask.png`` and ``<name>_overlay.png`` next to an image ``<name>.*``) are left out,
@@ -278,10 +276,10 @@ def image_files(*sources):
         text = os.fspath(source)
         if os.path.isdir(text):
             found = [os.path.join(text, name) for name in sorted(os.listdir(text))
-                     if name.lower().endswith(IMAGE_SUFFIXES) and os.path.isfile(os.path.join(text, name))]
+                     if name.lower().endswith(INPUT_SUFFIXES) and os.path.isfile(os.path.join(text, name))]
             found = _without_outputs(found)
             if not found:
-                raise ValueError(f"no image files ({', '.join(IMAGE_SUFFIXES)}) in the folder {text!r}")
+                raise ValueError(f"no image files ({', '.join(INPUT_SUFFIXES)}) in the folder {text!r}")
         elif os.path.exists(text) or not _GLOB_CHARACTERS.intersection(text):
             if not os.path.exists(text):
                 raise FileNotFoundError(f"image file not found: {text!r}")
@@ -362,7 +360,7 @@ def _check_images_argument(images):
     if isinstance(images, (str, bytes, os.PathLike)):
         raise TypeError("images must be an iterable of arrays or paths, got a single "
                         f"{type(images).__name__} {os.fsdecode(images)!r}; for a folder or a pattern "
-                        "use activecontour.batch.image_files(...)")
+                        "use activecontour.batch.find_images(...)")
     if isinstance(images, np.ndarray):
         raise TypeError("images must be an iterable of arrays or paths, got one ndarray; pass a list "
                         "(or list(stack) for a stack of images)")
@@ -414,9 +412,11 @@ def _source_of(item):
 
 def _without_outputs(paths):
     """Leave out ``<name>_mask.png`` / ``<name>_overlay.png`` that sit next to an image ``<name>.*``."""
+    from activecontour.io import output_paths
+
+    endings = [os.fspath(path) for path in output_paths("", ())]  # "_mask.png", "_overlay.png"
     stems = {os.path.splitext(p)[0] for p in paths}
-    return [p for p in paths
-            if not any(p.endswith(s) and p[: -len(s)] in stems for s in _OUTPUT_SUFFIXES)]
+    return [p for p in paths if not any(p.endswith(e) and p[: -len(e)] in stems for e in endings)]
 
 
 def _map_here(function, items):

@@ -12,17 +12,20 @@ Per iteration k, on the polygon(s) Gamma^k:
    book's form), which resolves corners and fine detail.
 3. ``X^{k+1} = X^k + dt V^k`` (6.31), vertices kept inside the image domain, with dt chosen by
    backtracking until the Armijo condition ``J(X^{k+1}) <= J(X^k) + 1e-4 f . (X^{k+1} - X^k)`` holds.
-   The first trial moves the fastest vertex by ``max_step`` pixels (at most twice the last accepted
-   dt), so a step is scale-free: it does not depend on the image contrast.
+   The first trial is twice the last accepted dt, at most the dt that moves the vertices by
+   ``max_step`` pixels root-mean-square: the bulk of the curve sets the scale (the fastest vertex
+   of a noisy image is an outlier, often 20x the median), so a step is scale-free (it does not
+   depend on the image contrast) and a 300 px travel takes tens of iterations.
 4. Mesh health: when an edge is shorter than half or longer than twice ``spacing``, the curve
    is resampled at equal arc length; the resampled curve is kept only if its energy is not above
    the previous iterate's, so the recorded energy sequence never increases.
 
-The flow stalls when either measure falls below ``tol``: the relative energy decrease per iteration
-averaged over the last five iterations (this ends the slow tail of noisy images, where the curve
-keeps chasing noise for no measurable gain), or the largest vertex displacement, in pixels, for three
-iterations in a row (clean images whose energy tends to zero).  A coarse l gives way to the next
-at 10 tol; a stall at the finest l is convergence; the run also stops at ``max_num_iter``.
+The flow stalls when the contour stops getting anywhere: its mean normal displacement (the area it
+sweeps over its length, in pixels) between the start and the end of a block of five iterations,
+per iteration, falls below ``tol`` (see :class:`_Movement`).  No energy scale enters, so the test
+means the same on every image: a relative energy decrease would stop earlier the larger or noisier
+the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next at 10 tol; a
+stall at the finest l is convergence; the run also stops at ``max_num_iter``.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from itertools import pairwise
 import numpy as np
 
 from activecontour import fem, topology
-from activecontour.curve import resample
+from activecontour.curve import edge_lengths, resample
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
@@ -43,8 +46,9 @@ __all__ = ["segment_polygon"]
 _VELOCITIES = ("h1", "l2")
 _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
-_PATIENCE = 3
-_ENERGY_WINDOW = 5
+_WINDOW = 5  # iterations over which the movement is averaged for the stopping test
+_MEMORY = 8  # step pairs of the L-BFGS acceleration
+_CURVE_STEP = 0.25  # a trial step moves a curve by at most this fraction of its radius (RMS)
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
 _MIN_EDGE = 1e-9
@@ -56,7 +60,8 @@ _REMESH_COOLDOWN = 10
 
 
 def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocity="h1", spacing=1.0,
-                    max_step=2.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True):
+                    max_step=8.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True,
+                    accelerate=True):
     """Minimise (6.38) by the H^1 gradient flow of a polygon (``backend="polygon"``).
 
     Called by :func:`activecontour.segment`; the keywords after ``callback`` are its ``options``.
@@ -76,7 +81,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
         everything the image resolves; the cost of an iteration grows with the curve's length in
         pixels either way.
     max_step : float
-        Largest vertex displacement of a first trial step, in pixels (> 0).
+        Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps
+        double while they are accepted, up to this; backtracking halves them.
     smoothing, min_smoothing : float
         First and last length l in ``b(V, Y) = int V.Y + l^2 int grad V : grad Y``, in pixels
         (``smoothing >= min_smoothing >= 0``).  The book's (6.39) is l = 1 in its units.  In pixel
@@ -93,6 +99,13 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
         (the topological derivative, :func:`activecontour.topology.nucleation_sites`), insert
         small circles there and continue; repeated at most a few times.  This is how a single
         initial curve finds a hole or a second object it cannot reach by deformation.
+    accelerate : bool
+        Combine the velocity with the last few steps (limited-memory BFGS in the metric b: the
+        first inverse Hessian guess is b^{-1}, so without memory the step is the book's
+        velocity).  Near a minimum the plain flow converges slowly along the directions the
+        metric and the energy weigh differently (a small, smooth shift of a long contour); this
+        takes them in one step.  Every step still passes the same descent test.  The memory is
+        cleared when the vertices change (remesh, topology repair) and at each new stage.
 
     Returns
     -------
@@ -111,13 +124,17 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     if not (np.isfinite(min_area) and min_area >= 0):
         raise ValueError(f"min_area must be a number of square pixels >= 0, got {min_area!r}")
     shape = model.shape
-    geometry = stack_curves([resample(c, spacing) for c in initial_curves(init, shape, model.values)])
+    # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
+    # exactly: resampling it would cut its corners and move it off its minimum
+    geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
+                             for c in initial_curves(init, shape, model.values, params.mu)])
     current = evaluate(model, *geometry[:2], params, gradient=True)
     if not np.isfinite(current.energy):
         raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")
-    flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds)
+    flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds, accelerate)
     energies = [current.energy]
-    status, n_iter, quiet, last_remesh, stage_start, rounds = 1, 0, 0, -_REMESH_COOLDOWN, 0, 0
+    movement = _Movement()
+    status, n_iter, last_remesh, rounds = 1, 0, -_REMESH_COOLDOWN, 0
     for k in range(max_num_iter):
         step = flow.step(geometry, current)
         if step is None:
@@ -133,10 +150,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
-        displacement = _max_displacement(geometry, new_geometry)
+        movement.add(new_geometry)
         geometry, current, n_iter = new_geometry, new, k + 1
         energies.append(current.energy)
-        quiet = quiet + 1 if displacement < tol else 0
         if callback is not None:
             state = FlowState(n_iter, _split(*geometry[::2]), current.energy, current.c_in,
                               current.c_out, shape, max_num_iter)
@@ -144,7 +160,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
                 status = 2
                 break
         finest = flow.smoothing <= min_smoothing or not flow.h1
-        if quiet >= _PATIENCE or _stalled(energies, stage_start, tol if finest else _STAGE_TOL * tol):
+        if movement.last < (tol if finest else _STAGE_TOL * tol):
             if not finest:
                 flow.refine(min_smoothing)
             elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
@@ -155,7 +171,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
             else:
                 status = 0
                 break
-            quiet, stage_start = 0, len(energies) - 1
+            movement.clear()
     return build_result(model, params, _split(*geometry[::2]), energies=energies, n_iter=n_iter,
                         status=status, backend="polygon")
 
@@ -163,7 +179,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
 class _Flow:
     """One time step (6.30)-(6.31) with backtracking and topology repair; remembers the last dt."""
 
-    def __init__(self, model, params, velocity, smoothing, max_step, min_area, bounds):
+    def __init__(self, model, params, velocity, smoothing, max_step, min_area, bounds, accelerate):
         self.model, self.params = model, params
         self.h1 = velocity == "h1"
         self.smoothing = smoothing
@@ -171,6 +187,7 @@ class _Flow:
         self.min_area = min_area
         self.low, self.high = bounds
         self.dt = np.inf
+        self.memory = _Memory(accelerate)
 
     def velocity(self, geometry, load):
         """Solve b(V, Y) = -f (6.40) for all curves at once (block-cyclic, O(K))."""
@@ -199,6 +216,7 @@ class _Flow:
     def restart(self, smoothing):
         self.smoothing = smoothing
         self.dt = np.inf
+        self.memory.clear()
 
     def nucleate(self, geometry, current):
         """Add the small holes/components that the topological derivative proposes, if J drops.
@@ -246,11 +264,25 @@ class _Flow:
         condition as any other step.
         """
         points, next_index, offsets = geometry
-        v = self.velocity(geometry, current.load)
-        speed = np.hypot(v[:, 0], v[:, 1]).max()
+        # Vertices on the image border that the force pushes out of the image cannot follow it:
+        # leave those components out of the load and of the velocity (an active set), so that
+        # f . V = -b^{-1}(f~, f~) < 0 stays a descent direction after clipping to the image.
+        held = ((points <= self.low) & (current.load > 0)) | ((points >= self.high) & (current.load < 0))
+        load = np.where(held, 0.0, current.load)
+        v = self.velocity(geometry, load)
+        v[held] = 0.0
+        # the bulk of the curve, not its fastest vertex (a noise outlier, often 20x the median),
+        # sets the scale of the first trial; backtracking still guarantees descent
+        speed = np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2))
         if not speed > 0:
             return None
         dt = min(self.max_step / speed, 2.0 * self.dt)
+        accelerated = self.memory.direction(geometry, load, held, self.velocity)
+        if accelerated is not None:
+            # a quasi-Newton step in the same metric: its natural length is 1
+            v = accelerated
+            dt = min(1.0, self.max_step / np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2)))
+        dt = min(dt, _size_limit(geometry, v))
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
@@ -261,7 +293,9 @@ class _Flow:
             if candidate is not None and predicted < 0:
                 new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
                 if new.energy <= current.energy + _ARMIJO * predicted:
-                    self.dt = dt
+                    if accelerated is None:
+                        self.dt = dt
+                    self.memory.remember(geometry, candidate, current.load, new.load)
                     return candidate, new
             dt *= 0.5
         return None
@@ -285,27 +319,119 @@ class _Flow:
         return geometry, current
 
 
-def _stalled(energies, stage_start, tol):
-    if len(energies) - stage_start <= _ENERGY_WINDOW:
-        return False
-    decrease = (energies[-1 - _ENERGY_WINDOW] - energies[-1]) / _ENERGY_WINDOW
-    return decrease < tol * max(abs(energies[-1]), 1e-300)
+class _Movement:
+    """How far the contour gets per iteration, in pixels, over blocks of ``_WINDOW`` iterations.
+
+    The measure is the mean normal displacement between the curve at the start of a block and at
+    its end, divided by the block's iterations: each vertex's displacement projected on its
+    normal, weighted by its share of the length, i.e. the area swept by the contour over its
+    length.  It means the same on every image (no energy scale enters), and a contour that only
+    jitters about a fixed place (steps at the edge of stability on noise) gets nowhere and counts
+    as still.  A remesh, a topology repair or a removed curve changes the vertices: the block
+    restarts there.
+    """
+
+    def __init__(self):
+        self.clear()
+
+    def add(self, geometry):
+        points, next_index, offsets = geometry
+        same = self.start is not None and points.shape == self.start.shape
+        if not (same and np.array_equal(offsets, self.offsets)):
+            self.start, self.offsets, self.count = points.copy(), offsets.copy(), 0
+            return
+        self.count += 1
+        if self.count < _WINDOW:
+            return
+        start = self.start
+        d = start[next_index] - start
+        previous = np.empty_like(next_index)
+        previous[next_index] = np.arange(len(next_index))
+        edge_normal = np.column_stack([d[:, 1], -d[:, 0]])  # nu |e|
+        vertex_normal = 0.5 * (edge_normal + edge_normal[previous])  # nu times the vertex's share
+        swept = np.abs(np.einsum("ij,ij->i", points - start, vertex_normal)).sum()
+        self.last = swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count
+        self.start, self.count = points.copy(), 0
+
+    def clear(self):
+        self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
+
+
+def _size_limit(geometry, v):
+    """The largest dt that moves no curve by more than a quarter of its radius (RMS).
+
+    A first trial that jumps a small curve across itself (or shrinks it to nothing in one go)
+    can pass the descent test and still land far from where the flow was going.
+    """
+    points, next_index, offsets = geometry
+    d = points[next_index] - points
+    radius = np.add.reduceat(np.hypot(d[:, 0], d[:, 1]), offsets[:-1]) / (2 * np.pi)
+    rms = np.sqrt(np.add.reduceat(v[:, 0] ** 2 + v[:, 1] ** 2, offsets[:-1]) / np.diff(offsets))
+    moving = rms > 0
+    return float(np.min(_CURVE_STEP * radius[moving] / rms[moving])) if moving.any() else np.inf
+
+
+class _Memory:
+    """Limited-memory BFGS pairs (s, y) = (step, change of the load) in the metric b (6.39)."""
+
+    def __init__(self, enabled, size=_MEMORY):
+        self.enabled, self.size = enabled, size
+        self.clear()
+
+    def clear(self):
+        self.pairs, self.signature = [], None
+
+    def _matches(self, geometry):
+        return self.signature is not None and geometry[0].shape == self.signature[0] \
+            and np.array_equal(geometry[2], self.signature[1])
+
+    def remember(self, old, new, old_load, new_load):
+        if not self.enabled:
+            return
+        if not (self._matches(old) or not self.pairs) or new[0].shape != old[0].shape \
+                or not np.array_equal(new[2], old[2]):
+            self.clear()
+            if new[0].shape != old[0].shape or not np.array_equal(new[2], old[2]):
+                return
+        s, y = (new[0] - old[0]).ravel(), (new_load - old_load).ravel()
+        curvature = s @ y
+        if curvature > 1e-12 * np.sqrt((s @ s) * (y @ y)):
+            self.pairs = (self.pairs + [(s, y, 1.0 / curvature)])[-self.size:]
+        self.signature = (new[0].shape, new[2].copy())
+
+    def direction(self, geometry, load, held, velocity):
+        """The L-BFGS direction -H f (two-loop recursion, H_0 = gamma b^{-1}), or None."""
+        if not (self.enabled and self.pairs and self._matches(geometry)):
+            return None
+        q = load.ravel().copy()
+        alphas = []
+        for s, y, rho in reversed(self.pairs):
+            alpha = rho * (s @ q)
+            q -= alpha * y
+            alphas.append(alpha)
+        s, y, _ = self.pairs[-1]
+        metric_y = -velocity(geometry, y.reshape(load.shape)).ravel()  # b^{-1} y
+        r = (s @ y) / max(y @ metric_y, 1e-300) * -velocity(geometry, q.reshape(load.shape)).ravel()
+        for (s, y, rho), alpha in zip(self.pairs, reversed(alphas), strict=True):
+            r += s * (alpha - rho * (y @ r))
+        direction = -r.reshape(load.shape)
+        direction[held] = 0.0
+        return direction if np.sum(load * direction) < 0 else None
 
 
 def _unhealthy(geometry, spacing):
     points, next_index, _ = geometry
     d = points[next_index] - points
-    h = np.hypot(d[:, 0], d[:, 1])
-    return h.max() > 2.0 * spacing or h.min() < 0.5 * spacing
+    return not _spacing_ok(np.hypot(d[:, 0], d[:, 1]), spacing)
+
+
+def _healthy(curve, spacing):
+    return len(curve) >= 8 and _spacing_ok(edge_lengths(curve), spacing)
+
+
+def _spacing_ok(h, spacing):
+    return h.max() <= 2.0 * spacing and h.min() >= 0.5 * spacing
 
 
 def _split(points, offsets):
     return [points[a:b].copy() for a, b in pairwise(offsets)]
-
-
-def _max_displacement(old, new):
-    """Largest vertex displacement, or inf when remeshing or a repair changed the vertices."""
-    if old[0].shape != new[0].shape or not np.array_equal(old[2], new[2]):
-        return np.inf
-    d = new[0] - old[0]
-    return float(np.hypot(d[:, 0], d[:, 1]).max())

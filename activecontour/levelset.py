@@ -535,7 +535,7 @@ def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, val
 
 
 def level_set_contours(phi):
-    """The zero level set of phi as closed sub-pixel curves in the DESIGN.md convention.
+    """The zero level set of phi as closed sub-pixel curves in the convention of :mod:`activecontour.curve`.
 
     Marching squares (``skimage.measure.find_contours``) on phi padded by one pixel of
     ``-|phi|``: a region that touches the image border closes along the domain edge, half a

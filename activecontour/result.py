@@ -14,7 +14,7 @@ __all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
 #: Status codes and their messages, shared by every backend.
 STATUS_MESSAGES = {
-    0: "Converged: the relative energy decrease and the largest displacement fell below tol.",
+    0: "Converged: the contour moves less than tol pixels per iteration.",
     1: "Reached max_num_iter before converging.",
     2: "Stopped by the callback.",
     3: "The contour collapsed: nothing left inside (try a smaller mu or another init).",
@@ -32,7 +32,7 @@ class SegmentationResult:
         The inside region Omega_i: pixels whose centre lies inside the contours.
     contours : list of ndarray (K, 2)
         Closed curves in (row, col), pixel centres at integer coordinates, each vertex once; outer
-        boundaries have positive signed area, holes negative (DESIGN.md conventions).
+        boundaries have positive signed area, holes negative (the conventions of :mod:`activecontour.curve`).
     c_in, c_out : float or ndarray (C,)
         The region constants (6.42) at the end: floats for gray images, one per channel otherwise.
     energy : float

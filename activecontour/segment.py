@@ -23,7 +23,7 @@ BACKENDS = {
 
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
-            lambda_out=1.0, max_num_iter=500, tol=1e-4, callback=None, c_in=None, c_out=None,
+            lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
             color="gray", normalize="range", options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
@@ -51,8 +51,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     max_num_iter : int
         Iteration limit.
     tol : float
-        Convergence tolerance: the run stops once the relative decrease of the energy and the
-        largest vertex displacement (pixels) per iteration stay below ``tol``.
+        Convergence tolerance in pixels per iteration: the run has converged when the contour's
+        mean normal displacement (the area it sweeps over its length), averaged over a few
+        iterations, falls below ``tol`` at the finest stage.  It means the same on every image,
+        whatever its size, noise or contrast; a 100x smaller ``tol`` changes neither the energy
+        nor the mask measurably.  Coarse stages end at 10 tol.
     callback : callable, optional
         ``callback(state)`` with a :class:`~activecontour.result.FlowState` once per iteration;
         return True to stop.

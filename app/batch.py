@@ -1,152 +1,85 @@
-"""The batch loop of ``activecontour segment``: each image read, segmented and written by a worker.
+"""The parallel loop of ``activecontour segment --jobs N``: whole images in worker processes.
 
-The images run in ``--jobs`` worker processes (:func:`activecontour.batch.map_unordered`); each
-worker reads its image, segments it and writes its files as a group
-(:func:`activecontour.io.save_result`), so the files are the same bytes whatever the number of
-jobs, and an image that fails leaves no file and does not stop the others.  The parent process
-only reports: a summary line per image as it finishes, and one progress display for the batch
-(images done out of all, elapsed time, an estimate of the time left).
+Each worker runs the command line's own per-image step (``app.cli._segment_one``: read, check,
+segment, write the files all or none), so the files are the same bytes whatever the number of jobs,
+and an image that fails leaves no file and does not stop the others.  The workers come from
+:func:`activecontour.batch.map_unordered`.  This process only reports: each image's summary or error
+line as it finishes, and one status line for the batch (images done of all, elapsed time, an
+estimate of the time left).
 """
 
 from __future__ import annotations
 
 import functools
-import os
 import sys
 import time
-from dataclasses import dataclass
 
-__all__ = ["BatchProgress", "SaveTask", "check_all", "run"]
-
-
-@dataclass(frozen=True)
-class SaveTask:
-    """Segment one image file and write its outputs: what each worker runs (picklable).
-
-    Attributes
-    ----------
-    init : object
-        The init given to :func:`activecontour.segment` (the same for every image).
-    settings : dict
-        segment()'s keyword arguments.
-    formats : tuple of str
-        Contour formats.
-    color : str or tuple
-        Overlay colour.
-    init_description : str
-        How the init was given, for the contour files' metadata.
-    protect : tuple of str
-        The input images, which no output may overwrite.
-    """
-
-    init: object
-    settings: dict
-    formats: tuple
-    color: object
-    init_description: str
-    protect: tuple
-
-    def __call__(self, plan, callback=None):
-        """Segment ``plan = (image path, output stem)``; return (result, seconds, written paths)."""
-        import activecontour
-        from activecontour import io
-
-        image_path, stem = plan
-        image = activecontour.load_image(image_path)
-        started = time.perf_counter()
-        result = activecontour.segment(image, self.init, callback=callback, **self.settings)
-        elapsed = time.perf_counter() - started
-        metadata = {
-            "image": os.fspath(image_path),
-            "init": self.init_description,
-            "parameters": self.settings,
-            "wall_time_s": elapsed,
-        }
-        written = io.save_result(result, image, stem, list(self.formats), metadata=metadata,
-                                 color=self.color, protect=list(self.protect))
-        return result, elapsed, written
+__all__ = ["BatchProgress", "run"]
 
 
-def check_all(check, image_paths, *, jobs):
-    """Run ``check(image_path)`` on every image, ``jobs`` at a time; raise the first failure.
-
-    Checking reads every image, so a batch of many files is checked in parallel too.  Of several
-    bad inputs, the first in the input order is raised, as a serial loop would.
-    """
-    from activecontour.batch import map_unordered
-
-    failures = [(index, error) for index, (_, error) in map_unordered(check, image_paths, jobs=jobs)
-                if error is not None]
-    if failures:
-        raise min(failures, key=lambda failure: failure[0])[1]
-
-
-def run(task, plans, *, jobs, summary, report_error, quiet=False, show_progress=False,
-        image_progress=None, stream=None):
-    """Run ``task`` on every plan in ``jobs`` processes; report each image; return the failures.
+def run(segment_one, plans, *, jobs, expected, report_line, report_failure, show_progress=False,
+        stream=None):
+    """Run ``segment_one(image_path, stem)`` for every plan in ``jobs`` worker processes.
 
     Parameters
     ----------
-    task : SaveTask
+    segment_one : callable
+        Picklable; returns the summary line of the image.
     plans : list of (image path, output stem)
     jobs : int
-        Worker processes (capped at the number of images); 1 runs in this process.
-    summary : callable
-        ``summary(name, result, elapsed, written) -> str``, the line printed for a finished image.
-    report_error : callable
-        ``report_error(image_path, exception)``, called for an image that failed.
-    quiet : bool
-        No summary lines and no progress display.
+    expected : tuple of exception types
+        What an image may raise and the batch survives: passed to ``report_failure``.  Anything
+        else is raised here, as the serial loop would.  A worker that dies (killed, out of memory)
+        is the failure of the images it breaks.
+    report_line : callable or None
+        ``report_line(line)`` for a finished image; None prints nothing (``--quiet``).
+    report_failure : callable
+        ``report_failure(image_path, exception)``.
     show_progress : bool
-        Draw the progress display (on a terminal).
-    image_progress : callable, optional
-        ``image_progress(name)`` gives the per-iteration callback of a batch of one image (with
-        ``close()``); a batch of several images gets :class:`BatchProgress` instead.
-    stream : file, optional
-        Where the progress display goes; ``sys.stderr`` by default.
+        Draw :class:`BatchProgress` on ``stream`` (``sys.stderr`` by default).
 
     Returns
     -------
     int
         The number of images that failed.
     """
+    from concurrent.futures.process import BrokenProcessPool
+
     from activecontour.batch import map_unordered
 
-    show_progress = show_progress and not quiet
-    one_bar = None
-    if len(plans) == 1 and show_progress and image_progress is not None:
-        one_bar = image_progress(os.path.basename(plans[0][0]))
-        task = functools.partial(task, callback=one_bar)
-    bar = BatchProgress(len(plans), jobs=min(jobs, len(plans)), stream=stream) \
-        if show_progress and one_bar is None else None
+    expected = (*expected, BrokenProcessPool)
+    bar = BatchProgress(len(plans), jobs=jobs, stream=stream) if show_progress else None
     failures = 0
     try:
-        for index, (value, error) in map_unordered(task, plans, jobs=jobs):
-            if one_bar is not None:
-                one_bar.close()
-                one_bar = None
-            line = None
-            if error is not None:
-                failures += 1
-            elif not quiet:
-                line = summary(os.path.basename(plans[index][0]), *value)
+        task = functools.partial(_run_plan, segment_one=segment_one)
+        for index, (line, error) in map_unordered(task, plans, jobs=jobs):
+            if error is not None and not isinstance(error, expected):
+                raise error
             if bar is not None:
                 bar.clear()
             if error is not None:
-                report_error(plans[index][0], error)
-            elif line is not None:
-                print(line, flush=True)
+                failures += 1
+                report_failure(plans[index][0], error)
+            elif report_line is not None:
+                report_line(line)
             if bar is not None:
                 bar.advance()
     finally:
-        for display in (one_bar, bar):
-            if display is not None:
-                display.close()
+        if bar is not None:
+            bar.close()
     return failures
 
 
+def _run_plan(plan, *, segment_one):
+    image_path, stem = plan
+    return segment_one(image_path, stem)
+
+
 class BatchProgress:
-    """One line on a terminal: images done out of all, elapsed time, estimated time left.
+    """One status line on a terminal: images done of all, elapsed time, estimated time left.
+
+    The time left is the elapsed time per finished image times the images left (``?`` before the
+    first one finishes).
 
     Parameters
     ----------
@@ -156,16 +89,19 @@ class BatchProgress:
         Worker processes (shown).
     stream : file, optional
         ``sys.stderr`` by default.
+    clock : callable
+        Seconds, monotonic.
     """
 
-    width = 30
+    width = 20
 
-    def __init__(self, total, *, jobs=1, stream=None):
+    def __init__(self, total, *, jobs=1, stream=None, clock=time.monotonic):
         self.total = total
         self.jobs = jobs
         self.done = 0
         self.stream = stream if stream is not None else sys.stderr
-        self.started = time.monotonic()
+        self.clock = clock
+        self.started = clock()
         self._drawn = False
         self.draw()
 
@@ -174,28 +110,31 @@ class BatchProgress:
         self.done += 1
         self.draw()
 
+    def remaining(self, now):
+        """Seconds left for the whole batch, or None before an image has finished."""
+        if not self.done:
+            return None
+        return (now - self.started) / self.done * (self.total - self.done)
+
     def draw(self):
-        elapsed = time.monotonic() - self.started
+        from app.cli import _clock  # the command line's one clock format
+
+        now = self.clock()
         filled = self.width * self.done // max(self.total, 1)
-        left = f"~{_clock(elapsed * (self.total - self.done) / self.done)} left" if self.done else "? left"
+        left = self.remaining(now)
         self.stream.write(
-            f"\r[{'#' * filled}{'-' * (self.width - filled)}] {self.done}/{self.total} images  "
-            f"{_clock(elapsed)} elapsed  {left}  ({self.jobs} job{'s' if self.jobs != 1 else ''})"
+            f"\r\033[K[{self.done}/{self.total}] images done, {self.jobs} jobs: "
+            f"[{'#' * filled}{'-' * (self.width - filled)}] elapsed {_clock(now - self.started)} "
+            f"left {'?' if left is None else '~' + _clock(left)}"
         )
         self.stream.flush()
         self._drawn = True
 
     def clear(self):
-        """Erase the line (before a summary line is printed)."""
+        """Erase the line (before a summary or error line is printed)."""
         if self._drawn:
             self.stream.write("\r\033[K")
             self.stream.flush()
             self._drawn = False
 
     close = clear
-
-
-def _clock(seconds):
-    seconds = int(round(seconds))
-    hours, rest = divmod(seconds, 3600)
-    return f"{hours}:{rest // 60:02d}:{rest % 60:02d}" if hours else f"{rest // 60}:{rest % 60:02d}"

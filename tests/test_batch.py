@@ -1,4 +1,4 @@
-"""Many images at once: segment_many equals the serial loop, per-image errors, pickling, image_files."""
+"""Many images at once: segment_many equals the serial loop, per-image errors, pickling, find_images."""
 
 import dataclasses
 import functools
@@ -140,7 +140,7 @@ def test_a_dead_worker_fails_items_but_not_the_iteration():
 @pytest.mark.parametrize(
     "kwargs, error, words",
     [
-        ({"images": "folder"}, TypeError, ["single str", "image_files"]),
+        ({"images": "folder"}, TypeError, ["single str", "find_images"]),
         ({"images": np.zeros((3, 8, 8))}, TypeError, ["one ndarray", "list"]),
         ({"images": 3}, TypeError, ["iterable", "int"]),
         ({"jobs": 0}, ValueError, ["jobs", ">= 1"]),
@@ -171,20 +171,20 @@ def test_image_files_lists_folders_and_expands_patterns(tmp_path):
     (folder / "sub").mkdir()
     write_files(folder / "sub", ["d.png"])
     expected = [str(folder / n) for n in ["C.JPG", "a.png", "b.tif", "c.png", "lone_mask.png"]]
-    assert batch.image_files(folder) == expected  # sorted, images only, no outputs, not recursive
-    assert batch.image_files(str(folder / "*.png")) == [str(folder / n) for n in
+    assert batch.find_images(folder) == expected  # sorted, images only, no outputs, not recursive
+    assert batch.find_images(str(folder / "*.png")) == [str(folder / n) for n in
                                                         ["a.png", "c.png", "lone_mask.png"]]
-    assert batch.image_files(str(tmp_path / "**" / "d.png")) == [str(folder / "sub" / "d.png")]
+    assert batch.find_images(str(tmp_path / "**" / "d.png")) == [str(folder / "sub" / "d.png")]
     # a named file is taken as it is, and a file named twice comes once
     named = folder / "c_mask.png"
-    assert batch.image_files(named, folder / "a.png", named) == [str(named), str(folder / "a.png")]
+    assert batch.find_images(named, folder / "a.png", named) == [str(named), str(folder / "a.png")]
     with pytest.raises(ValueError, match="no file matches"):
-        batch.image_files(str(folder / "*.bmp"))
+        batch.find_images(str(folder / "*.bmp"))
     with pytest.raises(FileNotFoundError, match="missing.png"):
-        batch.image_files(folder / "missing.png")
+        batch.find_images(folder / "missing.png")
     empty = write_files(tmp_path / "empty", ["readme.txt"])
     with pytest.raises(ValueError, match="no image files"):
-        batch.image_files(empty)
+        batch.find_images(empty)
 
 
 def test_a_process_with_threads_is_not_forked():

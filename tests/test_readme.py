@@ -1,8 +1,9 @@
-"""README's Python examples run as written and do what their comments say."""
+"""README's Python examples run as written, in order, and do what their comments say."""
 
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from activecontour import synthetic
@@ -14,16 +15,26 @@ def python_blocks():
     return re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
 
 
-def run_blocks(*codes):
-    namespace = {"__name__": "__main__"}  # the examples' `if __name__ == "__main__":` parts run too
-    for code in codes:
+def run_blocks(*codes, namespace=None):
+    namespace = {"__name__": "__main__"} if namespace is None else namespace
+    for code in codes:  # the examples' `if __name__ == "__main__":` parts run too
         exec(compile(code, "README.md", "exec"), namespace)  # noqa: S102 - our own documentation
     return namespace
 
 
-def test_readme_python_example_runs():
-    namespace = run_blocks(python_blocks()[0])
+def test_readme_python_examples_run(tmp_path, monkeypatch):
+    segmenting, saving = python_blocks()[:2]
+    monkeypatch.chdir(tmp_path)
+    namespace = run_blocks(segmenting)
     assert synthetic.dice(namespace["res"].mask, namespace["truth"]) >= 0.98  # README says ~0.99
+    run_blocks(saving, namespace=namespace)
+    written = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert written == ["disk_contours.geojson", "disk_contours.json", "disk_contours.npz",
+                       "disk_contours.svg", "disk_mask.png", "disk_overlay.png"]
+    res = namespace["res"]
+    assert all(np.array_equal(a, b) for a, b in zip(namespace["curves"], res.contours, strict=True))
+    assert namespace["meta"]["image_shape"] == list(res.mask.shape)
+    assert (tmp_path / "disk.geojson").is_file() and (tmp_path / "disk_mask.png").is_file()
 
 
 def test_readme_batch_examples_run():
