@@ -48,6 +48,7 @@ _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
 _WINDOW = 5  # iterations over which the movement is averaged for the stopping test
 _MEMORY = 8  # step pairs of the L-BFGS acceleration
+_MIN_SPACING = 0.1  # pixels: the bilinear image has no detail finer than this needs
 _CURVE_STEP = 0.25  # a trial step moves a curve by at most this fraction of its radius (RMS)
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
@@ -77,7 +78,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     velocity : {"h1", "l2"}
         The bilinear form b: H^1 (6.39), the default, or L^2 (6.25).
     spacing : float
-        Target distance between vertices, in pixels (> 0).  About one vertex per pixel resolves
+        Target distance between vertices, in pixels (>= 0.1).  About one vertex per pixel resolves
         everything the image resolves; the cost of an iteration grows with the curve's length in
         pixels either way.
     max_step : float
@@ -113,9 +114,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     """
     if velocity not in _VELOCITIES:
         raise ValueError(f"velocity must be one of {_VELOCITIES}, got {velocity!r}")
-    for name, value, low in (("spacing", spacing, 0.0), ("max_step", max_step, 0.0)):
-        if not (np.isfinite(value) and value > low):
-            raise ValueError(f"{name} must be a positive number of pixels, got {value!r}")
+    if not (np.isfinite(spacing) and spacing >= _MIN_SPACING):
+        raise ValueError(f"spacing must be a number of pixels >= {_MIN_SPACING} (vertices closer than "
+                         f"the image resolves only cost time), got {spacing!r}")
+    if not (np.isfinite(max_step) and max_step > 0):
+        raise ValueError(f"max_step must be a positive number of pixels, got {max_step!r}")
     if not (np.isfinite(min_smoothing) and np.isfinite(smoothing) and smoothing >= min_smoothing >= 0):
         raise ValueError(
             f"smoothing and min_smoothing must be pixel lengths with smoothing >= min_smoothing >= 0, "
@@ -228,7 +231,8 @@ class _Flow:
         inside = rasterize(curves, self.model.shape)
         sites = topology.nucleation_sites(self.model.values, inside, self.params, current.c_in,
                                           current.c_out, _NUCLEATION_RADIUS)
-        seeds = [circle(center, _NUCLEATION_RADIUS)[:: -1 if hole else 1] for center, hole in sites]
+        seeds = [np.clip(circle(center, _NUCLEATION_RADIUS), self.low, self.high)[:: -1 if hole else 1]
+                 for center, hole in sites]
         best = None
         for chosen in ([seeds], [[seed] for seed in seeds[:_NUCLEATION_TRIALS]]):
             accepted = []
