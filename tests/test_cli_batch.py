@@ -173,3 +173,22 @@ def test_ctrl_c_stops_a_parallel_batch_without_tracebacks(folder, tmp_path):
     assert stderr.strip().splitlines() == ["activecontour: interrupted"]
     assert stdout == ""
     assert not (tmp_path / "out").exists()  # nothing was finished, so the new folder is gone
+
+
+def test_the_batch_status_line_estimates_the_time_left_from_the_images_done():
+    import io as text_io
+
+    from app.batch import BatchProgress
+
+    now = [100.0]
+    stream = text_io.StringIO()
+    bar = BatchProgress(4, jobs=2, stream=stream, clock=lambda: now[0])
+    assert bar.remaining(now[0]) is None and stream.getvalue().endswith("left ?")
+    now[0] = 110.0  # two images done in 10 s: 5 s each, two left
+    bar.advance()
+    bar.advance()
+    assert bar.remaining(now[0]) == pytest.approx(10.0)
+    assert stream.getvalue().endswith("[2/4] images done, 2 jobs: [##########----------] elapsed 0:10 "
+                                      "left ~0:10")
+    bar.clear()
+    assert stream.getvalue().endswith("\r\033[K")
