@@ -82,35 +82,34 @@ def grid(shape, spacing=GRID_SPACING, radius=GRID_RADIUS, *, values=None):
     return kept or circles
 
 
-def _object_class(values, iterations=20):
+def _object_class(values, iterations=20, sample=1_000_000):
     """The object class of 2-means: a bool (M, N) mask and the squared distance of the means.
 
     The pixels are split in two classes by 2-means (Lloyd's iterations from the split along the
-    principal axis); the background is the class that covers most of the image border.  The
-    contrast is 0 when there is one class only.
+    principal axis, on at most ``sample`` pixels: the two means need no more); the background is
+    the class that covers most of the image border.  The contrast is 0 when there is one class.
     """
     flat = values.reshape(-1, values.shape[2])
-    centred = flat - flat.mean(axis=0)
-    axis = np.linalg.svd(centred[:: max(1, len(flat) // 20000)], full_matrices=False)[2][0]
+    fit = flat[:: max(1, len(flat) // sample)]
+    centred = fit - fit.mean(axis=0)
+    axis = np.linalg.svd(centred[:: max(1, len(fit) // 20000)], full_matrices=False)[2][0]
     label = centred @ axis > 0
-    means = None
     for _ in range(iterations):
         if label.all() or not label.any():
             return np.zeros(values.shape[:2], dtype=bool), 0.0
-        means = flat[~label].mean(axis=0), flat[label].mean(axis=0)
-        # the nearer mean, i.e. the threshold half-way between them along their difference
-        direction = means[1] - means[0]
-        new = flat @ direction > 0.5 * (means[1] + means[0]) @ direction
+        low, high = fit[~label].mean(axis=0), fit[label].mean(axis=0)
+        # the nearer mean: the threshold half-way between them along their difference
+        new = fit @ (high - low) > 0.5 * (high + low) @ (high - low)
         if np.array_equal(new, label):
             break
         label = new
     if label.all() or not label.any():
         return np.zeros(values.shape[:2], dtype=bool), 0.0
-    means = flat[~label].mean(axis=0), flat[label].mean(axis=0)
-    label = label.reshape(values.shape[:2])
+    low, high = fit[~label].mean(axis=0), fit[label].mean(axis=0)
+    label = (flat @ (high - low) > 0.5 * (high + low) @ (high - low)).reshape(values.shape[:2])
     border = np.concatenate([label[0], label[-1], label[:, 0], label[:, -1]])
     # the fit terms are the channels' mean: so is the contrast
-    contrast = float(np.mean((means[1] - means[0]) ** 2))
+    contrast = float(np.mean((high - low) ** 2))
     return (~label if border.mean() > 0.5 else label), contrast
 
 
