@@ -80,8 +80,9 @@ class UsageError(Exception):
     """Bad input found by the command line itself (reported like the library's ValueError)."""
 
 
-#: What one image may raise and the batch survives (one line names it, the next image goes on).
-IMAGE_ERRORS = (UsageError, FileNotFoundError, ValueError, TypeError, OSError)
+#: Errors reported on one line (exit status 2) rather than as a traceback; raised by one image of a
+#: batch, they name it and the next image goes on.
+REPORTED_ERRORS = (UsageError, FileNotFoundError, ValueError, TypeError, OSError)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -109,7 +110,7 @@ def main(argv=None):
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except IMAGE_ERRORS as exc:
+    except REPORTED_ERRORS as exc:
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
 
@@ -277,7 +278,7 @@ def _segment_serially(plans, batch, show_progress):
                 progress.start(number, image_path)
             try:
                 line = _segment_one(image_path, stem, batch, progress)
-            except IMAGE_ERRORS as exc:
+            except REPORTED_ERRORS as exc:
                 failures += 1
                 _report_failure(progress, image_path, exc)
             else:
@@ -297,7 +298,7 @@ def _segment_in_parallel(plans, batch, jobs, show_progress):
         with contextlib.suppress(UsageError):  # made here, not raced for by the workers; a failure
             _make_directory(directory, batch.created)  # is each image's, reported by its worker
     return parallel.run(
-        functools.partial(_segment_one, batch=batch), plans, jobs=jobs, expected=IMAGE_ERRORS,
+        functools.partial(_segment_one, batch=batch), plans, jobs=jobs, expected=REPORTED_ERRORS,
         report_line=None if batch.quiet else functools.partial(print, flush=True),
         report_failure=functools.partial(_report_failure, None), show_progress=show_progress,
     )
