@@ -481,8 +481,8 @@ def curves_level_set(curves, shape, band=np.inf):
     positive = rasterize(curves, shape)
     if not positive.any():
         raise ValueError("init selects no pixel centre of the image: nothing would be inside")
-    if positive.all():
-        raise ValueError("init contains every pixel centre of the image: nothing would be outside")
+    if positive.all():  # the whole image inside: the flow starts from the domain's edge
+        return _clipped(positive, band if np.isfinite(band) else float(max(shape)))
     rows, cols = np.divmod(np.flatnonzero(_front_pixels(positive)), shape[1])
     pieces = [_densify(np.asarray(c, dtype=np.float64), 0.5) for c in curves]
     starts = np.concatenate(pieces)
@@ -808,11 +808,12 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         None: the default start (:func:`activecontour.initial.initial_curves`).  Curves, masks
         and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are
         inside).  A result of either backend: its ``phi`` when it has one, else its contours.
-        ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels
-        (:func:`checkerboard_level_set`); it has no preferred phase, so when the functional is
-        symmetric (omega = 0, lambda_in = lambda_out, c free) the phase of lower energy is
-        returned (phi or -phi: they differ by the length along the image border, which the
-        inside pays), i.e. the one whose inside touches the border less.
+        ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels,
+        at most a quarter of the image's smaller side (:func:`checkerboard_level_set`); it has no
+        preferred phase, so when the functional is symmetric (omega = 0, lambda_in = lambda_out,
+        c free) the phase of lower energy is returned (phi or -phi: they differ by the length
+        along the image border, which the inside pays), i.e. the one whose inside touches the
+        border less.
     params : activecontour.energy.ChanVeseParameters
         mu, omega, lambda_in, lambda_out and optional fixed c_in, c_out of (6.38), as for the
         polygon backend.
@@ -832,8 +833,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     Other Parameters
     ----------------
     dt : float, default 16.0
-        First step, pixels of travel at the typical force (module docstring).  By default it is
-        at most half the width of the start's regions; a ``dt`` given explicitly is used as is.
+        First step, pixels of travel at the typical force (module docstring), at most half the
+        width of the start's regions (but not below ``dt_min``).
     dt_min : float, default 1.0
         Below this ceiling the smoothed-force stages end and the unsmoothed stage (b) runs, with
         steps up to ``dt_min`` and the force within the band only (no single pixel far from
@@ -864,14 +865,16 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     TypeError
         For an unknown option (the message lists the valid ones) or an option of the wrong type.
     ValueError
-        For an unknown ``init`` string, a mask of the wrong shape, an init with nothing inside or
-        nothing outside, or an option out of range.
+        For an unknown ``init`` string, a mask of the wrong shape, an init with nothing inside,
+        or an option out of range.  (An init that covers the whole image is a valid start.)
     """
     settings = _parse_options(options)
     shape = tuple(model.shape)
     problem = _Problem(model, params, settings)
     if isinstance(init, str) and init == "checkerboard":
-        phi = checkerboard_level_set(shape, settings["checkerboard_period"])  # redistanced below
+        # squares of at most a quarter of the smaller side: a small image gets several of them
+        period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
+        phi = checkerboard_level_set(shape, period)  # redistanced below
     else:
         phi = initial_level_set(init, shape, band=settings["band"], values=model.values)
     state = problem.redistance(phi)
@@ -881,7 +884,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     # first step is at most the width of the start's regions (the smaller area over the length):
     # a larger one jumps past the start's own shapes into whatever basin it lands in.
     width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
-    step = settings["dt"] if "dt" in options else min(settings["dt"], max(0.5 * width, settings["dt_min"]))
+    step = min(settings["dt"], max(0.5 * width, settings["dt_min"]))
     first_step, ceiling, grow, smooth_force = step, settings["dt_max"], True, True
     status, n_iter, stage_start, streak = 1, 0, 0, 0
     # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):

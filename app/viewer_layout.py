@@ -54,7 +54,7 @@ SLIDERS = (
 #: backend's own default.
 STEP_OPTIONS = {
     "polygon": ("max_step", "step (px)", 0.25, 10.0),
-    "levelset": ("dt", "first step dt", 4.0, 256.0),
+    "levelset": ("dt", "first step (px)", 1.0, 64.0),
 }
 
 #: The window's size in inches (at matplotlib's default 100 dpi: 1200 x 740 pixels).

@@ -52,12 +52,7 @@ def test_gap_closing(backend):
     assert result.energy <= closed
 
 
-@pytest.mark.parametrize("backend", [
-    "levelset",
-    pytest.param("polygon", marks=pytest.mark.xfail(
-        strict=True, reason="polygon flow since 62e8444 collapses this start at iteration 0 "
-                            "(empty result); reported to the lead, flow.py is not this branch's")),
-])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_noise_pixel_is_removed(backend):
     # a rounded 5 x 5 square and one isolated bright pixel: keeping the pixel costs the length
     # around it (about 4 x 0.7 px, times mu = 0.3) for a fit gain of a fraction of one pixel
