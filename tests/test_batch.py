@@ -215,7 +215,9 @@ import sys, time
 import numpy as np
 import activecontour as ac
 if __name__ == "__main__":
-    images = [np.random.default_rng(k).random((48, 56)) for k in range(4)]
+    from activecontour import synthetic
+    image, _ = synthetic.render(synthetic.disk((22.0, 27.0), 11.0), (48, 56), inside=0.75, outside=0.25)
+    images = [synthetic.add_noise(image, 0.05, seed=k) for k in range(4)]  # tol 0: never converge
     started = time.monotonic()
     try:
         list(ac.segment_many(images, jobs=2, context="spawn", max_num_iter=10**6, tol=0))
