@@ -1,5 +1,7 @@
 """segment_dask on a LocalCluster of two worker processes gives exactly the serial results."""
 
+import os
+
 import cv2
 import numpy as np
 import pytest
@@ -15,9 +17,12 @@ da = pytest.importorskip("dask.array")
 
 @pytest.fixture(scope="module")
 def client():
+    saved = dict(os.environ)  # the nannies set OMP_NUM_THREADS etc. here for their workers
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         yield client
+    os.environ.clear()
+    os.environ.update(saved)
 
 
 def test_a_folder_on_the_cluster_equals_the_serial_loop(client, tmp_path):

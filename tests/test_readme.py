@@ -37,7 +37,7 @@ def test_readme_python_examples_run(tmp_path, monkeypatch):
     assert (tmp_path / "disk.geojson").is_file() and (tmp_path / "disk_mask.png").is_file()
 
 
-def test_readme_batch_examples_run():
+def test_readme_batch_examples_run(restore_environ):
     (many,) = [code for code in python_blocks() if "segment_many(" in code]
     namespace = run_blocks(many)
     assert sorted(namespace["dice"]) == [0, 1, 2, 3]
