@@ -7,6 +7,7 @@ derivative (6.41), on a polygon, or on a level-set function over the pixel grid.
 Parts
 -----
 segment            the entry point: ``segment(image, init, backend=..., mu=..., ...)``
+segment_many       many images in worker processes, results as they finish (also on Dask: batch)
 SegmentationResult the result of every backend
 circle, rectangle  initial curves (any (K, 2) array, list of them, or bool mask also works)
 chan_vese_energy   the common evaluator of (6.38) for any contours
@@ -16,11 +17,13 @@ flow, levelset     the two backends
 io, raster         writers/readers of masks, overlays and contours (atomic, image_files,
                    contour_files, vector_formats); curves <-> masks
 synthetic          anti-aliased test images with exact ground truth
+batch              many images: worker processes, folders and globs, a Dask cluster
 
 Conventions: points are (row, col) with pixel centres at integer coordinates; outer boundaries are
 positively oriented (signed area > 0), holes negatively; the normal points out of the inside region.
 """
 
+from activecontour.batch import segment_many
 from activecontour.energy import chan_vese_energy
 from activecontour.image import load_image
 from activecontour.initial import circle, rectangle
@@ -35,6 +38,7 @@ __all__ = [
     "load_image",
     "rectangle",
     "segment",
+    "segment_many",
 ]
 
 __version__ = "0.1.0"

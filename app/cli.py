@@ -4,7 +4,8 @@ Usage
 -----
 ::
 
-    activecontour segment IMAGE [IMAGE ...] [-o DIR] [--format json,geojson,svg,csv,npz]
+    activecontour segment IMAGE|FOLDER|'GLOB' [...] [-o DIR] [--jobs N]
+                          [--format json,geojson,svg,csv,npz]
                           [--backend {polygon,levelset}] [--mu MU] [--omega OMEGA]
                           [--lambda-in L] [--lambda-out L] [--max-iter N] [--tol TOL]
                           [--c-in C] [--c-out C] [--color {gray,vector}]
@@ -17,10 +18,15 @@ Usage
 ``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
 (the contour drawn on the image) and ``<DIR>/<name>_contours.<fmt>`` for each format, where
 ``<name>`` is the image's file name without its suffix.  ``DIR`` defaults to the directory of each
-image and is created when the first files go into it.  On a terminal a status line on stderr shows
-the file (k/N), ``loading`` while it is read, then the iteration, the energy, the elapsed time and
-the time left; one summary line per image goes to stdout, with the reason when ``success=False``
-(``--quiet`` silences both).
+image and is created when the first files go into it.  A FOLDER stands for the images in it and a
+quoted GLOB (``'data/**/*.tif'``) for the files it matches, both sorted, without this tool's own
+outputs (:func:`activecontour.batch.find_images`).  ``--jobs N`` (default: every core) segments N
+images at a time in worker processes (:mod:`app.batch`); the files are the same as with
+``--jobs 1``, which segments them one after another in this process.  On a terminal a status line
+on stderr shows the file (k/N), ``loading`` while it is read, then the iteration, the energy, the
+elapsed time and the time left (with several jobs: the images done, the elapsed time and the time
+left); one summary line per image goes to stdout as it finishes, with the reason when
+``success=False`` (``--quiet`` silences both).
 
 Errors
 ------
@@ -41,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import inspect
 import math
 import os
@@ -73,6 +80,11 @@ class UsageError(Exception):
     """Bad input found by the command line itself (reported like the library's ValueError)."""
 
 
+#: Errors reported on one line (exit status 2) rather than as a traceback; raised by one image of a
+#: batch, they name it and the next image goes on.
+REPORTED_ERRORS = (UsageError, FileNotFoundError, ValueError, TypeError, OSError)
+
+
 class _Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (no usage block), exit status 2."""
 
@@ -98,7 +110,7 @@ def main(argv=None):
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except (UsageError, FileNotFoundError, ValueError, TypeError, OSError) as exc:
+    except REPORTED_ERRORS as exc:
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
 
@@ -129,10 +141,19 @@ def build_parser():
         description="Segment each IMAGE; write <name>_mask.png, <name>_overlay.png and "
         "<name>_contours.<fmt> into the output directory.",
     )
-    segment.add_argument("images", nargs="+", metavar="IMAGE", help="image files (PNG, TIFF, JPEG, ...)")
+    segment.add_argument(
+        "images", nargs="+", metavar="IMAGE",
+        help="image files (PNG, TIFF, JPEG, ...), folders (the images in them) or quoted glob "
+        "patterns such as 'data/*.tif'",
+    )
     segment.add_argument(
         "-o", "--output", metavar="DIR", type=Path,
         help="output directory, created if missing (default: the directory of each image)",
+    )
+    segment.add_argument(
+        "-j", "--jobs", type=_positive_int, default=None, metavar="N",
+        help="segment N images at a time in worker processes; 1 runs them one after another "
+        "(default: every core)",
     )
     segment.add_argument(
         "--format", dest="formats", type=_formats, default=["json"], metavar="FMT[,FMT...]",
@@ -220,54 +241,90 @@ def _add_parameter_options(parser):
 
 
 def _run_segment(args):
-    """Check the arguments, then segment each image; a failing image is reported and skipped."""
+    """Check the arguments, then segment each image (``--jobs`` at a time); a failing image is
+    reported and skipped."""
+    from activecontour.batch import default_jobs, find_images
+
     settings = _settings(args)
     init, init_description = _load_init(args)
-    _check_inputs_exist(args.images)
-    plans = _plan_outputs(args.images, args.output, args.formats)
+    images = find_images(*args.images)  # folders and patterns expanded; a missing file stops here
+    plans = _plan_outputs(images, args.output, args.formats)
     color = _overlay_color(args.overlay_color)
     _check_can_create(args.output)
-    common = _Common(init, init_description, settings, args.formats, color,
-                     protect=[p for p, _ in plans])
-    progress = (_Progress(len(plans)) if not args.quiet and _is_terminal(sys.stderr) else None)
-    failures = 0
+    batch = _Batch(init, init_description, settings, args.formats, color,
+                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet)
+    jobs = min(args.jobs or default_jobs(), len(plans))
+    show_progress = not args.quiet and _is_terminal(sys.stderr)
     try:
-        for number, (image_path, stem) in enumerate(plans, start=1):
-            if progress is not None:
-                progress.start(number, image_path)
-            try:
-                line = _segment_one(image_path, stem, common, progress)
-            except (UsageError, FileNotFoundError, ValueError, TypeError, OSError) as exc:
-                failures += 1
-                _report(progress, f"{PROG}: error: {_naming(image_path, exc)}", sys.stderr)
-            else:
-                if not args.quiet:
-                    _report(progress, line, sys.stdout)
+        if jobs > 1:
+            failures = _segment_in_parallel(plans, batch, jobs, show_progress)
+        else:
+            failures = _segment_serially(plans, batch, show_progress)
     finally:
-        if progress is not None:
-            progress.close()
-        _remove_if_empty(common.created)
+        _remove_if_empty(batch.created)
     if failures and len(plans) > 1:
         print(f"{PROG}: error: {failures} of {len(plans)} images failed; the others were written",
               file=sys.stderr)
     return EXIT_USAGE if failures else 0
 
 
-class _Common:
+def _segment_serially(plans, batch, show_progress):
+    """``--jobs 1``: the images one after another in this process; return the failures."""
+    progress = _Progress(len(plans)) if show_progress else None
+    failures = 0
+    try:
+        for number, (image_path, stem) in enumerate(plans, start=1):
+            if progress is not None:
+                progress.start(number, image_path)
+            try:
+                line = _segment_one(image_path, stem, batch, progress)
+            except REPORTED_ERRORS as exc:
+                failures += 1
+                _report_failure(progress, image_path, exc)
+            else:
+                if not batch.quiet:
+                    _report(progress, line, sys.stdout)
+    finally:
+        if progress is not None:
+            progress.close()
+    return failures
+
+
+def _segment_in_parallel(plans, batch, jobs, show_progress):
+    """``--jobs N``: each image read, segmented and written by a worker (:mod:`app.batch`)."""
+    from app import batch as parallel
+
+    for directory in dict.fromkeys(Path(stem).parent for _, stem in plans):
+        with contextlib.suppress(UsageError):  # made here, not raced for by the workers; a failure
+            _make_directory(directory, batch.created)  # is each image's, reported by its worker
+    return parallel.run(
+        functools.partial(_segment_one, batch=batch), plans, jobs=jobs, expected=REPORTED_ERRORS,
+        report_line=None if batch.quiet else functools.partial(print, flush=True),
+        report_failure=functools.partial(_report_failure, None), show_progress=show_progress,
+    )
+
+
+def _report_failure(progress, image_path, exc):
+    _report(progress, f"{PROG}: error: {_naming(image_path, exc)}", sys.stderr)
+
+
+class _Batch:
     """What every image of a ``segment`` run shares: the init, the settings and the outputs."""
 
-    def __init__(self, init, init_description, settings, formats, color, *, protect):
+    def __init__(self, init, init_description, settings, formats, color, *, protect, output, quiet):
         self.init = init
         self.init_description = init_description
         self.settings = settings
         self.formats = formats
         self.color = color
         self.protect = protect
+        self.output = output
+        self.quiet = quiet
         #: (leaf, topmost) of every output directory this run created
         self.created = []
 
 
-def _segment_one(image_path, stem, common, progress=None):
+def _segment_one(image_path, stem, batch, progress=None):
     """Load, check, segment and save one image (its files all or none); return its summary line.
 
     Raises the library's ValueError/TypeError/OSError or a UsageError for this image only.
@@ -279,20 +336,20 @@ def _segment_one(image_path, stem, common, progress=None):
         image = activecontour.load_image(image_path)
         if progress is not None:
             progress.note(f"setting up ({' x '.join(map(str, image.shape))})")
-        _check_image(image_path, common.init, common.settings, image=image)
-        init = list(common.init) if isinstance(common.init, _ContourInit) else common.init
+        _check_image(image_path, batch.init, batch.settings, image=image)
+        init = list(batch.init) if isinstance(batch.init, _ContourInit) else batch.init
         started = time.perf_counter()
-        result = activecontour.segment(image, init, callback=progress, **common.settings)
+        result = activecontour.segment(image, init, callback=progress, **batch.settings)
         elapsed = time.perf_counter() - started
     metadata = {
         "image": os.fspath(image_path),
-        "init": common.init_description,
-        "parameters": common.settings,
+        "init": batch.init_description,
+        "parameters": batch.settings,
         "wall_time_s": elapsed,
     }
-    _make_directory(Path(stem).parent, common.created)
-    written = io.save_result(result, image, stem, common.formats, metadata=metadata,
-                             color=common.color, protect=common.protect)
+    _make_directory(Path(stem).parent, batch.created)
+    written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
+                             color=batch.color, protect=batch.protect)
     return _summary(Path(image_path).name, result, elapsed, written)
 
 
@@ -329,13 +386,6 @@ def _report(progress, line, stream):
     if progress is not None:
         progress.clear()
     print(line, file=stream, flush=True)
-
-
-def _check_inputs_exist(images):
-    """A name that is not there is a mistake in the command line: nothing runs."""
-    for image_path in images:
-        if not os.path.exists(image_path):
-            raise UsageError(f"image file not found: {os.fspath(image_path)!r}")
 
 
 def _settings(args):
@@ -799,6 +849,16 @@ def _nonnegative_int(text):
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
     return value
 
 

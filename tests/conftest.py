@@ -16,3 +16,13 @@ def no_space_for_contours(monkeypatch):
         return real_replace(src, dst)
 
     monkeypatch.setattr(os, "replace", failing_replace)
+
+
+@pytest.fixture
+def restore_environ():
+    """Put os.environ back afterwards: a LocalCluster's nannies set OMP_NUM_THREADS,
+    MALLOC_TRIM_THRESHOLD_, ... in this process for the workers they start."""
+    saved = dict(os.environ)
+    yield
+    os.environ.clear()
+    os.environ.update(saved)

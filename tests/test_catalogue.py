@@ -277,7 +277,8 @@ CLI_REFUSED = {
                                              t / "out"], ["notes.png", "holds text"]),
     "truncated PNG": (lambda t, png: ["segment", _make(t / "cut.png", png.read_bytes()[:300]), "-o",
                                       t / "out"], ["cut.png", "damaged or truncated"]),
-    "directory as image": (lambda t, png: ["segment", t / "in", "-o", t / "out"], ["directory"]),
+    "folder without images": (lambda t, png: ["segment", _folder(t / "empty"), "-o", t / "out"],
+                              ["no image files", "folder", "empty"]),
     "--option smoothing=abc": (["--option", "smoothing=abc"], ["--option smoothing", "a number",
                                                                "'abc'"]),
     "--option nucleate=2": (["--option", "nucleate=2"], ["--option nucleate", "true or false"]),
@@ -305,6 +306,11 @@ CLI_REFUSED = {
 
 def _make(path, content):
     path.write_bytes(content)
+    return path
+
+
+def _folder(path):
+    path.mkdir()
     return path
 
 

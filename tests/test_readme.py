@@ -4,19 +4,30 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
+
+from activecontour import synthetic
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
 
-def test_readme_python_examples_run(tmp_path, monkeypatch):
-    segmenting, saving = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
-    monkeypatch.chdir(tmp_path)
-    namespace = {}
-    exec(compile(segmenting, "README.md", "exec"), namespace)  # noqa: S102 - our own documentation
-    from activecontour import synthetic
+def python_blocks():
+    return re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
 
+
+def run_blocks(*codes, namespace=None):
+    namespace = {"__name__": "__main__"} if namespace is None else namespace
+    for code in codes:  # the examples' `if __name__ == "__main__":` parts run too
+        exec(compile(code, "README.md", "exec"), namespace)  # noqa: S102 - our own documentation
+    return namespace
+
+
+def test_readme_python_examples_run(tmp_path, monkeypatch):
+    segmenting, saving = python_blocks()[:2]
+    monkeypatch.chdir(tmp_path)
+    namespace = run_blocks(segmenting)
     assert synthetic.dice(namespace["res"].mask, namespace["truth"]) >= 0.98  # README says ~0.99
-    exec(compile(saving, "README.md", "exec"), namespace)  # noqa: S102
+    run_blocks(saving, namespace=namespace)
     written = sorted(p.name for p in (tmp_path / "out").iterdir())
     assert written == ["disk_contours.geojson", "disk_contours.json", "disk_contours.npz",
                        "disk_contours.svg", "disk_mask.png", "disk_overlay.png"]
@@ -24,3 +35,16 @@ def test_readme_python_examples_run(tmp_path, monkeypatch):
     assert all(np.array_equal(a, b) for a, b in zip(namespace["curves"], res.contours, strict=True))
     assert namespace["meta"]["image_shape"] == list(res.mask.shape)
     assert (tmp_path / "disk.geojson").is_file() and (tmp_path / "disk_mask.png").is_file()
+
+
+def test_readme_batch_examples_run(restore_environ):
+    (many,) = [code for code in python_blocks() if "segment_many(" in code]
+    namespace = run_blocks(many)
+    assert sorted(namespace["dice"]) == [0, 1, 2, 3]
+    assert all(value >= 0.98 for value in namespace["dice"].values())  # README says about 0.99
+    pytest.importorskip("distributed")
+    (on_dask,) = [code for code in python_blocks() if "segment_dask(" in code]
+    namespace = run_blocks(many, on_dask)
+    assert sorted(namespace["masks"]) == [0, 1, 2, 3]
+    for index, mask in namespace["masks"].items():
+        assert synthetic.dice(mask, namespace["scenes"][index][1]) >= 0.98

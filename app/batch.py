@@ -1,0 +1,140 @@
+"""The parallel loop of ``activecontour segment --jobs N``: whole images in worker processes.
+
+Each worker runs the command line's own per-image step (``app.cli._segment_one``: read, check,
+segment, write the files all or none), so the files are the same bytes whatever the number of jobs,
+and an image that fails leaves no file and does not stop the others.  The workers come from
+:func:`activecontour.batch.map_unordered`.  This process only reports: each image's summary or error
+line as it finishes, and one status line for the batch (images done of all, elapsed time, an
+estimate of the time left).
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+import time
+
+__all__ = ["BatchProgress", "run"]
+
+
+def run(segment_one, plans, *, jobs, expected, report_line, report_failure, show_progress=False,
+        stream=None):
+    """Run ``segment_one(image_path, stem)`` for every plan in ``jobs`` worker processes.
+
+    Parameters
+    ----------
+    segment_one : callable
+        Picklable; returns the summary line of the image.
+    plans : list of (image path, output stem)
+    jobs : int
+    expected : tuple of exception types
+        What an image may raise and the batch survives: passed to ``report_failure``.  Anything
+        else is raised here, as the serial loop would.  A worker that dies (killed, out of memory)
+        is the failure of the images it breaks.
+    report_line : callable or None
+        ``report_line(line)`` for a finished image; None prints nothing (``--quiet``).
+    report_failure : callable
+        ``report_failure(image_path, exception)``.
+    show_progress : bool
+        Draw :class:`BatchProgress` on ``stream`` (``sys.stderr`` by default).
+
+    Returns
+    -------
+    int
+        The number of images that failed.
+    """
+    from concurrent.futures.process import BrokenProcessPool
+
+    from activecontour.batch import map_unordered
+
+    expected = (*expected, BrokenProcessPool)
+    bar = BatchProgress(len(plans), jobs=jobs, stream=stream) if show_progress else None
+    failures = 0
+    try:
+        task = functools.partial(_run_plan, segment_one=segment_one)
+        for index, (line, error) in map_unordered(task, plans, jobs=jobs):
+            if error is not None and not isinstance(error, expected):
+                raise error
+            if bar is not None:
+                bar.clear()
+            if error is not None:
+                failures += 1
+                report_failure(plans[index][0], error)
+            elif report_line is not None:
+                report_line(line)
+            if bar is not None:
+                bar.advance()
+    finally:
+        if bar is not None:
+            bar.close()
+    return failures
+
+
+def _run_plan(plan, *, segment_one):
+    image_path, stem = plan
+    return segment_one(image_path, stem)
+
+
+class BatchProgress:
+    """One status line on a terminal: images done of all, elapsed time, estimated time left.
+
+    The time left is the elapsed time per finished image times the images left (``?`` before the
+    first one finishes).
+
+    Parameters
+    ----------
+    total : int
+        Images in the batch.
+    jobs : int
+        Worker processes (shown).
+    stream : file, optional
+        ``sys.stderr`` by default.
+    clock : callable
+        Seconds, monotonic.
+    """
+
+    width = 20
+
+    def __init__(self, total, *, jobs=1, stream=None, clock=time.monotonic):
+        self.total = total
+        self.jobs = jobs
+        self.done = 0
+        self.stream = stream if stream is not None else sys.stderr
+        self.clock = clock
+        self.started = clock()
+        self._drawn = False
+        self.draw()
+
+    def advance(self):
+        """One more image finished: redraw."""
+        self.done += 1
+        self.draw()
+
+    def remaining(self, now):
+        """Seconds left for the whole batch, or None before an image has finished."""
+        if not self.done:
+            return None
+        return (now - self.started) / self.done * (self.total - self.done)
+
+    def draw(self):
+        from app.cli import _clock  # the command line's one clock format
+
+        now = self.clock()
+        filled = self.width * self.done // max(self.total, 1)
+        left = self.remaining(now)
+        self.stream.write(
+            f"\r\033[K[{self.done}/{self.total}] images done, {self.jobs} jobs: "
+            f"[{'#' * filled}{'-' * (self.width - filled)}] elapsed {_clock(now - self.started)} "
+            f"left {'?' if left is None else '~' + _clock(left)}"
+        )
+        self.stream.flush()
+        self._drawn = True
+
+    def clear(self):
+        """Erase the line (before a summary or error line is printed)."""
+        if self._drawn:
+            self.stream.write("\r\033[K")
+            self.stream.flush()
+            self._drawn = False
+
+    close = clear
