@@ -19,9 +19,9 @@ as large as the longest edge: an iteration costs O(K) on average, not O(K^2).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.curve import signed_area
 
 __all__ = ["crossings", "curve_areas", "nucleation_sites", "repair", "winding_number"]
@@ -39,7 +39,7 @@ def crossings(points, next_index):
         both strictly inside (0, 1).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    found = _crossings(points, np.ascontiguousarray(next_index, dtype=np.intp))
+    found = _kernels.crossings(points, np.ascontiguousarray(next_index, dtype=np.intp))
     first = np.array([f[0] for f in found], dtype=np.intp)
     second = np.array([f[1] for f in found], dtype=np.intp)
     s = np.array([f[2] for f in found], dtype=np.float64)
@@ -47,93 +47,12 @@ def crossings(points, next_index):
     return first, second, s, t
 
 
-@numba.njit(cache=True, error_model="numpy")
-def _crossings(points, next_index):
-    """Grid hashing: every edge is filed, in a linked list per cell, under the cell of its bounding
-    box's low corner.  Cells are at least as large as the largest edge extent (and the grid has at
-    most 256 x 256 cells), so edges whose boxes overlap sit in the same or neighbouring cells; only
-    those pairs are tested: O(K) on average."""
-    n = points.shape[0]
-    found = [(0, 0, 0.0, 0.0)]
-    found.pop()
-    if n < 4:
-        return found
-    low = np.empty((n, 2))
-    cell = 1e-9
-    for e in range(n):
-        b = next_index[e]
-        for k in range(2):
-            low[e, k] = min(points[e, k], points[b, k])
-            cell = max(cell, abs(points[b, k] - points[e, k]))
-    origin_r, origin_c = low[:, 0].min(), low[:, 1].min()
-    extent = max(low[:, 0].max() - origin_r, low[:, 1].max() - origin_c)
-    cell = max(cell, extent / 255.0) * 1.0001
-    rows = int((low[:, 0].max() - origin_r) / cell) + 1
-    cols = int((low[:, 1].max() - origin_c) / cell) + 1
-    head = np.full(rows * cols, -1, dtype=np.int64)
-    following = np.empty(n, dtype=np.int64)
-    row = np.empty(n, dtype=np.int64)
-    col = np.empty(n, dtype=np.int64)
-    for e in range(n):
-        row[e] = int((low[e, 0] - origin_r) / cell)
-        col[e] = int((low[e, 1] - origin_c) / cell)
-        key = row[e] * cols + col[e]
-        following[e] = head[key]
-        head[key] = e
-    for e in range(n):
-        a, b = e, next_index[e]
-        r0, r1 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1]
-        for dr in (-1, 0, 1):
-            cell_row = row[e] + dr
-            if cell_row < 0 or cell_row >= rows:
-                continue
-            for dc in (-1, 0, 1):
-                cell_col = col[e] + dc
-                if cell_col < 0 or cell_col >= cols:
-                    continue
-                f = head[cell_row * cols + cell_col]
-                while f >= 0:
-                    other = f
-                    f = following[f]
-                    if other <= e or next_index[e] == other or next_index[other] == e:
-                        continue
-                    c, d = other, next_index[other]
-                    u0, u1 = points[d, 0] - points[c, 0], points[d, 1] - points[c, 1]
-                    denominator = r0 * u1 - r1 * u0
-                    if denominator == 0.0:
-                        continue
-                    q0, q1 = points[c, 0] - points[a, 0], points[c, 1] - points[a, 1]
-                    s = (q0 * u1 - q1 * u0) / denominator
-                    t = (q0 * r1 - q1 * r0) / denominator
-                    if 0.0 < s < 1.0 and 0.0 < t < 1.0:
-                        found.append((e, other, s, t))
-    return found
-
-
 def winding_number(points, next_index, probes):
     """Winding number of each probe point (P, 2) with respect to the oriented curves."""
     probes = np.ascontiguousarray(np.atleast_2d(probes), dtype=np.float64)
-    return _winding(np.ascontiguousarray(points, dtype=np.float64),
-                    np.ascontiguousarray(next_index, dtype=np.intp), probes)
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _winding(points, next_index, probes):
-    out = np.zeros(probes.shape[0], dtype=np.int64)
-    for i in range(probes.shape[0]):
-        r, c = probes[i, 0], probes[i, 1]
-        count = 0
-        for e in range(points.shape[0]):
-            r0, r1 = points[e, 0], points[next_index[e], 0]
-            upward = r0 <= r < r1
-            if not (upward or r1 <= r < r0):
-                continue
-            t = (r - r0) / (r1 - r0)
-            if points[e, 1] + t * (points[next_index[e], 1] - points[e, 1]) > c:
-                # a positively oriented curve (area > 0) runs towards smaller rows on its
-                # larger-column side: a downward crossing to the right counts +1
-                count += -1 if upward else 1
-        out[i] = count
+    out = np.empty(len(probes), dtype=np.int64)
+    _kernels.winding(np.ascontiguousarray(points, dtype=np.float64),
+                     np.ascontiguousarray(next_index, dtype=np.intp), probes, out)
     return out
 
 
