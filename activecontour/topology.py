@@ -26,6 +26,9 @@ from activecontour.curve import signed_area
 
 __all__ = ["crossings", "curve_areas", "nucleation_sites", "repair", "winding_number"]
 
+#: pixels per band of rows in :func:`nucleation_sites` (a few float32 arrays of 16 MB)
+_BAND_PIXELS = 1 << 22
+
 
 def crossings(points, next_index):
     """Pairs of non-adjacent edges that cross, with the crossing's parameter on each edge.
@@ -176,27 +179,58 @@ def nucleation_sites(values, inside, params, c_in, c_out, radius):
     c_in, c_out : ndarray (C,)
     radius : float
     """
-    import scipy.ndimage
+    import cv2
 
     lambda_in, lambda_out = params.weights(values.shape[2])
-    g = params.omega + ((values - c_in) ** 2) @ lambda_in - ((values - c_out) ** 2) @ lambda_out
+    # mean_B g = omega + sum_ch [(l_in - l_out) mean_B I^2 - 2 (l_in c_in - l_out c_out) mean_B I]
+    #            + sum_ch (l_in c_in^2 - l_out c_out^2): local means of I (and I^2), in float32
+    # (a mean of a few tens of values in [0, 1]: float32 is exact to ~1e-7, far below any threshold)
+    square = lambda_in - lambda_out
+    linear = -2.0 * (lambda_in * c_in - lambda_out * c_out)
+    constant = params.omega + float(np.sum(lambda_in * c_in**2 - lambda_out * c_out**2))
     size = int(np.ceil(radius))
     yy, xx = np.mgrid[-size: size + 1, -size: size + 1]
     disk = (yy**2 + xx**2) <= radius**2
-    mean = scipy.ndimage.convolve(g, disk / disk.sum(), mode="nearest")
+    kernel = (disk / disk.sum()).astype(np.float32)
+    footprint = disk.astype(np.uint8)
     threshold = 2.0 * params.mu / radius
+    m, n = inside.shape
+    inside_u8 = np.ascontiguousarray(inside, dtype=bool).view(np.uint8)
+    candidates = {True: np.zeros((m, n), np.uint8), False: np.zeros((m, n), np.uint8)}
+    found = {True: ([], []), False: ([], [])}  # flat index and gain of every candidate pixel
+    band = max(1, _BAND_PIXELS // n)
+    for start in range(0, m, band):
+        stop = min(m, start + band)
+        low, high = max(0, start - size), min(m, stop + size)  # margins: the filters see real data
+        keep = slice(start - low, stop - low)
+        mean = np.full((high - low, n), constant, dtype=np.float32)
+        for ch in range(values.shape[2]):
+            channel = np.ascontiguousarray(values[low:high, :, ch], dtype=np.float32)
+            mean += float(linear[ch]) * cv2.filter2D(channel, -1, kernel, borderType=cv2.BORDER_REPLICATE)
+            if square[ch] != 0:
+                mean += float(square[ch]) * cv2.filter2D(channel * channel, -1, kernel,
+                                                  borderType=cv2.BORDER_REPLICATE)
+        for hole, region, sign in ((True, inside_u8[low:high], 1.0), (False, 1 - inside_u8[low:high], -1.0)):
+            # erosion keeps the pixels whose whole disk lies in the region (the image's outside
+            # counts as in the region, as for a disk cut by the border)
+            room = cv2.erode(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=1)[keep]
+            gain = sign * mean[keep].astype(np.float64) - threshold
+            chosen = (room != 0) & (gain > 0)
+            candidates[hole][start:stop] = chosen
+            where = np.flatnonzero(chosen)
+            found[hole][0].append(where + start * n)
+            found[hole][1].append(gain.ravel()[where])
     sites = []
-    for hole, region, sign in ((True, inside, 1.0), (False, ~inside, -1.0)):
-        room = scipy.ndimage.binary_erosion(region, structure=disk, border_value=1)
-        gain = sign * mean - threshold
-        candidates = room & (gain > 0)
-        labels, count = scipy.ndimage.label(candidates)
-        if count == 0:
+    for hole in (True, False):
+        index, gain = np.concatenate(found[hole][0]), np.concatenate(found[hole][1])
+        if index.size == 0:
             continue
-        index = np.arange(1, count + 1)
-        best = scipy.ndimage.maximum_position(gain, labels, index)
-        strength = scipy.ndimage.maximum(gain, labels, index)
-        sites.extend((float(s), np.array(p, dtype=np.float64), hole)
-                     for s, p in zip(strength, best, strict=True))
+        _, labels = cv2.connectedComponents(candidates[hole], connectivity=4, ltype=cv2.CV_32S)
+        label = labels.ravel()[index]
+        # the best pixel of each component, the first in raster order on ties
+        order = np.lexsort((index, -gain, label))
+        best = order[np.r_[True, label[order][1:] != label[order][:-1]]]
+        sites.extend((float(gain[b]), np.array(divmod(int(index[b]), n), dtype=np.float64), hole)
+                     for b in best)
     sites.sort(key=lambda site: -site[0])
     return [(center, hole) for _, center, hole in sites]
