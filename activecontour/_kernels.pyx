@@ -316,64 +316,73 @@ def cyclic_thomas(const double[::1] diagonal, const double[::1] off, const doubl
     free(y)
 
 
+cdef inline Py_ssize_t _slot(long long key, long long *keys, Py_ssize_t mask, int shift) noexcept nogil:
+    """Open-addressing slot of ``key`` (its own, or the empty one where it would go): Fibonacci
+    hashing, the top bits of key times 2^64 / golden ratio."""
+    cdef Py_ssize_t slot = <Py_ssize_t> ((<unsigned long long> key * 11400714819323198485ULL) >> shift)
+    while keys[slot] != key and keys[slot] != -1:
+        slot = (slot + 1) & mask
+    return slot
+
+
 def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index):
     """Pairs of non-adjacent crossing edges as a list of ``(e, other, s, t)``, ``e < other``.
 
-    Grid hashing: every edge is filed, in a linked list per cell, under the cell of its bounding
-    box's low corner.  Cells are at least as large as the largest edge extent (and the grid has at
-    most 256 x 256 cells), so edges whose boxes overlap sit in the same or neighbouring cells; only
-    those pairs are tested: O(K) on average.
+    Spatial hashing: every edge is filed, in a linked list per cell, under the cell of its
+    bounding box's low corner.  Cells are as large as the largest edge extent, so edges whose boxes
+    overlap sit in the same or neighbouring cells; only those pairs are tested.  The occupied cells
+    live in a hash table of about 2 K slots, so a long curve on a large image still costs O(K), not
+    O(K * edges per cell of a fixed grid).
     """
-    cdef Py_ssize_t n = points.shape[0], e, b, k, rows, cols, key, f, other, c, d, cell_row, cell_col
-    cdef Py_ssize_t dr, dc
-    cdef double cell = 1e-9, origin_r, origin_c, high_r, high_c, r0, r1, u0, u1, q0, q1
-    cdef double denominator, s, t, low_r, low_c
+    cdef Py_ssize_t n = points.shape[0], e, b, k, f, other, c, d, slot, mask, size = 1
+    cdef int shift = 64
+    cdef long long cell_row, cell_col, key
+    cdef double cell = 1e-9, origin_r, origin_c, r0, r1, u0, u1, q0, q1, denominator, s, t
     found = []
     if n < 4:
         return found
-    cdef double *low = <double *> malloc(2 * n * sizeof(double))
+    while size < 2 * n:
+        size *= 2
+        shift -= 1
+    mask = size - 1
+    cdef long long *keys = <long long *> malloc(size * sizeof(long long))
+    cdef Py_ssize_t *head = <Py_ssize_t *> malloc(size * sizeof(Py_ssize_t))
     cdef Py_ssize_t *following = <Py_ssize_t *> malloc(n * sizeof(Py_ssize_t))
-    cdef Py_ssize_t *row = <Py_ssize_t *> malloc(n * sizeof(Py_ssize_t))
-    cdef Py_ssize_t *column = <Py_ssize_t *> malloc(n * sizeof(Py_ssize_t))
-    cdef Py_ssize_t *head = NULL
+    cdef long long *row = <long long *> malloc(n * sizeof(long long))
+    cdef long long *column = <long long *> malloc(n * sizeof(long long))
     try:
-        if low == NULL or following == NULL or row == NULL or column == NULL:
+        if keys == NULL or head == NULL or following == NULL or row == NULL or column == NULL:
             raise MemoryError()
+        origin_r, origin_c = points[0, 0], points[0, 1]
         for e in range(n):
             b = next_index[e]
+            origin_r, origin_c = min(origin_r, points[e, 0]), min(origin_c, points[e, 1])
             for k in range(2):
-                low[2 * e + k] = min(points[e, k], points[b, k])
                 cell = max(cell, abs(points[b, k] - points[e, k]))
-        origin_r, origin_c, high_r, high_c = low[0], low[1], low[0], low[1]
-        for e in range(n):
-            origin_r, high_r = min(origin_r, low[2 * e]), max(high_r, low[2 * e])
-            origin_c, high_c = min(origin_c, low[2 * e + 1]), max(high_c, low[2 * e + 1])
-        cell = max(cell, max(high_r - origin_r, high_c - origin_c) / 255.0) * 1.0001
-        rows = <Py_ssize_t> ((high_r - origin_r) / cell) + 1
-        cols = <Py_ssize_t> ((high_c - origin_c) / cell) + 1
-        head = <Py_ssize_t *> malloc(rows * cols * sizeof(Py_ssize_t))
-        if head == NULL:
-            raise MemoryError()
-        for key in range(rows * cols):
-            head[key] = -1
-        for e in range(n):
-            row[e] = <Py_ssize_t> ((low[2 * e] - origin_r) / cell)
-            column[e] = <Py_ssize_t> ((low[2 * e + 1] - origin_c) / cell)
-            key = row[e] * cols + column[e]
-            following[e] = head[key]
-            head[key] = e
+        cell *= 1.0001
+        for slot in range(size):
+            keys[slot] = -1
+        with nogil:
+            for e in range(n):
+                b = next_index[e]
+                row[e] = <long long> ((min(points[e, 0], points[b, 0]) - origin_r) / cell)
+                column[e] = <long long> ((min(points[e, 1], points[b, 1]) - origin_c) / cell)
+                key = row[e] * 4294967296LL + column[e]
+                slot = _slot(key, keys, mask, shift)
+                if keys[slot] == -1:
+                    keys[slot] = key
+                    head[slot] = -1
+                following[e] = head[slot]
+                head[slot] = e
         for e in range(n):
             b = next_index[e]
             r0, r1 = points[b, 0] - points[e, 0], points[b, 1] - points[e, 1]
-            for dr in range(-1, 2):
-                cell_row = row[e] + dr
-                if cell_row < 0 or cell_row >= rows:
-                    continue
-                for dc in range(-1, 2):
-                    cell_col = column[e] + dc
-                    if cell_col < 0 or cell_col >= cols:
+            for cell_row in range(row[e] - 1, row[e] + 2):
+                for cell_col in range(column[e] - 1, column[e] + 2):
+                    if cell_row < 0 or cell_col < 0:
                         continue
-                    f = head[cell_row * cols + cell_col]
+                    slot = _slot(cell_row * 4294967296LL + cell_col, keys, mask, shift)
+                    f = head[slot] if keys[slot] != -1 else -1
                     while f >= 0:
                         other = f
                         f = following[f]
@@ -390,11 +399,11 @@ def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index):
                         if 0.0 < s < 1.0 and 0.0 < t < 1.0:
                             found.append((e, other, s, t))
     finally:
-        free(low)
+        free(keys)
+        free(head)
         free(following)
         free(row)
         free(column)
-        free(head)
     return found
 
 
