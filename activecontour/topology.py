@@ -196,37 +196,42 @@ def nucleation_sites(values, inside, params, c_in, c_out, radius):
     threshold = 2.0 * params.mu / radius
     m, n = inside.shape
     inside_u8 = np.ascontiguousarray(inside, dtype=bool).view(np.uint8)
-    candidates = {True: np.zeros((m, n), np.uint8), False: np.zeros((m, n), np.uint8)}
     found = {True: ([], []), False: ([], [])}  # flat index and gain of every candidate pixel
     band = max(1, _BAND_PIXELS // n)
     for start in range(0, m, band):
         stop = min(m, start + band)
         low, high = max(0, start - size), min(m, stop + size)  # margins: the filters see real data
         keep = slice(start - low, stop - low)
-        mean = np.full((high - low, n), constant, dtype=np.float32)
+        mean = None
         for ch in range(values.shape[2]):
             channel = np.ascontiguousarray(values[low:high, :, ch], dtype=np.float32)
-            mean += float(linear[ch]) * cv2.filter2D(channel, -1, kernel, borderType=cv2.BORDER_REPLICATE)
-            if square[ch] != 0:
-                mean += float(square[ch]) * cv2.filter2D(channel * channel, -1, kernel,
-                                                  borderType=cv2.BORDER_REPLICATE)
-        for hole, region, sign in ((True, inside_u8[low:high], 1.0), (False, 1 - inside_u8[low:high], -1.0)):
-            # erosion keeps the pixels whose whole disk lies in the region (the image's outside
-            # counts as in the region, as for a disk cut by the border)
-            room = cv2.erode(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=1)[keep]
-            gain = sign * mean[keep].astype(np.float64) - threshold
-            chosen = (room != 0) & (gain > 0)
-            candidates[hole][start:stop] = chosen
+            terms = [(channel, linear[ch])] + ([(channel * channel, square[ch])] if square[ch] != 0 else [])
+            for data, factor in terms:
+                part = cv2.filter2D(data, -1, kernel * np.float32(factor), delta=0.0 if mean is not None
+                                    else constant, borderType=cv2.BORDER_REPLICATE)
+                mean = part if mean is None else cv2.add(mean, part)
+        mean = mean[keep]
+        region = inside_u8[low:high]
+        # pixels whose whole disk lies inside (erosion) or outside (no dilation reaches them); the
+        # image's outside counts as either region, as for a disk cut by the border
+        room = {True: cv2.erode(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=1)[keep],
+                False: cv2.dilate(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=0)[keep]}
+        for hole, sign in ((True, 1.0), (False, -1.0)):
+            room_ok = room[hole].view(bool)  # 0/1 bytes
+            chosen = (mean > threshold) & room_ok if hole else (mean < -threshold) & ~room_ok
             where = np.flatnonzero(chosen)
             found[hole][0].append(where + start * n)
-            found[hole][1].append(gain.ravel()[where])
+            found[hole][1].append(sign * mean.ravel()[where].astype(np.float64) - threshold)
     sites = []
     for hole in (True, False):
         index, gain = np.concatenate(found[hole][0]), np.concatenate(found[hole][1])
         if index.size == 0:
             continue
-        _, labels = cv2.connectedComponents(candidates[hole], connectivity=4, ltype=cv2.CV_32S)
-        label = labels.ravel()[index]
+        rows, cols = np.divmod(index, n)
+        box = np.zeros((rows.max() - rows.min() + 1, cols.max() - cols.min() + 1), np.uint8)
+        box[rows - rows.min(), cols - cols.min()] = 1
+        _, labels = cv2.connectedComponents(box, connectivity=4, ltype=cv2.CV_32S)
+        label = labels[rows - rows.min(), cols - cols.min()]
         # the best pixel of each component, the first in raster order on ties
         order = np.lexsort((index, -gain, label))
         best = order[np.r_[True, label[order][1:] != label[order][:-1]]]

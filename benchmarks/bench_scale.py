@@ -1,0 +1,179 @@
+"""Scale: cold start of the command line, and images from 1024^2 to 8192^2 through the polygon backend.
+
+Run ``python benchmarks/bench_scale.py`` from the repository root, after ``pip install -e .``
+(``--huge`` adds 8192^2: ~30 s to make the image once, ~1 GB of cache; ``--max-iter`` fixes the
+iteration count so that the sizes compare; ``--importtime`` prints the import profile).  Every
+measurement runs in a fresh process, so peak RSS (``os.wait4``) is that run's alone.  The machine's
+load average is printed with the timings: compare ratios taken in the same run.
+
+1. Cold start: wall time of ``python -m app segment disk.png -o DIR -q`` on a 256^2 noisy disk, and
+   of a fresh process that reads the same PNG and runs ``skimage.segmentation.chan_vese`` with its
+   defaults; interleaved, min of ``--repeat`` runs each.
+2. Sizes: a disk of radius 0.3 size (contrast 0.4, noise sigma 0.2, 8-bit PNG).  The floor is reading
+   the PNG plus one float64 cumulative sum along its rows.  Then the command line with
+   ``--max-iter`` (wall, peak RSS, iterations, Dice of its mask against the synthetic truth), and
+   the library in one process: preparation (normalising and the tables), time per iteration, and
+   the rest (the final mask).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+SKIMAGE = """
+import sys, skimage.io, skimage.segmentation
+skimage.segmentation.chan_vese(skimage.io.imread(sys.argv[1]))
+"""
+
+FLOOR = """
+import sys, time, cv2, numpy as np
+start = time.perf_counter()
+image = cv2.imread(sys.argv[1], cv2.IMREAD_UNCHANGED)
+np.cumsum(image, axis=1, dtype=np.float64)
+print(time.perf_counter() - start)
+"""
+
+LIBRARY = """
+import sys, time, numpy as np
+import activecontour as ac
+from activecontour.image import ImageModel, normalize_image
+image = ac.load_image(sys.argv[1])
+start = time.perf_counter()
+ImageModel(normalize_image(image))
+prepare = time.perf_counter() - start
+stamps = []
+start = time.perf_counter()
+result = ac.segment(image, max_num_iter=int(sys.argv[2]),
+                    callback=lambda s: stamps.append(time.perf_counter()))
+end = time.perf_counter()
+steps = np.diff([start] + stamps)
+per_iteration = float(np.median(steps[1:])) if len(steps) > 1 else float("nan")
+print(prepare, per_iteration, end - stamps[-1], result.n_iter)
+"""
+
+
+def run_measured(command):
+    """Run a command in the repository root; return (wall s, peak RSS MB of exactly this child, stdout)."""
+    start = time.perf_counter()
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        process = subprocess.Popen(command, stdout=out, stderr=err, text=True, cwd=ROOT)
+        _, status, usage = os.wait4(process.pid, 0)
+        wall = time.perf_counter() - start
+        process.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        if process.returncode:
+            raise RuntimeError(f"{' '.join(map(str, command))} failed: {err.read().strip()}")
+        return wall, usage.ru_maxrss / 1024, out.read()
+
+
+def noisy_disk(size, cache):
+    """Write (once) the 8-bit noisy disk of this size and its truth; return their paths."""
+    import cv2
+
+    from activecontour import synthetic
+
+    image_path, truth_path = cache / f"disk{size}.png", cache / f"disk{size}_truth.npy"
+    if not (image_path.exists() and truth_path.exists()):
+        center = (0.5 * size + 0.3, 0.47 * size - 0.2)
+        image, truth = synthetic.render(synthetic.disk(center, 0.3 * size), (size, size), inside=0.7,
+                                        outside=0.3, supersample=2)
+        image = synthetic.add_noise(image, 0.2, seed=size)
+        cv2.imwrite(str(image_path), np.clip(np.rint(image * 255), 0, 255).astype(np.uint8))
+        np.save(truth_path, truth)
+    return image_path, truth_path
+
+
+def load():
+    return "load average " + " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def cold_start(cache, repeat):
+    image, _ = noisy_disk(256, cache)
+    out = cache / "cold-out"
+    ours = [sys.executable, "-m", "app", "segment", str(image), "-o", str(out), "-q"]
+    theirs = [sys.executable, "-c", SKIMAGE, str(image)]
+    run_measured(ours)  # the first run after an install may write caches (none of ours do)
+    times = {"ours": [], "skimage": []}
+    for _ in range(repeat):
+        times["ours"].append(run_measured(ours)[0])
+        times["skimage"].append(run_measured(theirs)[0])
+    best_ours, best_theirs = min(times["ours"]), min(times["skimage"])
+    print(f"Cold start, 256x256 noisy disk, min of {repeat} fresh processes ({load()})")
+    print(f"  activecontour segment: {best_ours:.3f} s   skimage chan_vese: {best_theirs:.3f} s   "
+          f"ratio {best_ours / best_theirs:.2f}")
+
+
+def import_profile(cache, top=12):
+    image, _ = noisy_disk(256, cache)
+    command = [sys.executable, "-X", "importtime", "-m", "app", "segment", str(image), "-o",
+               str(cache / "cold-out"), "-q"]
+    rows = []
+    for line in subprocess.run(command, capture_output=True, text=True, cwd=ROOT).stderr.splitlines():
+        if line.startswith("import time:") and "|" in line:
+            _, cumulative, name = line.split("|")
+            if cumulative.strip().isdigit() and not name.startswith("    "):
+                rows.append((int(cumulative), name.rstrip()))
+    print("Import profile of the segment command (cumulative ms, top-level modules)")
+    for cumulative, name in sorted(rows, reverse=True)[:top]:
+        print(f"  {cumulative / 1000:8.1f}  {name}")
+
+
+def sizes(cache, sizes, max_iter):
+    from activecontour import synthetic
+    from activecontour.image import load_image
+
+    print(f"\nNoisy disk through the polygon backend, --max-iter {max_iter} ({load()})")
+    header = (f"{'size':>6s} | {'floor s':>7s} | {'CLI s':>6s} {'x floor':>7s} {'RSS MB':>7s} {'iters':>5s} "
+              f"{'Dice':>6s} | {'prepare s':>9s} {'ms/iter':>7s} {'final s':>7s}")
+    print(header)
+    print("-" * len(header))
+    for size in sizes:
+        image, truth = noisy_disk(size, cache)
+        floor = float(run_measured([sys.executable, "-c", FLOOR, str(image)])[2])
+        out = cache / f"out{size}"
+        wall, rss, stdout = run_measured([sys.executable, "-m", "app", "segment", str(image), "-o", str(out),
+                                          "--max-iter", str(max_iter)])
+        iterations = int(stdout.split("iterations=")[1].split()[0])
+        mask = load_image(out / f"disk{size}_mask.png") != 0
+        dice = synthetic.dice(mask, np.load(truth))
+        prepare, per_iter, final, _ = run_measured([sys.executable, "-c", LIBRARY, str(image),
+                                                    str(max_iter)])[2].split()
+        print(f"{size:6d} | {floor:7.2f} | {wall:6.2f} {wall / floor:7.1f} {rss:7.0f} {iterations:5d} "
+              f"{dice:6.4f} | {float(prepare):9.2f} {float(per_iter) * 1e3:7.1f} {float(final):7.2f}",
+              flush=True)
+    print(f"({load()})")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--huge", action="store_true", help="also 8192 x 8192")
+    parser.add_argument("--max-iter", type=int, default=300)
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--skip-cold", action="store_true")
+    parser.add_argument("--skip-sizes", action="store_true")
+    parser.add_argument("--importtime", action="store_true")
+    parser.add_argument("--cache", type=Path,
+                        default=Path(tempfile.gettempdir()) / "activecontour-bench-scale")
+    args = parser.parse_args()
+    args.cache.mkdir(parents=True, exist_ok=True)
+    if args.importtime:
+        import_profile(args.cache)
+    if not args.skip_cold:
+        cold_start(args.cache, args.repeat)
+    if not args.skip_sizes:
+        sizes(args.cache, [1024, 2048, 4096] + ([8192] if args.huge else []), args.max_iter)
+
+
+if __name__ == "__main__":
+    main()
