@@ -59,8 +59,10 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, dou
     form along the columns.
     """
     cdef Py_ssize_t m = values.shape[0], n = values.shape[1], channels = values.shape[2]
-    cdef Py_ssize_t width = n + 2, a, j, ch, src_lo, src_hi, c_lo, c_hi, index
-    cdef double p_lo, p_hi, q_lo, q_hi, diagonal, row_same, row_next, row_sum, x
+    cdef Py_ssize_t width = n + 2, a, j, ch, c_lo, c_hi, index
+    cdef const double *lo
+    cdef const double *hi
+    cdef double p_lo, p_hi, q_lo, q_hi, diagonal, same, following
     cdef double *acc = <double *> malloc(width * channels * 3 * sizeof(double))
     if acc == NULL:
         raise MemoryError()
@@ -70,54 +72,60 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, dou
         table[0, :, :, :] = 0.0
         total1[:] = 0.0
         total2[:] = 0.0
-        for a in range(m + 1):  # padded rows a -> a + 1
+        for a in range(m + 1):  # padded rows a -> a + 1, i.e. image rows a - 1 -> a (clamped)
             if a % _POLL_ROWS == 0:
                 PyErr_CheckSignals()
-            src_lo, src_hi = _clamp(a - 1, m), _clamp(a, m)
-            for j in range(width):
-                c_lo = _clamp(j - 1, n)
-                c_hi = _clamp(j, n)  # the right neighbour j + 1 in padded columns
-                for ch in range(channels):
-                    p_lo, p_hi = values[src_lo, c_lo, ch], values[src_hi, c_lo, ch]
-                    index = (j * channels + ch) * 3
-                    acc[index] += 0.5 * (p_lo + p_hi)
-                    acc[index + 1] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
-                    if j < width - 1:
-                        q_lo, q_hi = values[src_lo, c_hi, ch], values[src_hi, c_hi, ch]
+            lo = &values[_clamp(a - 1, m), 0, 0]
+            hi = &values[_clamp(a, m), 0, 0]
+            with nogil:
+                for j in range(width):
+                    c_lo = _clamp(j - 1, n) * channels
+                    c_hi = _clamp(j, n) * channels  # the right neighbour j + 1 in padded columns
+                    for ch in range(channels):
+                        p_lo, p_hi = lo[c_lo + ch], hi[c_lo + ch]
+                        q_lo, q_hi = lo[c_hi + ch], hi[c_hi + ch]
+                        index = (j * channels + ch) * 3
+                        acc[index] += 0.5 * (p_lo + p_hi)
+                        acc[index + 1] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
                         acc[index + 2] += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo
                                            + 2.0 * p_hi * q_hi) / 6.0
             if (a + 1) % _ANCHOR == 0:
                 for j in range(width):
                     for ch in range(channels):
-                        index = (j * channels + ch) * 3
-                        table[(a + 1) // _ANCHOR, j, ch, 0] = acc[index]
-                        table[(a + 1) // _ANCHOR, j, ch, 1] = acc[index + 1]
-                        table[(a + 1) // _ANCHOR, j, ch, 2] = acc[index + 2]
+                        for index in range(3):
+                            table[(a + 1) // _ANCHOR, j, ch, index] = acc[(j * channels + ch) * 3 + index]
+        for ch in range(channels):
+            table[:, width - 1, ch, 2] = 0.0  # t3 of the last column has no right neighbour
         for a in range(m):  # domain totals, image row by image row
+            if a % _POLL_ROWS == 0:
+                PyErr_CheckSignals()
             diagonal = 2.0 / 3.0 + (1.0 / 6.0 if a == 0 else 0.0) + (1.0 / 6.0 if a == m - 1 else 0.0)
             for ch in range(channels):
-                row_sum = 0.0
-                for j in range(n):
-                    row_sum = row_sum + values[a, j, ch]
-                total1[ch] += row_sum
-                row_same = _row_form(values, a, a, ch)
-                row_next = _row_form(values, a, a + 1, ch) if a + 1 < m else 0.0
-                total2[ch] += diagonal * row_same + row_next / 3.0
+                same, following = _row_forms(values, a, ch, total1)
+                total2[ch] += diagonal * same + following / 3.0
     finally:
         free(acc)
 
 
-cdef double _row_form(const double[:, :, ::1] values, Py_ssize_t a, Py_ssize_t c,
-                      Py_ssize_t ch) noexcept nogil:
-    """``R(V_a, V_c) = int x(v) y(v) dv`` of the column interpolants of image rows a and c."""
-    cdef Py_ssize_t n = values.shape[1], j
-    cdef double out = 0.0, weight
+cdef (double, double) _row_forms(const double[:, :, ::1] values, Py_ssize_t a, Py_ssize_t ch,
+                                 double[::1] total1) noexcept nogil:
+    """``R(V_a, V_a)`` and ``R(V_a, V_{a+1})`` (0 for the last row), ``R(x, y) = int x(v) y(v) dv``
+    of the column interpolants of two image rows; adds row a's sum to ``total1[ch]``."""
+    cdef Py_ssize_t n = values.shape[1], j, last = values.shape[0] - 1
+    cdef Py_ssize_t below = a + 1 if a < last else a
+    cdef double same = 0.0, following = 0.0, row_sum = 0.0, x0, x1, y0, y1, weight
     for j in range(n):
-        weight = 2.0 / 3.0 + (1.0 / 6.0 if j == 0 else 0.0) + (1.0 / 6.0 if j == n - 1 else 0.0)
-        out += weight * values[a, j, ch] * values[c, j, ch]
+        x0, y0 = values[a, j, ch], values[below, j, ch]
+        row_sum += x0
+        weight = 2.0 / 3.0 if 0 < j < n - 1 else (1.0 if n == 1 else 5.0 / 6.0)
+        same += weight * x0 * x0
+        following += weight * x0 * y0
         if j + 1 < n:
-            out += (values[a, j, ch] * values[c, j + 1, ch] + values[a, j + 1, ch] * values[c, j, ch]) / 6.0
-    return out
+            x1, y1 = values[a, j + 1, ch], values[below, j + 1, ch]
+            same += x0 * x1 / 3.0
+            following += (x0 * y1 + x1 * y0) / 6.0
+    total1[ch] += row_sum
+    return same, (following if a < last else 0.0)
 
 
 cdef struct Cell:

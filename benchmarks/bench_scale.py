@@ -10,10 +10,12 @@ load average is printed with the timings: compare ratios taken in the same run.
    of a fresh process that reads the same PNG and runs ``skimage.segmentation.chan_vese`` with its
    defaults; interleaved, min of ``--repeat`` runs each.
 2. Sizes: a disk of radius 0.3 size (contrast 0.4, noise sigma 0.2, 8-bit PNG).  The floor is reading
-   the PNG plus one float64 cumulative sum along its rows.  Then the command line with
-   ``--max-iter`` (wall, peak RSS, iterations, Dice of its mask against the synthetic truth), and
+   the PNG plus one float64 cumulative sum along its rows (in-process time).  Then the command line
+   with ``--max-iter`` (wall, peak RSS, iterations, Dice of its mask against the synthetic truth);
    the library in one process: preparation (normalising and the tables), time per iteration, and
-   the rest (the final mask).
+   the rest after the last iteration (the final mask); and the coarse-to-fine start
+   (:func:`activecontour.pyramid.coarse_start` then the full-size flow on the same model): in-process
+   time from reading the PNG to the result, peak RSS, full-size iterations, Dice.
 """
 
 from __future__ import annotations
@@ -37,10 +39,10 @@ skimage.segmentation.chan_vese(skimage.io.imread(sys.argv[1]))
 
 FLOOR = """
 import sys, time, cv2, numpy as np
-start = time.perf_counter()
+start, cpu = time.perf_counter(), time.process_time()
 image = cv2.imread(sys.argv[1], cv2.IMREAD_UNCHANGED)
 np.cumsum(image, axis=1, dtype=np.float64)
-print(time.perf_counter() - start)
+print(time.perf_counter() - start, time.process_time() - cpu)
 """
 
 LIBRARY = """
@@ -48,22 +50,40 @@ import sys, time, numpy as np
 import activecontour as ac
 from activecontour.image import ImageModel, normalize_image
 image = ac.load_image(sys.argv[1])
-start = time.perf_counter()
+start = time.process_time()
 ImageModel(normalize_image(image))
-prepare = time.perf_counter() - start
+prepare = time.process_time() - start
 stamps = []
-start = time.perf_counter()
+start = time.process_time()
 result = ac.segment(image, max_num_iter=int(sys.argv[2]),
-                    callback=lambda s: stamps.append(time.perf_counter()))
-end = time.perf_counter()
+                    callback=lambda s: stamps.append(time.process_time()))
+end = time.process_time()
 steps = np.diff([start] + stamps)
 per_iteration = float(np.median(steps[1:])) if len(steps) > 1 else float("nan")
 print(prepare, per_iteration, end - stamps[-1], result.n_iter)
 """
 
 
+COARSE_TO_FINE = """
+import sys, time, numpy as np
+import activecontour as ac
+from activecontour import pyramid, synthetic
+from activecontour.energy import ChanVeseParameters
+from activecontour.flow import segment_polygon
+from activecontour.image import ImageModel, normalize_image
+start, cpu = time.perf_counter(), time.process_time()
+model = ImageModel(normalize_image(ac.load_image(sys.argv[1])))
+params = ChanVeseParameters()
+curves = pyramid.coarse_start(model, None, params)
+result = segment_polygon(model, curves, params, max_num_iter=int(sys.argv[3]), tol=1e-4, callback=None)
+elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+print(elapsed, cpu, result.n_iter, synthetic.dice(result.mask, np.load(sys.argv[2])))
+"""
+
+
 def run_measured(command):
-    """Run a command in the repository root; return (wall s, peak RSS MB of exactly this child, stdout)."""
+    """Run a command in the repository root; return wall s, peak RSS MB and CPU s (user + system) of
+    exactly this child, and its stdout."""
     start = time.perf_counter()
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         process = subprocess.Popen(command, stdout=out, stderr=err, text=True, cwd=ROOT)
@@ -74,7 +94,7 @@ def run_measured(command):
         err.seek(0)
         if process.returncode:
             raise RuntimeError(f"{' '.join(map(str, command))} failed: {err.read().strip()}")
-        return wall, usage.ru_maxrss / 1024, out.read()
+        return wall, usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime, out.read()
 
 
 def noisy_disk(size, cache):
@@ -105,13 +125,14 @@ def cold_start(cache, repeat):
     theirs = [sys.executable, "-c", SKIMAGE, str(image)]
     run_measured(ours)  # the first run after an install may write caches (none of ours do)
     times = {"ours": [], "skimage": []}
-    for _ in range(repeat):
-        times["ours"].append(run_measured(ours)[0])
-        times["skimage"].append(run_measured(theirs)[0])
-    best_ours, best_theirs = min(times["ours"]), min(times["skimage"])
+    for _ in range(repeat):  # interleaved: both see the same load
+        times["ours"].append(run_measured(ours)[::2])
+        times["skimage"].append(run_measured(theirs)[::2])
+    (ours_wall, ours_cpu), (theirs_wall, theirs_cpu) = (np.min(times[k], axis=0) for k in ("ours", "skimage"))
     print(f"Cold start, 256x256 noisy disk, min of {repeat} fresh processes ({load()})")
-    print(f"  activecontour segment: {best_ours:.3f} s   skimage chan_vese: {best_theirs:.3f} s   "
-          f"ratio {best_ours / best_theirs:.2f}")
+    print(f"  activecontour segment: {ours_wall:.3f} s wall, {ours_cpu:.3f} s CPU   skimage chan_vese: "
+          f"{theirs_wall:.3f} s wall, {theirs_cpu:.3f} s CPU   ratio {ours_wall / theirs_wall:.2f} wall, "
+          f"{ours_cpu / theirs_cpu:.2f} CPU")
 
 
 def import_profile(cache, top=12):
@@ -134,24 +155,31 @@ def sizes(cache, sizes, max_iter):
     from activecontour.image import load_image
 
     print(f"\nNoisy disk through the polygon backend, --max-iter {max_iter} ({load()})")
-    header = (f"{'size':>6s} | {'floor s':>7s} | {'CLI s':>6s} {'x floor':>7s} {'RSS MB':>7s} {'iters':>5s} "
-              f"{'Dice':>6s} | {'prepare s':>9s} {'ms/iter':>7s} {'final s':>7s}")
+    print("floor: read + one float64 cumulative sum (in-process wall / CPU); CLI: whole process; library")
+    print("and c2f (coarse-to-fine): in-process CPU; x floor compares CPU seconds with the floor's CPU")
+    header = (f"{'size':>6s} | {'floor s':>9s} | {'CLI s':>11s} {'x floor':>7s} {'RSS MB':>6s} {'iters':>5s} "
+              f"{'Dice':>6s} | {'prepare':>7s} {'ms/iter':>7s} {'final':>5s} | {'c2f s':>10s} "
+              f"{'x floor':>7s} {'RSS MB':>6s} {'iters':>5s} {'Dice':>6s}")
     print(header)
     print("-" * len(header))
     for size in sizes:
         image, truth = noisy_disk(size, cache)
-        floor = float(run_measured([sys.executable, "-c", FLOOR, str(image)])[2])
+        floor_wall, floor = map(float, run_measured([sys.executable, "-c", FLOOR, str(image)])[3].split())
         out = cache / f"out{size}"
-        wall, rss, stdout = run_measured([sys.executable, "-m", "app", "segment", str(image), "-o", str(out),
-                                          "--max-iter", str(max_iter)])
+        wall, rss, cpu, stdout = run_measured([sys.executable, "-m", "app", "segment", str(image), "-o",
+                                               str(out), "--max-iter", str(max_iter)])
         iterations = int(stdout.split("iterations=")[1].split()[0])
         mask = load_image(out / f"disk{size}_mask.png") != 0
         dice = synthetic.dice(mask, np.load(truth))
-        prepare, per_iter, final, _ = run_measured([sys.executable, "-c", LIBRARY, str(image),
-                                                    str(max_iter)])[2].split()
-        print(f"{size:6d} | {floor:7.2f} | {wall:6.2f} {wall / floor:7.1f} {rss:7.0f} {iterations:5d} "
-              f"{dice:6.4f} | {float(prepare):9.2f} {float(per_iter) * 1e3:7.1f} {float(final):7.2f}",
-              flush=True)
+        prepare, per_iter, final, _ = map(float, run_measured([sys.executable, "-c", LIBRARY, str(image),
+                                                              str(max_iter)])[3].split())
+        _, c2f_rss, _, c2f = run_measured([sys.executable, "-c", COARSE_TO_FINE, str(image), str(truth),
+                                           str(max_iter)])
+        c2f_wall, c2f_cpu, c2f_iter, c2f_dice = map(float, c2f.split())
+        print(f"{size:6d} | {floor_wall:4.2f}/{floor:4.2f} | {wall:5.2f}/{cpu:5.2f} {cpu / floor:7.1f} "
+              f"{rss:6.0f} {iterations:5d} {dice:6.4f} | {prepare:7.2f} {per_iter * 1e3:7.1f} {final:5.2f} | "
+              f"{c2f_wall:5.2f}/{c2f_cpu:4.2f} {c2f_cpu / floor:7.1f} {c2f_rss:6.0f} {int(c2f_iter):5d} "
+              f"{c2f_dice:6.4f}", flush=True)
     print(f"({load()})")
 
 
