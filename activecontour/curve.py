@@ -18,6 +18,7 @@ from activecontour import fem
 
 __all__ = [
     "as_curve",
+    "clean",
     "curvature",
     "curvature_vector",
     "edge_lengths",
@@ -57,6 +58,50 @@ def as_curve(points, *, name="curve"):
         raise ValueError(f"{name} needs at least 3 distinct vertices, got {len(points)}")
     if abs(signed_area(points)) <= 1e-12 * max(1.0, length(points) ** 2):
         raise ValueError(f"{name} is degenerate: it encloses no area")
+    return points
+
+
+#: Relative tolerance of :func:`clean`: a vertex whose turn is within this fraction of its edges'
+#: lengths of a straight reversal, or an edge this much shorter than the curve, is removed.
+CLEAN_TOLERANCE = 1e-9
+
+
+def clean(points, *, tolerance=CLEAN_TOLERANCE):
+    """Remove what makes a polygon invalid without changing the region it encloses.
+
+    Drops repeated vertices (edges shorter than ``tolerance`` times the curve's extent) and
+    zero-width spikes: a vertex where the curve goes straight back along itself (its two edges
+    antiparallel to within ``tolerance``), such as a back-step of 1e-5 px along the image border
+    after clipping.  Removing either changes the enclosed area by at most ``tolerance`` times
+    its extent squared.  Repeats until nothing changes.
+
+    Returns
+    -------
+    ndarray (K, 2), or None when fewer than 3 vertices or no area are left.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    if len(points) == 0:
+        return None
+    extent = float(np.ptp(points, axis=0).max())
+    scale = tolerance * max(extent, 1.0)
+    while len(points) >= 3:
+        d = edge_vectors(points)
+        h = np.hypot(d[:, 0], d[:, 1])
+        keep = h > scale  # vertex i survives when the edge from it is not ~0
+        if keep.all():
+            before = np.roll(d, 1, axis=0)
+            before_h = np.roll(h, 1)
+            cross = before[:, 0] * d[:, 1] - before[:, 1] * d[:, 0]
+            dot = np.einsum("ij,ij->i", before, d)
+            spike = (dot < 0) & (np.abs(cross) <= tolerance * before_h * h + scale * np.minimum(before_h, h))
+            if not spike.any():
+                break
+            # remove one spike vertex of each pair of neighbours per pass: the curve stays closed
+            spike &= ~np.roll(spike, 1)
+            keep = ~spike
+        points = points[keep]
+    if len(points) < 3 or abs(signed_area(points)) <= scale * max(extent, 1.0):
+        return None
     return points
 
 

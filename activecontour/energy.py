@@ -3,17 +3,18 @@
 For a set of closed polygons Gamma (outer boundaries positive, holes negative) enclosing Omega_i,
 
     J(Gamma, c_in, c_out) = mu |Gamma| + omega |Omega_i|
-                            + lambda_in  int_{Omega_i} sum_ch (I - c_in)^2
-                            + lambda_out int_{Omega_o} sum_ch (I - c_out)^2          (6.38)
+                            + lambda_in  int_{Omega_i} mean_ch (I - c_in)^2
+                            + lambda_out int_{Omega_o} mean_ch (I - c_out)^2         (6.38)
 
-with I the bilinear image of :class:`~activecontour.image.ImageModel` (a sum over channels for a
-vector-valued image, Chan-Sandberg-Vese).  The region integrals expand into the moments
+with I the bilinear image of :class:`~activecontour.image.ImageModel` (the mean over channels for
+a vector-valued image: Chan-Sandberg-Vese's sum with weights 1/C, see
+:meth:`ChanVeseParameters.weights`).  The region integrals expand into the moments
 ``int 1, int I, int I^2`` over Omega_i, which Green's theorem turns into boundary integrals of the
 row-antiderivatives; the outside moments are the domain totals minus the inside ones.
 
 The shape derivative in the direction of the P1 hat function phi_j (times a unit vector) is
 
-    f_j = mu (K X)_j + int_Gamma [omega + lambda_in sum (I - c_in)^2 - lambda_out sum (I - c_out)^2]
+    f_j = mu (K X)_j + int_Gamma [omega + lambda_in mean (I - c_in)^2 - lambda_out mean (I - c_out)^2]
                                  phi_j nu ds                                          (6.41)
 
 where ``(K X)_j = tau_{j-1} - tau_j`` is the exact derivative of the polygon's length (the weak
@@ -87,13 +88,19 @@ class ChanVeseParameters:
                 object.__setattr__(self, name, arr)
 
     def weights(self, n_channels):
-        """(lambda_in, lambda_out), each broadcast to one weight per channel."""
+        """(lambda_in, lambda_out) per channel, divided by the number of channels.
+
+        The fitting terms of a vector-valued image are the *mean* of the channel terms (Chan,
+        Sandberg and Vese's sum with weights lambda / C), so mu and omega mean the same relative to
+        the contrast of a gray image and of a colour one: three equal channels segment exactly
+        like their gray image.
+        """
         out = []
         for name in ("lambda_in", "lambda_out"):
             value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
             if value.size not in (1, n_channels):
                 raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} channels")
-            out.append(np.broadcast_to(value, (n_channels,)))
+            out.append(np.broadcast_to(value / n_channels, (n_channels,)))
         return out
 
     def constant(self, name, n_channels):
@@ -153,7 +160,7 @@ def _moments(model, points, next_index):
     return sums[0], sums[1], s1, s2
 
 
-def evaluate(model, points, next_index, params, *, gradient=False):
+def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=False):
     """Energy (6.38) of stacked curves (see :func:`stack_curves`), and with ``gradient`` the load.
 
     Parameters
@@ -165,12 +172,16 @@ def evaluate(model, points, next_index, params, *, gradient=False):
     params : ChanVeseParameters
     gradient : bool
         Also assemble ``load`` (K, 2), the derivative of J with respect to every vertex (6.41).
+    empty_ok : bool
+        How to treat curves that enclose no area or the whole domain while a constant is optimised
+        (6.42 is then undefined).  False (the flow's view): ``energy`` is ``inf``, so no step is
+        accepted into that state.  True (the value of a final result): the empty region's fitting
+        term is 0 whatever its constant, so J is finite, and the undefined constant is reported
+        equal to the other one.
 
     Returns
     -------
     Evaluation
-        ``energy`` is ``inf`` when the curves enclose no area or the whole domain and a constant
-        must be optimised (6.42 is undefined there).
     """
     channels = model.n_channels
     area, length, s1, s2 = _moments(model, points, next_index)
@@ -178,10 +189,17 @@ def evaluate(model, points, next_index, params, *, gradient=False):
     outside_area = total_area - area
     c_in = params.constant("c_in", channels)
     c_out = params.constant("c_out", channels)
-    degenerate = area <= 1e-9 or outside_area <= 1e-9
-    if degenerate and (c_in is None or c_out is None):
-        nan = np.full(channels, np.nan)
-        return Evaluation(np.inf, nan, nan, area, length, None)
+    empty_in, empty_out = area <= 1e-9, outside_area <= 1e-9
+    if (empty_in and c_in is None) or (empty_out and c_out is None):
+        if not empty_ok:
+            nan = np.full(channels, np.nan)
+            return Evaluation(np.inf, nan, nan, area, length, None)
+        if empty_in:  # the whole image is outside (or, below, inside)
+            c_out = total1 / total_area if c_out is None else c_out
+            c_in = c_out if c_in is None else c_in
+        else:
+            c_in = total1 / total_area if c_in is None else c_in
+            c_out = c_in if c_out is None else c_out
     if c_in is None:
         c_in = s1 / area
     if c_out is None:
@@ -202,8 +220,8 @@ def evaluate(model, points, next_index, params, *, gradient=False):
     return result
 
 
-def chan_vese_energy(image, contours, *, mu=0.2, omega=0.0, lambda_in=1.0, lambda_out=1.0,
-                     c_in=None, c_out=None, color="gray"):
+def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, lambda_out=1.0,
+                     c_in=None, c_out=None, color="gray", normalize="range"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours``.
@@ -212,21 +230,27 @@ def chan_vese_energy(image, contours, *, mu=0.2, omega=0.0, lambda_in=1.0, lambd
     ----------
     image : ndarray (M, N) or (M, N, C)
     contours : list of ndarray (K, 2)
-        Closed curves in (row, col), outer boundaries positive, holes negative.
+        Closed curves in (row, col), outer boundaries positive, holes negative.  An empty list is
+        the empty set: J is then the outside term alone.
     mu, omega, lambda_in, lambda_out : float
-        Weights of (6.38).
+        Weights of (6.38); ``mu="auto"`` as in :func:`activecontour.segment` (``result.mu`` is the
+        value a result used).
     c_in, c_out : float, optional
-        Fixed constants; by default the optimal ones (6.42).
+        Fixed constants, in normalised units; by default the optimal ones (6.42).
     color : {"gray", "vector"}
+    normalize : {"range", "dtype", None}
+        As in :func:`activecontour.segment`: pass the same choices to score a result.
 
     Returns
     -------
     float
     """
     from activecontour.image import ImageModel, normalize_image
+    from activecontour.noise import auto_mu, is_auto
 
-    model = ImageModel(normalize_image(image, color=color))
-    params = ChanVeseParameters(mu, omega, lambda_in, lambda_out, c_in, c_out)
+    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
+    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
+                                lambda_out, c_in, c_out)
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
     points, next_index, _ = stack_curves(curves)
-    return evaluate(model, points, next_index, params).energy
+    return evaluate(model, points, next_index, params, empty_ok=True).energy

@@ -12,17 +12,20 @@ Per iteration k, on the polygon(s) Gamma^k:
    book's form), which resolves corners and fine detail.
 3. ``X^{k+1} = X^k + dt V^k`` (6.31), vertices kept inside the image domain, with dt chosen by
    backtracking until the Armijo condition ``J(X^{k+1}) <= J(X^k) + 1e-4 f . (X^{k+1} - X^k)`` holds.
-   The first trial moves the fastest vertex by ``max_step`` pixels (at most twice the last accepted
-   dt), so a step is scale-free: it does not depend on the image contrast.
+   The first trial is twice the last accepted dt, at most the dt that moves the vertices by
+   ``max_step`` pixels root-mean-square: the bulk of the curve sets the scale (the fastest vertex
+   of a noisy image is an outlier, often 20x the median), so a step is scale-free (it does not
+   depend on the image contrast) and a 300 px travel takes tens of iterations.
 4. Mesh health: when an edge is shorter than half or longer than twice ``spacing``, the curve
    is resampled at equal arc length; the resampled curve is kept only if its energy is not above
    the previous iterate's, so the recorded energy sequence never increases.
 
-The flow stalls when either measure falls below ``tol``: the relative energy decrease per iteration
-averaged over the last five iterations (this ends the slow tail of noisy images, where the curve
-keeps chasing noise for no measurable gain), or the largest vertex displacement, in pixels, for three
-iterations in a row (clean images whose energy tends to zero).  A coarse l gives way to the next
-at 10 tol; a stall at the finest l is convergence; the run also stops at ``max_num_iter``.
+The flow stalls when the contour stops getting anywhere: its mean normal displacement (the area it
+sweeps over its length, in pixels) between the start and the end of a block of five iterations,
+per iteration, falls below ``tol`` (see :class:`_Movement`).  No energy scale enters, so the test
+means the same on every image: a relative energy decrease would stop earlier the larger or noisier
+the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next at 10 tol; a
+stall at the finest l is convergence; the run also stops at ``max_num_iter``.
 """
 
 from __future__ import annotations
@@ -32,19 +35,18 @@ from itertools import pairwise
 import numpy as np
 
 from activecontour import fem, topology
-from activecontour.curve import resample
+from activecontour.curve import edge_lengths, resample
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
-from activecontour.result import FlowState, SegmentationResult
+from activecontour.result import FlowState, build_result
 
 __all__ = ["segment_polygon"]
 
 _VELOCITIES = ("h1", "l2")
 _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
-_PATIENCE = 3
-_ENERGY_WINDOW = 5
+_WINDOW = 5  # iterations over which the movement is averaged for the stopping test
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
 _MIN_EDGE = 1e-9
@@ -56,7 +58,7 @@ _REMESH_COOLDOWN = 10
 
 
 def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocity="h1", spacing=1.0,
-                    max_step=2.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True):
+                    max_step=8.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True):
     """Minimise (6.38) by the H^1 gradient flow of a polygon (``backend="polygon"``).
 
     Called by :func:`activecontour.segment`; the keywords after ``callback`` are its ``options``.
@@ -76,7 +78,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
         everything the image resolves; the cost of an iteration grows with the curve's length in
         pixels either way.
     max_step : float
-        Largest vertex displacement of a first trial step, in pixels (> 0).
+        Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps
+        double while they are accepted, up to this; backtracking halves them.
     smoothing, min_smoothing : float
         First and last length l in ``b(V, Y) = int V.Y + l^2 int grad V : grad Y``, in pixels
         (``smoothing >= min_smoothing >= 0``).  The book's (6.39) is l = 1 in its units.  In pixel
@@ -111,13 +114,17 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     if not (np.isfinite(min_area) and min_area >= 0):
         raise ValueError(f"min_area must be a number of square pixels >= 0, got {min_area!r}")
     shape = model.shape
-    geometry = stack_curves([resample(c, spacing) for c in initial_curves(init, shape, model.values)])
+    # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
+    # exactly: resampling it would cut its corners and move it off its minimum
+    geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
+                             for c in initial_curves(init, shape, model.values, params.mu)])
     current = evaluate(model, *geometry[:2], params, gradient=True)
     if not np.isfinite(current.energy):
         raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")
     flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds)
     energies = [current.energy]
-    status, n_iter, quiet, last_remesh, stage_start, rounds = 1, 0, 0, -_REMESH_COOLDOWN, 0, 0
+    movement = _Movement()
+    status, n_iter, last_remesh, rounds = 1, 0, -_REMESH_COOLDOWN, 0
     for k in range(max_num_iter):
         step = flow.step(geometry, current)
         if step is None:
@@ -133,10 +140,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
-        displacement = _max_displacement(geometry, new_geometry)
+        movement.add(new_geometry)
         geometry, current, n_iter = new_geometry, new, k + 1
         energies.append(current.energy)
-        quiet = quiet + 1 if displacement < tol else 0
         if callback is not None:
             state = FlowState(n_iter, _split(*geometry[::2]), current.energy, current.c_in,
                               current.c_out, shape, max_num_iter)
@@ -144,7 +150,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
                 status = 2
                 break
         finest = flow.smoothing <= min_smoothing or not flow.h1
-        if quiet >= _PATIENCE or _stalled(energies, stage_start, tol if finest else _STAGE_TOL * tol):
+        if movement.last < (tol if finest else _STAGE_TOL * tol):
             if not finest:
                 flow.refine(min_smoothing)
             elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
@@ -155,12 +161,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
             else:
                 status = 0
                 break
-            quiet, stage_start = 0, len(energies) - 1
-    contours = _split(*geometry[::2])
-    return SegmentationResult(
-        mask=rasterize(contours, shape), contours=contours, c_in=current.c_in, c_out=current.c_out,
-        energy=current.energy, energies=energies, n_iter=n_iter, status=status, backend="polygon",
-    )
+            movement.clear()
+    return build_result(model, params, _split(*geometry[::2]), energies=energies, n_iter=n_iter,
+                        status=status, backend="polygon")
 
 
 class _Flow:
@@ -249,8 +252,15 @@ class _Flow:
         condition as any other step.
         """
         points, next_index, offsets = geometry
-        v = self.velocity(geometry, current.load)
-        speed = np.hypot(v[:, 0], v[:, 1]).max()
+        # Vertices on the image border that the force pushes out of the image cannot follow it:
+        # leave those components out of the load and of the velocity (an active set), so that
+        # f . V = -b^{-1}(f~, f~) < 0 stays a descent direction after clipping to the image.
+        held = ((points <= self.low) & (current.load > 0)) | ((points >= self.high) & (current.load < 0))
+        v = self.velocity(geometry, np.where(held, 0.0, current.load))
+        v[held] = 0.0
+        # the bulk of the curve, not its fastest vertex (a noise outlier, often 20x the median),
+        # sets the scale of the first trial; backtracking still guarantees descent
+        speed = np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2))
         if not speed > 0:
             return None
         dt = min(self.max_step / speed, 2.0 * self.dt)
@@ -288,27 +298,57 @@ class _Flow:
         return geometry, current
 
 
-def _stalled(energies, stage_start, tol):
-    if len(energies) - stage_start <= _ENERGY_WINDOW:
-        return False
-    decrease = (energies[-1 - _ENERGY_WINDOW] - energies[-1]) / _ENERGY_WINDOW
-    return decrease < tol * max(abs(energies[-1]), 1e-300)
+class _Movement:
+    """How far the contour gets per iteration, in pixels, over blocks of ``_WINDOW`` iterations.
+
+    The measure is the mean normal displacement between the curve at the start of a block and at
+    its end, divided by the block's iterations: each vertex's displacement projected on its
+    normal, weighted by its share of the length, i.e. the area swept by the contour over its
+    length.  It means the same on every image (no energy scale enters), and a contour that only
+    jitters about a fixed place (steps at the edge of stability on noise) gets nowhere and counts
+    as still.  A remesh, a topology repair or a removed curve changes the vertices: the block
+    restarts there.
+    """
+
+    def __init__(self):
+        self.clear()
+
+    def add(self, geometry):
+        points, next_index, offsets = geometry
+        same = self.start is not None and points.shape == self.start.shape
+        if not (same and np.array_equal(offsets, self.offsets)):
+            self.start, self.offsets, self.count = points.copy(), offsets.copy(), 0
+            return
+        self.count += 1
+        if self.count < _WINDOW:
+            return
+        start = self.start
+        d = start[next_index] - start
+        previous = np.empty_like(next_index)
+        previous[next_index] = np.arange(len(next_index))
+        edge_normal = np.column_stack([d[:, 1], -d[:, 0]])  # nu |e|
+        vertex_normal = 0.5 * (edge_normal + edge_normal[previous])  # nu times the vertex's share
+        swept = np.abs(np.einsum("ij,ij->i", points - start, vertex_normal)).sum()
+        self.last = swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count
+        self.start, self.count = points.copy(), 0
+
+    def clear(self):
+        self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
 
 
 def _unhealthy(geometry, spacing):
     points, next_index, _ = geometry
     d = points[next_index] - points
-    h = np.hypot(d[:, 0], d[:, 1])
-    return h.max() > 2.0 * spacing or h.min() < 0.5 * spacing
+    return not _spacing_ok(np.hypot(d[:, 0], d[:, 1]), spacing)
+
+
+def _healthy(curve, spacing):
+    return len(curve) >= 8 and _spacing_ok(edge_lengths(curve), spacing)
+
+
+def _spacing_ok(h, spacing):
+    return h.max() <= 2.0 * spacing and h.min() >= 0.5 * spacing
 
 
 def _split(points, offsets):
     return [points[a:b].copy() for a, b in pairwise(offsets)]
-
-
-def _max_displacement(old, new):
-    """Largest vertex displacement, or inf when remeshing or a repair changed the vertices."""
-    if old[0].shape != new[0].shape or not np.array_equal(old[2], new[2]):
-        return np.inf
-    d = new[0] - old[0]
-    return float(np.hypot(d[:, 0], d[:, 1]).max())

@@ -27,9 +27,11 @@ import numpy as np
 
 from activecontour import _kernels
 
-__all__ = ["ImageModel", "load_image", "normalize_image"]
+__all__ = ["NORMALIZATIONS", "ImageModel", "intensity_scale", "load_image", "normalize_image"]
 
 _COLOR_MODES = ("gray", "vector")
+#: The choices of ``normalize``: the image's own range (default), its dtype's range, or as given.
+NORMALIZATIONS = ("range", "dtype", None)
 
 
 def load_image(path):
@@ -82,53 +84,96 @@ def _read_opencv(path):
     return image
 
 
-def normalize_image(image, *, color="gray"):
+def normalize_image(image, *, color="gray", normalize="range"):
     """Convert an image to float64 intensities of shape (M, N, C).
 
-    Integer images are scaled by their dtype's range to [0, 1], booleans to {0, 1}; float images are
-    used as given.  An alpha channel is dropped.  ``color="gray"`` converts RGB to luminance
-    (``skimage.color.rgb2gray`` weights); ``color="vector"`` keeps the channels, for the
-    vector-valued functional of Chan, Sandberg and Vese (sum of the channel terms).
+    Parameters
+    ----------
+    image : ndarray (M, N), (M, N, C) or (C, M, N)
+        Gray (C = 1), gray + alpha (C = 2), RGB (3) or RGBA (4); bool, integer or float.  A
+        channel-first stack (3 or 4, M, N) with M, N > 4 is read as channel-last.  Alpha is dropped.
+    color : {"gray", "vector"}
+        ``"gray"`` converts RGB to luminance (``skimage.color.rgb2gray`` weights); ``"vector"``
+        keeps the channels, for the vector-valued functional of Chan, Sandberg and Vese.
+    normalize : {"range", "dtype", None}
+        ``"range"`` (default): affinely onto [0, 1] by the image's own minimum and maximum (over
+        all channels), so that mu and omega mean the same relative to the image's contrast
+        whatever its dtype, bit depth or intensity scale: 12-bit data in a uint16 array, values
+        0..235 in uint16, int64, float 0..255 and float 0..1 of one scene give one segmentation
+        (as ``skimage.segmentation.chan_vese`` does).  A constant image becomes 0.  ``"dtype"``:
+        integers by their dtype's range (uint8 / 255, ...), floats as given.  None: the values
+        as given.  Booleans are {0, 1} in every mode.  The plain minimum and maximum are used,
+        not percentiles: on images whose objects are a tiny fraction of the pixels (stars, text)
+        a percentile would cut the objects off.
 
     Raises
     ------
     TypeError
         For a dtype that is not bool, integer or float.
     ValueError
-        For a wrong number of dimensions, an image smaller than 2 x 2, NaN or infinite values, or an
-        unknown ``color``.
+        For a wrong shape or number of channels, an image smaller than 2 x 2, NaN or infinite
+        values, or an unknown ``color`` or ``normalize``.
     """
     if color not in _COLOR_MODES:
         raise ValueError(f"color must be one of {_COLOR_MODES}, got {color!r}")
+    if normalize not in NORMALIZATIONS:
+        raise ValueError(f"normalize must be one of {NORMALIZATIONS}, got {normalize!r}")
     image = np.asarray(image)
     if image.dtype == bool:
         values = image.astype(np.float64)
     elif np.issubdtype(image.dtype, np.integer):
-        info = np.iinfo(image.dtype)
-        values = (image.astype(np.float64) - info.min) / (info.max - info.min)
+        values = image.astype(np.float64)
+        if normalize == "dtype":
+            info = np.iinfo(image.dtype)
+            values = (values - info.min) / (info.max - info.min)
     elif np.issubdtype(image.dtype, np.floating):
         values = image.astype(np.float64)
     else:
         raise TypeError(f"image dtype must be bool, integer or float, got {image.dtype}")
-    if values.ndim == 3 and values.shape[2] == 1:
-        values = values[:, :, 0]
+    if values.ndim == 3 and values.shape[0] in (3, 4) and values.shape[2] not in (2, 3, 4) \
+            and min(values.shape[1:]) > 4:
+        values = np.moveaxis(values, 0, -1)  # a channel-first stack
+    if values.ndim == 3 and values.shape[2] in (1, 2):
+        values = values[:, :, 0]  # gray, or gray + alpha
     if values.ndim == 3:
         if values.shape[2] not in (3, 4):
             raise ValueError(
-                f"a colour image must have 3 (RGB) or 4 (RGBA) channels, got shape {image.shape}"
+                f"a colour image must have 1 (gray), 2 (gray + alpha), 3 (RGB) or 4 (RGBA) channels, "
+                f"got shape {image.shape}"
             )
         values = values[:, :, :3]
-        if color == "gray":
-            values = values @ np.array([0.2125, 0.7154, 0.0721])
     elif values.ndim != 2:
         raise ValueError(f"image must have shape (M, N) or (M, N, C), got shape {image.shape}")
     if values.shape[0] < 2 or values.shape[1] < 2:
         raise ValueError(f"image must be at least 2 x 2 pixels, got shape {image.shape}")
     if not np.all(np.isfinite(values)):
         raise ValueError("image contains NaN or infinite values")
+    if normalize == "range" and image.dtype != bool:
+        low, high = values.min(), values.max()
+        values = (values - low) / (high - low) if high > low else np.zeros_like(values)
+    if values.ndim == 3 and color == "gray":
+        values = values @ np.array([0.2125, 0.7154, 0.0721])
     if values.ndim == 2:
         values = values[:, :, np.newaxis]
     return np.ascontiguousarray(values)
+
+
+def intensity_scale(image, normalize="range"):
+    """``(offset, scale)`` such that an input intensity is ``offset + scale * normalised``.
+
+    The inverse of the affine map of :func:`normalize_image`, to report region constants in the
+    input's own units (the luminance weights sum to 1, so it holds for gray from colour too).
+    """
+    image = np.asarray(image)
+    if image.dtype == bool or normalize is None:
+        return 0.0, 1.0
+    if normalize == "dtype":
+        if np.issubdtype(image.dtype, np.integer):
+            info = np.iinfo(image.dtype)
+            return float(info.min), float(info.max) - float(info.min)
+        return 0.0, 1.0
+    low, high = float(image.min()), float(image.max())
+    return low, (high - low) if high > low else 1.0
 
 
 class ImageModel:

@@ -76,37 +76,89 @@ def grid(shape, spacing=GRID_SPACING, radius=GRID_RADIUS, *, values=None):
     circles = [circle((r, c), radius) for r in rows for c in cols]
     if values is None:
         return circles
-    on_object = _object_class(values)[np.rint(rows).astype(int)[:, None], np.rint(cols).astype(int)]
+    on_object = _object_class(values)[0][np.rint(rows).astype(int)[:, None], np.rint(cols).astype(int)]
     kept = [c for c, keep in zip(circles, on_object.ravel(), strict=True) if keep]
     return kept or circles
 
 
 def _object_class(values, iterations=20):
-    """Boolean (M, N): pixels of the 2-means class that is not the image border's majority."""
+    """The object class of 2-means: a bool (M, N) mask and the squared distance of the means.
+
+    The pixels are split in two classes by 2-means (Lloyd's iterations from the split along the
+    principal axis); the background is the class that covers most of the image border.  The
+    contrast is 0 when there is one class only.
+    """
     flat = values.reshape(-1, values.shape[2])
     centred = flat - flat.mean(axis=0)
     axis = np.linalg.svd(centred[:: max(1, len(flat) // 20000)], full_matrices=False)[2][0]
     label = centred @ axis > 0
+    means = None
     for _ in range(iterations):
         if label.all() or not label.any():
-            break
+            return np.zeros(values.shape[:2], dtype=bool), 0.0
         means = flat[~label].mean(axis=0), flat[label].mean(axis=0)
-        new = np.sum((flat - means[1]) ** 2, axis=1) < np.sum((flat - means[0]) ** 2, axis=1)
+        # the nearer mean, i.e. the threshold half-way between them along their difference
+        direction = means[1] - means[0]
+        new = flat @ direction > 0.5 * (means[1] + means[0]) @ direction
         if np.array_equal(new, label):
             break
         label = new
+    if label.all() or not label.any():
+        return np.zeros(values.shape[:2], dtype=bool), 0.0
+    means = flat[~label].mean(axis=0), flat[label].mean(axis=0)
     label = label.reshape(values.shape[:2])
     border = np.concatenate([label[0], label[-1], label[:, 0], label[:, -1]])
-    return ~label if border.mean() > 0.5 else label
+    # the fit terms are the channels' mean: so is the contrast
+    contrast = float(np.mean((means[1] - means[0]) ** 2))
+    return (~label if border.mean() > 0.5 else label), contrast
 
 
-def default_init(shape):
-    """The documented default: a centred circle of radius 3/8 of the smaller side."""
+#: Width (pixels) of the Gaussian that takes the pixel noise off the image before the threshold of
+#: the default start: enough to make its mask a few large pieces instead of noise, small enough
+#: to keep a 3 px stroke.
+DEFAULT_INIT_BLUR = 1.0
+#: The default start drops pieces smaller than this many square pixels whatever mu is.
+DEFAULT_INIT_MIN_AREA = 4.0
+
+
+def default_init(shape, values=None, mu=0.0):
+    """The documented default start: the objects of the length-free problem, as curves.
+
+    Without the length term, the global minimiser of (6.38) for fixed c_in, c_out is the
+    threshold of I at (c_in + c_out) / 2, and the optimal constants are those of 2-means: the
+    default start is that threshold, taken on the image smoothed by a Gaussian of
+    ``DEFAULT_INIT_BLUR`` px (so that pixel noise does not make it a speckle), with inside = the
+    class that covers less of the image border (the objects, not the background).  Pieces the
+    length term would remove at once are dropped: a disk of radius r pays ``2 pi r mu`` of length
+    for ``pi r^2 (c_in - c_out)^2`` of fit, so components and holes of area below
+    ``pi (2 mu / (c_in - c_out)^2)^2`` (and below ``DEFAULT_INIT_MIN_AREA``) go.  The flow then
+    starts at every object at once, wherever it is, instead of reaching for them from a circle.
+
+    Parameters
+    ----------
+    shape : tuple (M, N)
+    values : ndarray (M, N, C), optional
+        The normalised image.  Without it (or for an image with one class only), the start is a
+        centred circle of radius 3/8 of the smaller side, as skimage's ``morphological_chan_vese``.
+    mu : float
+        The length weight the flow will use.
+    """
     m, n = shape
-    return [circle(((m - 1) / 2.0, (n - 1) / 2.0), DEFAULT_RADIUS_FRACTION * min(m, n))]
+    fallback = [circle(((m - 1) / 2.0, (n - 1) / 2.0), DEFAULT_RADIUS_FRACTION * min(m, n))]
+    if values is None:
+        return fallback
+    import scipy.ndimage
+
+    smooth = scipy.ndimage.gaussian_filter(values, (DEFAULT_INIT_BLUR, DEFAULT_INIT_BLUR, 0))
+    inside, contrast = _object_class(smooth)
+    if contrast <= 0:
+        return fallback
+    speck = max(DEFAULT_INIT_MIN_AREA, np.pi * (2.0 * mu / contrast) ** 2)
+    curves = mask_to_curves(inside, min_area=speck)
+    return curves if curves else fallback
 
 
-def initial_curves(init, shape, values=None):
+def initial_curves(init, shape, values=None, mu=0.0):
     """Turn an ``init`` into a list of closed curves inside the image domain.
 
     Parameters
@@ -117,7 +169,10 @@ def initial_curves(init, shape, values=None):
         ``"grid"``: small circles all over the image (:func:`grid`).
     shape : tuple (M, N)
     values : ndarray (M, N, C), optional
-        The normalised image, used by ``"grid"`` to keep only the circles on the object class.
+        The normalised image, used by the default start (:func:`default_init`) and by ``"grid"``
+        to keep only the circles on the object class.
+    mu : float
+        The length weight, for the default start.
 
     Returns
     -------
@@ -131,7 +186,7 @@ def initial_curves(init, shape, values=None):
         ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``.
     """
     if init is None:
-        return default_init(shape)
+        return default_init(shape, values, mu)
     if hasattr(init, "contours") and hasattr(init, "mask"):
         init = init.contours
     if isinstance(init, np.ndarray) and init.dtype == bool:

@@ -236,7 +236,7 @@ def _encode_overlay(path, image, contours, color, thickness):
 
 
 def _display_rgb(image):
-    values = normalize_image(image, color="vector")
+    values = normalize_image(image, color="vector", normalize="dtype")
     low, high = float(values.min()), float(values.max())
     if low < 0.0 or high > 1.0:
         # float images outside [0, 1] (e.g. 0..255 floats) are shown from their own range

@@ -6,11 +6,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult"]
+from activecontour.curve import clean
+from activecontour.energy import evaluate, stack_curves
+from activecontour.raster import rasterize
+
+__all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
 #: Status codes and their messages, shared by every backend.
 STATUS_MESSAGES = {
-    0: "Converged: the relative energy decrease and the largest displacement fell below tol.",
+    0: "Converged: the contour moves less than tol pixels per iteration.",
     1: "Reached max_num_iter before converging.",
     2: "Stopped by the callback.",
     3: "The contour collapsed: nothing left inside (try a smaller mu or another init).",
@@ -45,6 +49,11 @@ class SegmentationResult:
     backend : str
     phi : ndarray (M, N) or None
         The level-set function (``backend="levelset"``), None for the polygon backend.
+    mu : float or None
+        The length weight used (the value ``mu="auto"`` chose), set by :func:`activecontour.segment`.
+    c_in_image, c_out_image : float or ndarray (C,) or None
+        ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
+        normalised units the functional uses), set by :func:`activecontour.segment`.
     """
 
     mask: np.ndarray
@@ -57,6 +66,9 @@ class SegmentationResult:
     status: int
     backend: str
     phi: np.ndarray | None = None
+    mu: float | None = None
+    c_in_image: object = None
+    c_out_image: object = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
@@ -64,8 +76,8 @@ class SegmentationResult:
         self.success = self.status in (0, 4)
         self.message = STATUS_MESSAGES[self.status]
         self.energies = np.asarray(self.energies, dtype=np.float64)
-        self.c_in = _scalar_if_gray(self.c_in)
-        self.c_out = _scalar_if_gray(self.c_out)
+        self.c_in = scalar_if_gray(self.c_in)
+        self.c_out = scalar_if_gray(self.c_out)
 
     def __repr__(self):
         return (
@@ -99,6 +111,57 @@ class FlowState:
         return rasterize(self.contours, self.shape)
 
 
-def _scalar_if_gray(value):
+def scalar_if_gray(value):
     value = np.asarray(value, dtype=np.float64)
     return float(value.reshape(-1)[0]) if value.size == 1 else value
+
+
+#: Energies that agree to this relative tolerance are the same number computed twice.
+_SAME_ENERGY = 1e-9
+
+
+def build_result(model, params, contours, *, energies, n_iter, status, backend, phi=None):
+    """The one way a backend makes its result, so that every result obeys the same invariants.
+
+    * contours are cleaned (:func:`activecontour.curve.clean`): no repeated vertices, zero-width
+      spikes, fewer than 3 vertices or zero area;
+    * ``energy`` is (6.38) of exactly these contours by the common evaluator
+      (:func:`activecontour.energy.chan_vese_energy`), and ``energies`` ends with it;
+    * when a converged flow ends above the energy of the empty set (a local minimum worse than
+      no object at all), or the backend reports a collapse, the result is the empty set, status 3;
+    * ``mask`` is the inside of the contours (:func:`activecontour.raster.rasterize`);
+    * ``c_in``, ``c_out`` are finite: the constant of an empty region is reported equal to the
+      other one (its fitting term is 0 whatever it is).
+
+    Parameters
+    ----------
+    model : ImageModel
+    params : ChanVeseParameters
+    contours : list of ndarray (K, 2)
+    energies : sequence of float
+        The backend's energy history (before the first iteration, then one per iteration).
+    n_iter, status, backend, phi
+        As in :class:`SegmentationResult`.
+    """
+    cleaned = [] if status == 3 else [c for c in map(clean, contours) if c is not None]
+    final = _evaluate(model, params, cleaned)
+    empty = _evaluate(model, params, [])
+    if cleaned and status in (0, 4) and empty.energy < final.energy:
+        cleaned, final = [], empty
+    if not cleaned:
+        status = 3
+    energies = list(energies)
+    if energies and abs(energies[-1] - final.energy) <= _SAME_ENERGY * max(abs(final.energy), 1.0):
+        energies[-1] = final.energy
+    else:
+        energies.append(final.energy)
+    return SegmentationResult(
+        mask=rasterize(cleaned, model.shape), contours=cleaned, c_in=final.c_in, c_out=final.c_out,
+        energy=final.energy, energies=energies, n_iter=n_iter, status=status, backend=backend,
+        phi=phi,
+    )
+
+
+def _evaluate(model, params, contours):
+    points, next_index, _ = stack_curves(contours)
+    return evaluate(model, points, next_index, params, empty_ok=True)

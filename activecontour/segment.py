@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
 
 import numpy as np
 
 from activecontour.energy import ChanVeseParameters
-from activecontour.image import ImageModel, normalize_image
+from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
+from activecontour.noise import auto_mu, is_auto
+from activecontour.result import scalar_if_gray
 
 __all__ = ["BACKENDS", "segment"]
 
@@ -19,16 +22,16 @@ BACKENDS = {
 }
 
 
-def segment(image, init=None, *, backend="polygon", mu=0.2, omega=0.0, lambda_in=1.0,
-            lambda_out=1.0, max_num_iter=500, tol=1e-4, callback=None, c_in=None, c_out=None,
-            color="gray", options=None):
+def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
+            lambda_out=1.0, max_num_iter=500, tol=1e-3, callback=None, c_in=None, c_out=None,
+            color="gray", normalize="range", options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
     ----------
-    image : ndarray of shape (M, N) or (M, N, C)
-        Gray or colour image.  Integer dtypes are scaled by their range to [0, 1]; floats are
-        used as given.
+    image : ndarray of shape (M, N) or (M, N, C), or a path
+        Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
+        or the path of an image file (read by :func:`activecontour.image.load_image`).
     init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), or SegmentationResult
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
         starts from a centred circle of radius 3/8 of the smaller side.  The level-set backend also
@@ -36,8 +39,11 @@ def segment(image, init=None, *, backend="polygon", mu=0.2, omega=0.0, lambda_in
     backend : {"polygon", "levelset"}
         ``"polygon"``: the book's gradient flow (6.30)-(6.31) of a polygon with the H^1 velocity
         (6.39)-(6.40), sub-pixel.  ``"levelset"``: the same functional on the pixel grid.
-    mu : float
-        Length weight (intensity^2 * pixel), >= 0.  Larger gives smoother, shorter contours.
+    mu : float or "auto"
+        Length weight (intensity^2 * pixel, intensities normalised), >= 0.  Larger gives smoother,
+        shorter contours: features with a radius of curvature below about ``mu / (c_in - c_out)^2``
+        pixels are smoothed away.  ``"auto"`` (default) sets it from the image's noise
+        (:func:`activecontour.noise.auto_mu`); ``result.mu`` reports the value used.
     omega : float
         Area weight (intensity^2); positive shrinks, negative grows the inside.
     lambda_in, lambda_out : float
@@ -45,8 +51,11 @@ def segment(image, init=None, *, backend="polygon", mu=0.2, omega=0.0, lambda_in
     max_num_iter : int
         Iteration limit.
     tol : float
-        Convergence tolerance: the run stops once the relative decrease of the energy and the
-        largest vertex displacement (pixels) per iteration stay below ``tol``.
+        Convergence tolerance in pixels per iteration: the run has converged when the contour's
+        mean normal displacement (the area it sweeps over its length), averaged over a few
+        iterations, falls below ``tol`` at the finest stage.  It means the same on every image,
+        whatever its size, noise or contrast; a 100x smaller ``tol`` changes neither the energy
+        nor the mask measurably.  Coarse stages end at 10 tol.
     callback : callable, optional
         ``callback(state)`` with a :class:`~activecontour.result.FlowState` once per iteration;
         return True to stop.
@@ -54,6 +63,11 @@ def segment(image, init=None, *, backend="polygon", mu=0.2, omega=0.0, lambda_in
         Hold the region constants fixed; by default they are updated by (6.42) every iteration.
     color : {"gray", "vector"}
         Colour images: convert to gray, or keep the channels (vector-valued functional).
+    normalize : {"range", "dtype", None}
+        Intensity scaling before the functional is set up: the image's own range onto [0, 1]
+        (default), the dtype's range, or none (see :func:`activecontour.image.normalize_image`).
+        ``result.c_in``/``c_out`` are in these normalised units; ``result.c_in_image`` and
+        ``result.c_out_image`` in the input's own.
     options : dict, optional
         Backend-specific settings, documented by the backend function
         (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
@@ -74,13 +88,21 @@ def segment(image, init=None, *, backend="polygon", mu=0.2, omega=0.0, lambda_in
         raise TypeError("callback must be callable or None")
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
-    params = ChanVeseParameters(mu, omega, lambda_in, lambda_out, c_in, c_out)
-    model = ImageModel(normalize_image(image, color=color))
+    if isinstance(image, (str, os.PathLike)):
+        image = load_image(image)
+    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
+    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
+                                lambda_out, c_in, c_out)
     module_name, function_name = BACKENDS[backend].split(":")
     solver = getattr(importlib.import_module(module_name), function_name)
     _check_options(solver, backend, options or {})
-    return solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
-                  callback=callback, **(options or {}))
+    result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
+                    callback=callback, **(options or {}))
+    offset, scale = intensity_scale(image, normalize)
+    result.mu = params.mu
+    result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
+    result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
+    return result
 
 
 def _check_options(solver, backend, options):

@@ -159,8 +159,8 @@ def _add_parameter_options(parser):
         help="polygon: the book's sub-pixel polygon flow; levelset: the same functional on the "
         "pixel grid, free topology (default: %(default)s)",
     )
-    group.add_argument("--mu", type=float, default=defaults["mu"],
-                       help="length weight, >= 0 (default: %(default)s)")
+    group.add_argument("--mu", type=_mu, default=defaults["mu"],
+                       help="length weight, >= 0, or 'auto': from the image's noise (default: %(default)s)")
     group.add_argument("--omega", type=float, default=defaults["omega"],
                        help="area weight: > 0 shrinks, < 0 grows the inside (default: %(default)s)")
     group.add_argument("--lambda-in", type=float, default=defaults["lambda_in"],
@@ -248,11 +248,21 @@ def _settings(args):
     if getattr(args, "options", None):
         settings["options"] = dict(args.options)
     try:
-        ChanVeseParameters(settings["mu"], settings["omega"], settings["lambda_in"],
+        ChanVeseParameters(0.0 if settings["mu"] == "auto" else settings["mu"], settings["omega"],
+                           settings["lambda_in"],
                            settings["lambda_out"], settings["c_in"], settings["c_out"])
     except (ValueError, TypeError) as exc:
         raise UsageError(_with_option_names(str(exc))) from None
     return settings
+
+
+def _mu(text):
+    if text == "auto":
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or 'auto', got {text!r}") from None
 
 
 def _option(text):
@@ -444,7 +454,7 @@ def _overlay_color(text):
 def _summary(name, result, elapsed, written):
     stem = os.path.commonprefix([os.fspath(p) for p in written])
     return (
-        f"{name}: iterations={result.n_iter} energy={result.energy:.6g} "
+        f"{name}: iterations={result.n_iter} energy={result.energy:.6g} mu={result.mu:.4g} "
         f"c_in={_format_constant(result.c_in)} c_out={_format_constant(result.c_out)} "
         f"time={elapsed:.2f}s success={result.success} output={stem}*"
     )

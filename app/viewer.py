@@ -51,6 +51,7 @@ import numpy as np
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
 from activecontour.initial import default_init, initial_curves
+from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
 from app.viewer_layout import (
     CONTOUR_COLOR,
@@ -157,10 +158,13 @@ class Viewer:
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         display = normalize_image(self.image, color="vector")  # validates the image, too
         self.shape = display.shape[:2]
+        values = normalize_image(self.image, color=color)
+        if is_auto(settings["mu"]):  # the slider starts at the value segment(mu="auto") would use
+            settings["mu"] = auto_mu(values)
         self.image_path = None if image_path is None else Path(image_path)
         self.formats = formats
         self.redraw_every = int(redraw_every)
-        self.init_curves = default_init(self.shape)
+        self.init_curves = default_init(self.shape, values, settings["mu"])  # segment's init=None
         if init is not None:  # a bad init is an error here, before any window exists
             if isinstance(init, (str, os.PathLike)):
                 init = _read_mask_file(init)
@@ -735,6 +739,8 @@ def _settings(**given):
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {settings['backend']!r}")
     for name in ("mu", "omega", "lambda_in", "lambda_out", "tol"):
         value = settings[name]
+        if name == "mu" and is_auto(value):
+            continue
         if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
                 or not np.isfinite(value):
             raise ValueError(f"{name} must be a finite number, got {value!r}")

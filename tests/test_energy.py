@@ -13,7 +13,7 @@ from tests.test_curve import random_smooth_curve
 
 
 def model_of(image, color="gray"):
-    return ImageModel(normalize_image(image, color=color))
+    return ImageModel(normalize_image(image, color=color, normalize=None))
 
 
 def test_domain_totals_are_the_pixel_sums():
@@ -78,8 +78,8 @@ def test_energy_of_a_constant_image_is_length_and_area_terms():
     area = 0.5 * 50 * 144 * np.sin(2 * np.pi / 50)
     # optimal constants equal the intensity: only mu |Gamma| + omega |Omega_i| remain
     assert chan_vese_energy(image, [points], mu=0.7, omega=0.3) == pytest.approx(0.7 * length + 0.3 * area)
-    # a fixed c_in = 0 adds lambda_in * 0.4^2 * |Omega_i|
-    energy = chan_vese_energy(image, [points], mu=0.0, lambda_in=2.0, c_in=0.0)
+    # a fixed c_in = 0 adds lambda_in * 0.4^2 * |Omega_i| (in the image's own units)
+    energy = chan_vese_energy(image, [points], mu=0.0, lambda_in=2.0, c_in=0.0, normalize=None)
     assert energy == pytest.approx(2.0 * 0.16 * area)
 
 

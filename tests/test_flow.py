@@ -69,9 +69,12 @@ def test_result_follows_the_conventions():
     assert result.mask.dtype == bool and result.mask.shape == SIZE
     assert all(signed_area(c) > 0 for c in result.contours)
     np.testing.assert_array_equal(result.mask, rasterize(result.contours, SIZE))
-    # c_in, c_out are the region means (6.42), here close to the rendered intensities
-    assert result.c_in == pytest.approx(0.7, abs=0.02)
-    assert result.c_out == pytest.approx(0.3, abs=0.02)
+    # c_in, c_out are the region means (6.42): in the input's units close to the rendered
+    # intensities, and in the normalised units the same affine map of them
+    assert result.c_in_image == pytest.approx(0.7, abs=0.02)
+    assert result.c_out_image == pytest.approx(0.3, abs=0.02)
+    low, high = image.min(), image.max()
+    assert result.c_in == pytest.approx((result.c_in_image - low) / (high - low), rel=1e-12)
     assert "SegmentationResult" in repr(result)
 
 
@@ -85,10 +88,26 @@ def test_fixed_constants_are_kept():
 def test_a_larger_mu_gives_a_shorter_contour():
     image, _ = shape_image("star", noise=0.1, seed=6)
     lengths = []
-    for mu in (0.1, 3.0):
+    for mu in (0.1, 1.0):  # mu |star| ~ 250 stays below the fit the star gains, ~450 (see below)
         (contour,) = ac.segment(image, OUTER_INIT, mu=mu).contours
         lengths.append(np.sum(np.linalg.norm(np.roll(contour, -1, 0) - contour, axis=1)))
     assert lengths[1] < lengths[0]
+
+
+def test_a_length_weight_above_the_objects_gain_gives_the_empty_set():
+    # the empty set costs sum (I - mean)^2; the true star saves A (1 - A/|D|) (c_in - c_out)^2 of
+    # it, about 450 here, at a length of about 250 px: from mu = 3 on, nothing beats the empty set
+    image, truth = shape_image("star")
+    area, total = truth.sum(), truth.size
+    gain = area * (1 - area / total) * (0.7 - 0.3) ** 2
+    perimeter = ac.segment(image, OUTER_INIT, mu=0.01, normalize=None).contours
+    mu = 1.5 * gain / sum(np.sum(np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)) for c in perimeter)
+    result = ac.segment(image, OUTER_INIT, mu=mu, normalize=None)
+    assert result.status == 3 and result.contours == [] and not result.mask.any()
+    empty = np.sum((image - image.mean()) ** 2)
+    # the pixel sum approximates the bilinear integral up to the anti-aliased rim (~1 %)
+    assert result.energy == pytest.approx(empty, rel=2e-2)
+    assert result.c_in == result.c_out == pytest.approx(image.mean(), rel=1e-3)
 
 
 def test_positive_omega_shrinks_the_inside():

@@ -36,6 +36,7 @@ def _circle_distance(shape, center, radius):
 
 def _levelset(image, init=None, **kwargs):
     kwargs.setdefault("mu", MU)
+    kwargs.setdefault("normalize", None)  # MU is in the units of the rendered intensities
     return ac.segment(image, init, backend="levelset", **kwargs)
 
 

@@ -29,7 +29,8 @@ IMAGE[10:30, 15:35] = 1.0
         (np.full((40, 50), np.nan), {}, ValueError, "NaN or infinite"),
         (np.zeros(40), {}, ValueError, r"shape \(M, N\)"),
         (np.zeros((1, 40)), {}, ValueError, "at least 2 x 2"),
-        (np.zeros((8, 8, 2)), {}, ValueError, "3 \\(RGB\\) or 4 \\(RGBA\\) channels"),
+        (np.zeros((8, 8, 5)), {}, ValueError, "3 \\(RGB\\) or 4 \\(RGBA\\) channels"),
+        (IMAGE, {"normalize": "minmax"}, ValueError, r"normalize must be one of \('range', 'dtype', None\)"),
         (np.zeros((8, 8), dtype=complex), {}, TypeError, "dtype must be bool, integer or float"),
     ],
 )
@@ -70,9 +71,21 @@ def test_default_init_is_a_centred_circle():
 def test_normalisation_of_dtypes():
     np.testing.assert_array_equal(normalize_image(np.array([[0, 255]], np.uint8).repeat(2, 0))[..., 0],
                                   [[0.0, 1.0], [0.0, 1.0]])
-    assert normalize_image(np.full((2, 2), 65535, np.uint16)).max() == 1.0
-    assert normalize_image(np.full((2, 2), -128, np.int8)).max() == 0.0
-    assert normalize_image(np.full((2, 2), 3.5, np.float32)).max() == 3.5  # floats used as given
+    # "range" (default): the image's own minimum and maximum go to 0 and 1, whatever the dtype
+    ramp = np.array([[100, 200], [300, 400]])
+    for dtype in (np.uint16, np.int64, np.float32):
+        np.testing.assert_allclose(normalize_image(ramp.astype(dtype))[..., 0], [[0, 1 / 3], [2 / 3, 1]])
+    assert normalize_image(np.full((2, 2), 65535, np.uint16)).max() == 0.0  # constant: 0
+    # "dtype": integers by their dtype's range, floats as given; None: as given
+    assert normalize_image(np.full((2, 2), 65535, np.uint16), normalize="dtype").max() == 1.0
+    assert normalize_image(np.full((2, 2), -128, np.int8), normalize="dtype").max() == 0.0
+    assert normalize_image(np.full((2, 2), 3.5, np.float32), normalize="dtype").max() == 3.5
+    assert normalize_image(np.full((2, 2), 300, np.int64), normalize=None).max() == 300.0
+    # gray + alpha drops the alpha; a channel-first stack is read as channel-last
+    gray_alpha = np.stack([ramp, np.full_like(ramp, 7)], axis=-1)
+    np.testing.assert_array_equal(normalize_image(gray_alpha), normalize_image(ramp))
+    stack = np.random.default_rng(0).random((3, 9, 8))
+    np.testing.assert_array_equal(normalize_image(stack), normalize_image(np.moveaxis(stack, 0, -1)))
     rgb = np.zeros((2, 2, 3))
     rgb[..., 1] = 1.0
     assert normalize_image(rgb)[0, 0, 0] == pytest.approx(0.7154)
