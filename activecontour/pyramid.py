@@ -40,7 +40,7 @@ def reduction_factor(shape, max_side=MAX_SIDE):
     return factor
 
 
-def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, tol=1e-4, **options):
+def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, tol=1e-3, **options):
     """Initial curves for ``model`` from the polygon flow on its copy reduced to ``max_side``.
 
     Parameters
@@ -48,7 +48,8 @@ def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, to
     model : ImageModel
         The full-resolution image.
     init : as for :func:`activecontour.segment`
-        Where the reduced flow starts, in full-resolution coordinates.
+        Where the reduced flow starts, in full-resolution coordinates; None is the default start
+        (:func:`activecontour.initial.default_init`) of the reduced copy.
     params : ChanVeseParameters
         Of the full-resolution problem; the reduced one uses ``mu / s`` (see the module notes).
     max_side : int
@@ -61,25 +62,27 @@ def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, to
     -------
     list of ndarray (K, 2)
         Closed curves in full-resolution (row, col); the initial curves themselves when the image
-        is no larger than ``max_side``.
+        is no larger than ``max_side`` or a curve of ``init`` is too small for the reduced copy.
     """
     from activecontour.flow import segment_polygon  # the flow is what this module feeds
 
-    curves = initial_curves(init, model.shape, model.values)
     factor = reduction_factor(model.shape, max_side)
     if factor == 1:
-        return curves
+        return initial_curves(init, model.shape, model.values, params.mu)
     m, n = model.shape[0] // factor, model.shape[1] // factor
     # block means; the last (shape % factor) rows and columns are left out of the reduced copy
     reduced = model.values[: m * factor, : n * factor].reshape(m, factor, n, factor, -1).mean(axis=(1, 3))
     # reduced pixel (i, j) covers full pixels factor * i .. factor * i + factor - 1: its centre
     # is at factor * i + (factor - 1) / 2
     offset = (factor - 1) / 2.0
-    start = [(curve - offset) / factor for curve in curves]
-    if min(abs(signed_area(curve)) for curve in start) < _MIN_REDUCED_AREA:
-        return curves  # a curve too small to see on the reduced copy: start at full size
+    start = None  # the default start, found on the reduced copy (it reads every pixel)
+    if init is not None:
+        curves = initial_curves(init, model.shape, model.values, params.mu)
+        start = [(curve - offset) / factor for curve in curves]
+        if min(abs(signed_area(curve)) for curve in start) < _MIN_REDUCED_AREA:
+            return curves  # a curve too small to see on the reduced copy: start at full size
     result = segment_polygon(ImageModel(reduced), start, dataclasses.replace(params, mu=params.mu / factor),
                              max_num_iter=max_num_iter, tol=tol, callback=None, **options)
     if not result.contours:
-        return curves
+        return initial_curves(init, model.shape, model.values, params.mu)
     return [factor * curve + offset for curve in result.contours]

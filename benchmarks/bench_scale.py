@@ -71,11 +71,12 @@ from activecontour import pyramid, synthetic
 from activecontour.energy import ChanVeseParameters
 from activecontour.flow import segment_polygon
 from activecontour.image import ImageModel, normalize_image
+from activecontour.noise import auto_mu
 start, cpu = time.perf_counter(), time.process_time()
 model = ImageModel(normalize_image(ac.load_image(sys.argv[1])))
-params = ChanVeseParameters()
+params = ChanVeseParameters(auto_mu(model.values))  # segment's default mu
 curves = pyramid.coarse_start(model, None, params)
-result = segment_polygon(model, curves, params, max_num_iter=int(sys.argv[3]), tol=1e-4, callback=None)
+result = segment_polygon(model, curves, params, max_num_iter=int(sys.argv[3]), tol=1e-3, callback=None)
 elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
 print(elapsed, cpu, result.n_iter, synthetic.dice(result.mask, np.load(sys.argv[2])))
 """
