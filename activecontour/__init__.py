@@ -13,7 +13,8 @@ chan_vese_energy   the common evaluator of (6.38) for any contours
 curve, fem         polygon geometry (tangent, normal, curvature) and P1 finite elements
 image, energy      the image model with its cumulative tables; the functional and its derivative
 flow, levelset     the two backends
-io, raster         writers/readers of masks, overlays and contours; curves <-> masks
+io, raster         writers/readers of masks, overlays and contours (atomic, image_files,
+                   contour_files, vector_formats); curves <-> masks
 synthetic          anti-aliased test images with exact ground truth
 
 Conventions: points are (row, col) with pixel centres at integer coordinates; outer boundaries are

@@ -56,9 +56,22 @@ def as_curve(points, *, name="curve"):
         points = points[keep]
     if len(points) < 3:
         raise ValueError(f"{name} needs at least 3 distinct vertices, got {len(points)}")
-    if abs(signed_area(points)) <= 1e-12 * max(1.0, length(points) ** 2):
+    if _encloses_no_area(points):
         raise ValueError(f"{name} is degenerate: it encloses no area")
     return points
+
+
+def _encloses_no_area(points):
+    """Whether ``|area| <= 1e-12 max(1, length^2)``, evaluated on the curve moved to the origin and
+    scaled to unit size, so that coordinates near the float range (1e200) do not overflow."""
+    centred = points - points[0]
+    scale = float(np.max(np.abs(centred)))
+    if scale == 0.0:
+        return True
+    unit = centred / scale
+    with np.errstate(over="ignore"):  # 1 / scale**2 is inf for a curve of 1e-160 px: no area
+        floor = 1.0 / (scale * scale)
+    return abs(signed_area(unit)) <= 1e-12 * max(floor, length(unit) ** 2)
 
 
 #: Relative tolerance of :func:`clean`: a vertex whose turn is within this fraction of its edges'
@@ -149,15 +162,41 @@ def vertex_normals(points):
 
 
 def curvature_vector(points):
-    """Curvature vector ``kappa nu = M^{-1} K X`` (4.30), the P1 weak form of -Laplace_Sigma id."""
-    h = edge_lengths(points)
+    """Curvature vector ``kappa nu = M^{-1} K X`` (4.30), the P1 weak form of -Laplace_Sigma id.
+
+    A vertex repeated consecutively (a zero-length edge, where the weak form is undefined) gets the
+    value of its first copy: the curve is evaluated on its distinct vertices.
+    """
+    distinct, owner = _distinct_vertices(points)
+    h = edge_lengths(distinct)
     stiffness = fem.stiffness_diagonals(h)
-    return fem.cyclic_solve(*fem.mass_diagonals(h), fem.cyclic_apply(*stiffness, points))
+    return fem.cyclic_solve(*fem.mass_diagonals(h), fem.cyclic_apply(*stiffness, distinct))[owner]
 
 
 def curvature(points):
-    """Signed scalar curvature at the vertices: ``(kappa nu) . nu``, 1/R on a circle (3.45)."""
-    return np.einsum("ij,ij->i", curvature_vector(points), vertex_normals(points))
+    """Signed scalar curvature at the vertices: ``(kappa nu) . nu``, 1/R on a circle (3.45).
+
+    Repeated vertices get the curvature of their first copy (see :func:`curvature_vector`).
+    """
+    distinct, owner = _distinct_vertices(points)
+    kappa = np.einsum("ij,ij->i", curvature_vector(distinct), vertex_normals(distinct))
+    return kappa[owner]
+
+
+def _distinct_vertices(points):
+    """The curve without consecutive repeated vertices, and for every vertex the index of its copy.
+
+    Raises ValueError when fewer than 3 distinct vertices remain (no curvature is defined).
+    """
+    points = np.asarray(points, dtype=np.float64)
+    new = np.any(points != np.roll(points, 1, axis=0), axis=1)
+    if np.count_nonzero(new) < 3:
+        raise ValueError(f"the curve needs at least 3 distinct vertices, got {np.count_nonzero(new)}")
+    starts = np.flatnonzero(new)
+    # vertex k belongs to the last distinct vertex at or before it (cyclically: a run of copies
+    # at the start of the array belongs to the last one)
+    owner = np.searchsorted(starts, np.arange(len(points)), side="right") - 1
+    return points[starts], np.where(owner < 0, len(starts) - 1, owner)
 
 
 def tangential_gradient(points, values):
@@ -193,7 +232,17 @@ def resample(points, spacing, *, min_vertices=8):
     """Vertices at equal arc-length steps of about ``spacing`` along the polygon.
 
     The first vertex is kept; the number of vertices is ``max(min_vertices, round(L / spacing))``.
+
+    Raises
+    ------
+    ValueError
+        For NaN or infinite coordinates, or a ``spacing`` that is not a finite number > 0.
     """
+    points = np.asarray(points, dtype=np.float64)
+    if not np.all(np.isfinite(points)):
+        raise ValueError("resample: the curve contains NaN or infinite coordinates")
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"spacing must be a finite number > 0 (pixels), got {spacing!r}")
     h = edge_lengths(points)
     s = np.concatenate([[0.0], np.cumsum(h)])
     total = s[-1]

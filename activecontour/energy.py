@@ -244,6 +244,13 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     Returns
     -------
     float
+
+    Raises
+    ------
+    ValueError
+        For a contour that is not a closed curve (see :func:`activecontour.curve.as_curve`) or has
+        a vertex outside the image domain ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``, where (6.38) is
+        not defined.
     """
     from activecontour.image import ImageModel, normalize_image
     from activecontour.noise import auto_mu, is_auto
@@ -251,6 +258,25 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     model = ImageModel(normalize_image(image, color=color, normalize=normalize))
     params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
+    if isinstance(contours, np.ndarray) and contours.ndim == 2:
+        contours = [contours]
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
+    for i, curve in enumerate(curves):
+        _check_in_domain(curve, model.bounds, f"contours[{i}]")
     points, next_index, _ = stack_curves(curves)
     return evaluate(model, points, next_index, params, empty_ok=True).energy
+
+
+def _check_in_domain(curve, bounds, name):
+    """ValueError naming ``name`` unless every vertex lies in the image domain D (a rectangle, so
+    then every edge does too).  Checked before the compiled kernel, which walks every grid line an
+    edge crosses: a vertex at 1e10 would keep it busy for hours."""
+    (low_r, low_c), (high_r, high_c) = bounds
+    slack = 1e-9 * max(high_r - low_r, high_c - low_c)  # rounding of a vertex clipped to the border
+    outside = np.any((curve < bounds[0] - slack) | (curve > bounds[1] + slack), axis=1)
+    if np.any(outside):
+        row, col = curve[np.argmax(outside)]
+        raise ValueError(
+            f"{name} has a vertex at (row, col) = ({row:.6g}, {col:.6g}) outside the image domain "
+            f"rows {low_r:g}..{high_r:g}, cols {low_c:g}..{high_c:g}"
+        )

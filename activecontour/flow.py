@@ -47,6 +47,9 @@ _VELOCITIES = ("h1", "l2")
 _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
 _WINDOW = 5  # iterations over which the movement is averaged for the stopping test
+_MEMORY = 8  # step pairs of the L-BFGS acceleration
+_MIN_SPACING = 0.1  # pixels: the bilinear image has no detail finer than this needs
+_CURVE_STEP = 0.25  # a trial step moves a curve by at most this fraction of its radius (RMS)
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
 _MIN_EDGE = 1e-9
@@ -58,7 +61,8 @@ _REMESH_COOLDOWN = 10
 
 
 def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocity="h1", spacing=1.0,
-                    max_step=8.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True):
+                    max_step=8.0, smoothing=30.0, min_smoothing=1.0, min_area=4.0, nucleate=True,
+                    accelerate=True):
     """Minimise (6.38) by the H^1 gradient flow of a polygon (``backend="polygon"``).
 
     Called by :func:`activecontour.segment`; the keywords after ``callback`` are its ``options``.
@@ -74,7 +78,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     velocity : {"h1", "l2"}
         The bilinear form b: H^1 (6.39), the default, or L^2 (6.25).
     spacing : float
-        Target distance between vertices, in pixels (> 0).  About one vertex per pixel resolves
+        Target distance between vertices, in pixels (>= 0.1).  About one vertex per pixel resolves
         everything the image resolves; the cost of an iteration grows with the curve's length in
         pixels either way.
     max_step : float
@@ -96,6 +100,13 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
         (the topological derivative, :func:`activecontour.topology.nucleation_sites`), insert
         small circles there and continue; repeated at most a few times.  This is how a single
         initial curve finds a hole or a second object it cannot reach by deformation.
+    accelerate : bool
+        Combine the velocity with the last few steps (limited-memory BFGS in the metric b: the
+        first inverse Hessian guess is b^{-1}, so without memory the step is the book's
+        velocity).  Near a minimum the plain flow converges slowly along the directions the
+        metric and the energy weigh differently (a small, smooth shift of a long contour); this
+        takes them in one step.  Every step still passes the same descent test.  The memory is
+        cleared when the vertices change (remesh, topology repair) and at each new stage.
 
     Returns
     -------
@@ -103,9 +114,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     """
     if velocity not in _VELOCITIES:
         raise ValueError(f"velocity must be one of {_VELOCITIES}, got {velocity!r}")
-    for name, value, low in (("spacing", spacing, 0.0), ("max_step", max_step, 0.0)):
-        if not (np.isfinite(value) and value > low):
-            raise ValueError(f"{name} must be a positive number of pixels, got {value!r}")
+    if not (np.isfinite(spacing) and spacing >= _MIN_SPACING):
+        raise ValueError(f"spacing must be a number of pixels >= {_MIN_SPACING} (vertices closer than "
+                         f"the image resolves only cost time), got {spacing!r}")
+    if not (np.isfinite(max_step) and max_step > 0):
+        raise ValueError(f"max_step must be a positive number of pixels, got {max_step!r}")
     if not (np.isfinite(min_smoothing) and np.isfinite(smoothing) and smoothing >= min_smoothing >= 0):
         raise ValueError(
             f"smoothing and min_smoothing must be pixel lengths with smoothing >= min_smoothing >= 0, "
@@ -121,7 +134,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     current = evaluate(model, *geometry[:2], params, gradient=True)
     if not np.isfinite(current.energy):
         raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")
-    flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds)
+    flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds, accelerate)
     energies = [current.energy]
     movement = _Movement()
     status, n_iter, last_remesh, rounds = 1, 0, -_REMESH_COOLDOWN, 0
@@ -169,7 +182,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
 class _Flow:
     """One time step (6.30)-(6.31) with backtracking and topology repair; remembers the last dt."""
 
-    def __init__(self, model, params, velocity, smoothing, max_step, min_area, bounds):
+    def __init__(self, model, params, velocity, smoothing, max_step, min_area, bounds, accelerate):
         self.model, self.params = model, params
         self.h1 = velocity == "h1"
         self.smoothing = smoothing
@@ -177,6 +190,7 @@ class _Flow:
         self.min_area = min_area
         self.low, self.high = bounds
         self.dt = np.inf
+        self.memory = _Memory(accelerate)
 
     def velocity(self, geometry, load):
         """Solve b(V, Y) = -f (6.40) for all curves at once (block-cyclic, O(K))."""
@@ -205,6 +219,7 @@ class _Flow:
     def restart(self, smoothing):
         self.smoothing = smoothing
         self.dt = np.inf
+        self.memory.clear()
 
     def nucleate(self, geometry, current):
         """Add the small holes/components that the topological derivative proposes, if J drops.
@@ -216,7 +231,8 @@ class _Flow:
         inside = rasterize(curves, self.model.shape)
         sites = topology.nucleation_sites(self.model.values, inside, self.params, current.c_in,
                                           current.c_out, _NUCLEATION_RADIUS)
-        seeds = [circle(center, _NUCLEATION_RADIUS)[:: -1 if hole else 1] for center, hole in sites]
+        seeds = [np.clip(circle(center, _NUCLEATION_RADIUS), self.low, self.high)[:: -1 if hole else 1]
+                 for center, hole in sites]
         best = None
         for chosen in ([seeds], [[seed] for seed in seeds[:_NUCLEATION_TRIALS]]):
             accepted = []
@@ -256,7 +272,8 @@ class _Flow:
         # leave those components out of the load and of the velocity (an active set), so that
         # f . V = -b^{-1}(f~, f~) < 0 stays a descent direction after clipping to the image.
         held = ((points <= self.low) & (current.load > 0)) | ((points >= self.high) & (current.load < 0))
-        v = self.velocity(geometry, np.where(held, 0.0, current.load))
+        load = np.where(held, 0.0, current.load)
+        v = self.velocity(geometry, load)
         v[held] = 0.0
         # the bulk of the curve, not its fastest vertex (a noise outlier, often 20x the median),
         # sets the scale of the first trial; backtracking still guarantees descent
@@ -264,6 +281,12 @@ class _Flow:
         if not speed > 0:
             return None
         dt = min(self.max_step / speed, 2.0 * self.dt)
+        accelerated = self.memory.direction(geometry, load, held, self.velocity)
+        if accelerated is not None:
+            # a quasi-Newton step in the same metric: its natural length is 1
+            v = accelerated
+            dt = min(1.0, self.max_step / np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2)))
+        dt = min(dt, _size_limit(geometry, v))
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
@@ -274,7 +297,9 @@ class _Flow:
             if candidate is not None and predicted < 0:
                 new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
                 if new.energy <= current.energy + _ARMIJO * predicted:
-                    self.dt = dt
+                    if accelerated is None:
+                        self.dt = dt
+                    self.memory.remember(geometry, candidate, current.load, new.load)
                     return candidate, new
             dt *= 0.5
         return None
@@ -334,6 +359,68 @@ class _Movement:
 
     def clear(self):
         self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
+
+
+def _size_limit(geometry, v):
+    """The largest dt that moves no curve by more than a quarter of its radius (RMS).
+
+    A first trial that jumps a small curve across itself (or shrinks it to nothing in one go)
+    can pass the descent test and still land far from where the flow was going.
+    """
+    points, next_index, offsets = geometry
+    d = points[next_index] - points
+    radius = np.add.reduceat(np.hypot(d[:, 0], d[:, 1]), offsets[:-1]) / (2 * np.pi)
+    rms = np.sqrt(np.add.reduceat(v[:, 0] ** 2 + v[:, 1] ** 2, offsets[:-1]) / np.diff(offsets))
+    moving = rms > 0
+    return float(np.min(_CURVE_STEP * radius[moving] / rms[moving])) if moving.any() else np.inf
+
+
+class _Memory:
+    """Limited-memory BFGS pairs (s, y) = (step, change of the load) in the metric b (6.39)."""
+
+    def __init__(self, enabled, size=_MEMORY):
+        self.enabled, self.size = enabled, size
+        self.clear()
+
+    def clear(self):
+        self.pairs, self.signature = [], None
+
+    def _matches(self, geometry):
+        return self.signature is not None and geometry[0].shape == self.signature[0] \
+            and np.array_equal(geometry[2], self.signature[1])
+
+    def remember(self, old, new, old_load, new_load):
+        if not self.enabled:
+            return
+        if not (self._matches(old) or not self.pairs) or new[0].shape != old[0].shape \
+                or not np.array_equal(new[2], old[2]):
+            self.clear()
+            if new[0].shape != old[0].shape or not np.array_equal(new[2], old[2]):
+                return
+        s, y = (new[0] - old[0]).ravel(), (new_load - old_load).ravel()
+        curvature = s @ y
+        if curvature > 1e-12 * np.sqrt((s @ s) * (y @ y)):
+            self.pairs = (self.pairs + [(s, y, 1.0 / curvature)])[-self.size:]
+        self.signature = (new[0].shape, new[2].copy())
+
+    def direction(self, geometry, load, held, velocity):
+        """The L-BFGS direction -H f (two-loop recursion, H_0 = gamma b^{-1}), or None."""
+        if not (self.enabled and self.pairs and self._matches(geometry)):
+            return None
+        q = load.ravel().copy()
+        alphas = []
+        for s, y, rho in reversed(self.pairs):
+            alpha = rho * (s @ q)
+            q -= alpha * y
+            alphas.append(alpha)
+        s, y, _ = self.pairs[-1]
+        metric_y = -velocity(geometry, y.reshape(load.shape)).ravel()  # b^{-1} y
+        r = (s @ y) / max(y @ metric_y, 1e-300) * -velocity(geometry, q.reshape(load.shape)).ravel()
+        for (s, y, rho), alpha in zip(self.pairs, reversed(alphas), strict=True):
+            r += s * (alpha - rho * (y @ r))
+        direction = -r.reshape(load.shape)
+        direction[held] = 0.0
+        return direction if np.sum(load * direction) < 0 else None
 
 
 def _unhealthy(geometry, spacing):

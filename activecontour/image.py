@@ -34,6 +34,31 @@ _COLOR_MODES = ("gray", "vector")
 NORMALIZATIONS = ("range", "dtype", None)
 
 
+#: Leading bytes of the formats the readers know, for saying what an unreadable file is.
+_SIGNATURES = (
+    (b"\x89PNG\r\n\x1a\n", "PNG"), (b"\xff\xd8\xff", "JPEG"), (b"II*\x00", "TIFF"),
+    (b"MM\x00*", "TIFF"), (b"II+\x00", "BigTIFF"), (b"MM\x00+", "BigTIFF"), (b"BM", "BMP"),
+    (b"GIF87a", "GIF"), (b"GIF89a", "GIF"), (b"RIFF", "WebP"), (b"\x00\x00\x00\x0cjP", "JPEG 2000"),
+)
+
+
+def _why_unreadable(path, error):
+    """One true line for a file no reader could open: empty, text, damaged, or the reader's words
+    (never the readers' advice to install plugins for a format the file is not in)."""
+    with open(path, "rb") as handle:
+        head = handle.read(4096)
+    if not head:
+        return "the file is empty (0 bytes)"
+    known = next((name for magic, name in _SIGNATURES if head.startswith(magic)), None)
+    if known is not None:
+        first_line = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        return f"the {known} data is damaged or truncated ({first_line})"
+    text = head.decode("utf-8", errors="ignore")  # the 4096th byte may cut a character in two
+    if all(ch.isprintable() or ch in "\t\r\n" for ch in text):
+        return "the file holds text, not an image"
+    return "not an image in a format the readers know (PNG, JPEG, TIFF, BMP, GIF, WebP, ...)"
+
+
 def load_image(path):
     """Read an image file into an array, with a clear error for a missing or unreadable file.
 
@@ -61,7 +86,7 @@ def load_image(path):
                 warnings.simplefilter("ignore", DeprecationWarning)
                 image = skimage.io.imread(path)
         except Exception as exc:  # every reader raises its own type; report them all the same way
-            raise ValueError(f"cannot read image {path!r}: {exc}") from None
+            raise ValueError(f"cannot read image {path!r}: {_why_unreadable(path, exc)}") from None
     image = np.asarray(image)
     if image.ndim == 3 and image.shape[0] in (3, 4) and image.shape[2] not in (3, 4):
         image = np.moveaxis(image, 0, -1)  # channel-first TIFF

@@ -73,7 +73,8 @@ def grid(shape, spacing=GRID_SPACING, radius=GRID_RADIUS, *, values=None):
     cols = np.arange(spacing / 2.0, n - 0.5, spacing) - 0.5
     if rows.size == 0 or cols.size == 0:
         return [circle(((m - 1) / 2.0, (n - 1) / 2.0), min(radius, (min(m, n) - 1) / 2.0))]
-    circles = [circle((r, c), radius) for r in rows for c in cols]
+    low, high = (-0.5, -0.5), (m - 0.5, n - 0.5)
+    circles = [np.clip(circle((r, c), radius), low, high) for r in rows for c in cols]
     if values is None:
         return circles
     on_object = _object_class(values)[0][np.rint(rows).astype(int)[:, None], np.rint(cols).astype(int)]
@@ -81,35 +82,34 @@ def grid(shape, spacing=GRID_SPACING, radius=GRID_RADIUS, *, values=None):
     return kept or circles
 
 
-def _object_class(values, iterations=20):
+def _object_class(values, iterations=20, sample=1_000_000):
     """The object class of 2-means: a bool (M, N) mask and the squared distance of the means.
 
     The pixels are split in two classes by 2-means (Lloyd's iterations from the split along the
-    principal axis); the background is the class that covers most of the image border.  The
-    contrast is 0 when there is one class only.
+    principal axis, on at most ``sample`` pixels: the two means need no more); the background is
+    the class that covers most of the image border.  The contrast is 0 when there is one class.
     """
     flat = values.reshape(-1, values.shape[2])
-    centred = flat - flat.mean(axis=0)
-    axis = np.linalg.svd(centred[:: max(1, len(flat) // 20000)], full_matrices=False)[2][0]
+    fit = flat[:: max(1, len(flat) // sample)]
+    centred = fit - fit.mean(axis=0)
+    axis = np.linalg.svd(centred[:: max(1, len(fit) // 20000)], full_matrices=False)[2][0]
     label = centred @ axis > 0
-    means = None
     for _ in range(iterations):
         if label.all() or not label.any():
             return np.zeros(values.shape[:2], dtype=bool), 0.0
-        means = flat[~label].mean(axis=0), flat[label].mean(axis=0)
-        # the nearer mean, i.e. the threshold half-way between them along their difference
-        direction = means[1] - means[0]
-        new = flat @ direction > 0.5 * (means[1] + means[0]) @ direction
+        low, high = fit[~label].mean(axis=0), fit[label].mean(axis=0)
+        # the nearer mean: the threshold half-way between them along their difference
+        new = fit @ (high - low) > 0.5 * (high + low) @ (high - low)
         if np.array_equal(new, label):
             break
         label = new
     if label.all() or not label.any():
         return np.zeros(values.shape[:2], dtype=bool), 0.0
-    means = flat[~label].mean(axis=0), flat[label].mean(axis=0)
-    label = label.reshape(values.shape[:2])
+    low, high = fit[~label].mean(axis=0), fit[label].mean(axis=0)
+    label = (flat @ (high - low) > 0.5 * (high + low) @ (high - low)).reshape(values.shape[:2])
     border = np.concatenate([label[0], label[-1], label[:, 0], label[:, -1]])
     # the fit terms are the channels' mean: so is the contrast
-    contrast = float(np.mean((means[1] - means[0]) ** 2))
+    contrast = float(np.mean((high - low) ** 2))
     return (~label if border.mean() > 0.5 else label), contrast
 
 
@@ -186,18 +186,24 @@ def initial_curves(init, shape, values=None, mu=0.0):
     ValueError
         For a mask of the wrong shape or an empty one, a malformed curve, or a curve that lies
         outside the image.  Curves partly outside are clipped to the image domain
-        ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``.
+        ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``; curves given by the user are oriented by nesting
+        and overlaps are merged (:func:`region_boundary`).  An integer array of the image's shape
+        with two values (0/1, 0/255) is a mask too.
     """
     if init is None:
         return default_init(shape, values, mu)
-    if hasattr(init, "contours") and hasattr(init, "mask"):
+    from_result = hasattr(init, "contours") and hasattr(init, "mask")
+    if from_result:  # a result's contours are already the oriented boundary of its region
         init = init.contours
-    if isinstance(init, np.ndarray) and init.dtype == bool:
+    if _is_mask(init, shape):
+        init = np.asarray(init) != 0
         if init.shape != tuple(shape):
             raise ValueError(
                 f"init mask has shape {init.shape}, but the image has shape {tuple(shape)}"
             )
-        curves = mask_to_curves(init)
+        # pieces under DEFAULT_INIT_MIN_AREA would be removed by the flow's first steps anyway,
+        # at the price of a curve each (a speckle mask has thousands)
+        curves = mask_to_curves(init, min_area=DEFAULT_INIT_MIN_AREA) or mask_to_curves(init)
         if not curves:
             raise ValueError("init mask is empty: it selects no pixel")
         return curves
@@ -215,14 +221,57 @@ def initial_curves(init, shape, values=None, mu=0.0):
         raw = list(init)
     else:
         raw = [init]
-    return [_clip(as_curve(c, name=f"init curve {i}"), shape, i) for i, c in enumerate(raw)]
+    curves = [_clip(as_curve(c, name=f"init curve {i}"), shape, i) for i, c in enumerate(raw)]
+    return curves if from_result else region_boundary(curves)
+
+
+def region_boundary(curves):
+    """The boundary of the region a user's curves outline, oriented by nesting.
+
+    A curve inside an even number of the others is an outer boundary (made positive), inside an
+    odd number a hole (made negative), whatever orientation it was given in: a lone curve is an
+    outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate.
+    Where curves overlap or cross themselves, the region is the union, {w > 0}, rebuilt as its
+    exact boundary (:func:`activecontour.topology.repair`): winding-number weights of 2 are not a
+    region (6.38) is defined on.
+    """
+    from activecontour import topology
+    from activecontour.energy import stack_curves
+
+    oriented = []
+    for i, curve in enumerate(curves):
+        depth = sum(_contains(other, curve[0]) for j, other in enumerate(curves) if j != i)
+        oriented.append(orient(curve, hole=depth % 2 == 1))
+    repaired = topology.repair(*stack_curves(oriented))
+    return oriented if repaired is None else repaired or oriented
+
+
+def _contains(curve, point):
+    """Whether ``point`` lies inside the closed ``curve`` (either orientation)."""
+    low, high = curve.min(axis=0), curve.max(axis=0)
+    if np.any(point < low) or np.any(point > high):
+        return False
+    from activecontour.topology import winding_number
+
+    next_index = np.roll(np.arange(len(curve)), -1)
+    return bool(winding_number(curve, next_index, point[None, :])[0] != 0)
+
+
+def _is_mask(init, shape):
+    """A bool array, or an integer array of the image's shape with two values (0/1, 0/255)."""
+    if not isinstance(init, np.ndarray):
+        return False
+    if init.dtype == bool:
+        return True
+    return (np.issubdtype(init.dtype, np.integer) and init.ndim == 2 and init.shape == tuple(shape)
+            and np.unique(init).size <= 2)
 
 
 def _clip(curve, shape, index):
     m, n = shape
     low, high = np.array([-0.5, -0.5]), np.array([m - 0.5, n - 0.5])
     clipped = np.clip(curve, low, high)
-    if abs(signed_area(clipped)) < 1.0:
+    if abs(signed_area(clipped)) <= 1e-9 * max(1.0, abs(signed_area(curve))):
         raise ValueError(
             f"init curve {index} lies outside the image (rows -0.5..{m - 0.5}, "
             f"cols -0.5..{n - 0.5}); its bounding box is rows {curve[:, 0].min():.1f}.."

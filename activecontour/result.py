@@ -32,7 +32,7 @@ class SegmentationResult:
         The inside region Omega_i: pixels whose centre lies inside the contours.
     contours : list of ndarray (K, 2)
         Closed curves in (row, col), pixel centres at integer coordinates, each vertex once; outer
-        boundaries have positive signed area, holes negative (DESIGN.md conventions).
+        boundaries have positive signed area, holes negative (the conventions of :mod:`activecontour.curve`).
     c_in, c_out : float or ndarray (C,)
         The region constants (6.42) at the end: floats for gray images, one per channel otherwise.
     energy : float

@@ -23,7 +23,7 @@ BACKENDS = {
 
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
-            lambda_out=1.0, max_num_iter=500, tol=1e-3, callback=None, c_in=None, c_out=None,
+            lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
             color="gray", normalize="range", options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 

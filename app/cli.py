@@ -17,28 +17,36 @@ Usage
 ``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
 (the contour drawn on the image) and ``<DIR>/<name>_contours.<fmt>`` for each format, where
 ``<name>`` is the image's file name without its suffix.  ``DIR`` defaults to the directory of each
-image and is created when missing.  A progress bar is drawn on stderr when it is a terminal; one
-summary line per image goes to stdout (``--quiet`` silences both).
+image and is created when the first files go into it.  On a terminal a status line on stderr shows
+the file (k/N), ``loading`` while it is read, then the iteration, the energy, the elapsed time and
+the time left; one summary line per image goes to stdout, with the reason when ``success=False``
+(``--quiet`` silences both).
 
 Errors
 ------
-Every input is checked before the first image is segmented: the files exist and are images, the
-parameters are valid, the initial curve lies inside each image (an init mask must have its shape),
-the output directory can hold the files, and no output would overwrite an input or another image's
-output.  Any problem prints one line ``activecontour: error: ...`` on stderr and exits with status
-2.  Each image's files are written as a group, all or none (:func:`activecontour.io.save_result`),
-so an interrupted or failed run never leaves a half-written file; images finished before a failure
-keep their complete outputs.  A run that reaches ``--max-iter`` without converging is not an error:
-its summary says ``success=False``.
+The arguments are checked before any image is read: the parameters and backend options, the
+init, that every IMAGE exists, that no output would overwrite an input or another image's output,
+and that the output directory can be created.  Any problem there prints one line
+``activecontour: error: ...`` on stderr and exits with status 2.  Then each image is read,
+checked against the init, segmented and saved; an image that fails (unreadable, init outside it,
+an error while writing) gets one such line naming it, and the batch goes on with the next image;
+the exit status is 2 if any image failed.  Each image's files are written as a group, all or none
+(:func:`activecontour.io.save_result`), so a failed or interrupted run never leaves a half-written
+file, and images finished earlier keep their outputs.  Ctrl-C ends the run at once, status 130
+(the image being segmented is abandoned: nothing of it is written).  A run that reaches
+``--max-iter`` without converging is not an error: its summary says ``success=False`` and why.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import inspect
 import math
 import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -80,12 +88,12 @@ def main(argv=None):
     argv : list of str, optional
         The arguments after the program name; ``sys.argv[1:]`` by default.
     """
-    parser = build_parser()
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help (0) or a usage error (2), already printed
-        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
-    try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help (0) or a usage error (2), already printed
+            return exc.code if isinstance(exc.code, int) else EXIT_USAGE
         return args.run(args)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
@@ -93,6 +101,17 @@ def main(argv=None):
     except (UsageError, FileNotFoundError, ValueError, TypeError, OSError) as exc:
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
+
+
+def console_script():
+    """The ``activecontour`` executable: :func:`main`, and after Ctrl-C an exit without the
+    interpreter's teardown of numba, SciPy and OpenCV (0.5-1.3 s), so that it answers at once."""
+    status = main()
+    if status == EXIT_INTERRUPTED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status
 
 
 def build_parser():
@@ -201,43 +220,121 @@ def _add_parameter_options(parser):
 
 
 def _run_segment(args):
+    """Check the arguments, then segment each image; a failing image is reported and skipped."""
+    settings = _settings(args)
+    init, init_description = _load_init(args)
+    _check_inputs_exist(args.images)
+    plans = _plan_outputs(args.images, args.output, args.formats)
+    color = _overlay_color(args.overlay_color)
+    _check_can_create(args.output)
+    batch = _Batch(init, init_description, settings, args.formats, color,
+                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet)
+    progress = (_Progress(len(plans)) if not args.quiet and _is_terminal(sys.stderr) else None)
+    failures = 0
+    try:
+        for number, (image_path, stem) in enumerate(plans, start=1):
+            if progress is not None:
+                progress.start(number, image_path)
+            try:
+                line = _segment_one(image_path, stem, batch, progress)
+            except (UsageError, FileNotFoundError, ValueError, TypeError, OSError) as exc:
+                failures += 1
+                _report(progress, f"{PROG}: error: {_naming(image_path, exc)}", sys.stderr)
+            else:
+                if not args.quiet:
+                    _report(progress, line, sys.stdout)
+    finally:
+        if progress is not None:
+            progress.close()
+        _remove_if_empty(batch.created)
+    if failures and len(plans) > 1:
+        print(f"{PROG}: error: {failures} of {len(plans)} images failed; the others were written",
+              file=sys.stderr)
+    return EXIT_USAGE if failures else 0
+
+
+class _Batch:
+    """What every image of a ``segment`` run shares: the init, the settings and the outputs."""
+
+    def __init__(self, init, init_description, settings, formats, color, *, protect, output, quiet):
+        self.init = init
+        self.init_description = init_description
+        self.settings = settings
+        self.formats = formats
+        self.color = color
+        self.protect = protect
+        self.output = output
+        self.quiet = quiet
+        #: (leaf, topmost) of every output directory this run created
+        self.created = []
+
+
+def _segment_one(image_path, stem, batch, progress=None):
+    """Load, check, segment and save one image (its files all or none); return its summary line.
+
+    Raises the library's ValueError/TypeError/OSError or a UsageError for this image only.
+    """
     import activecontour
     from activecontour import io
 
-    settings = _settings(args)
-    init, init_description = _load_init(args)
-    plans = _plan_outputs(args.images, args.output, args.formats)
-    color = _overlay_color(args.overlay_color)
-    for image_path, _ in plans:
-        _check_image(image_path, init, settings)
-    created = _make_directory(args.output)
-    show_progress = not args.quiet and _is_terminal(sys.stderr)
-    init_argument = list(init) if isinstance(init, _ContourInit) else init
+    with _interrupt_at_once():
+        image = activecontour.load_image(image_path)
+        _check_image(image_path, batch.init, batch.settings, image=image)
+        init = list(batch.init) if isinstance(batch.init, _ContourInit) else batch.init
+        started = time.perf_counter()
+        result = activecontour.segment(image, init, callback=progress, **batch.settings)
+        elapsed = time.perf_counter() - started
+    metadata = {
+        "image": os.fspath(image_path),
+        "init": batch.init_description,
+        "parameters": batch.settings,
+        "wall_time_s": elapsed,
+    }
+    _make_directory(Path(stem).parent, batch.created)
+    written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
+                             color=batch.color, protect=batch.protect)
+    return _summary(Path(image_path).name, result, elapsed, written)
+
+
+@contextlib.contextmanager
+def _interrupt_at_once():
+    """Let Ctrl-C end the process at once while an image is read and segmented.
+
+    Python turns SIGINT into KeyboardInterrupt only between bytecodes, and a compiled kernel
+    holds the interpreter for as long as it runs (20 s in ``topology.winding_number`` on a
+    speckle init).  Nothing is being written in this phase (the files of an image are written
+    after it, all or none), so the signal's default action, ending the process, loses nothing that
+    was finished.  Left alone when SIGINT is not Python's default (ignored, or the caller's).
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield
+        return
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
     try:
-        for image_path, stem in plans:
-            image = activecontour.load_image(image_path)
-            progress = _Progress(Path(image_path).name) if show_progress else None
-            started = time.perf_counter()
-            try:
-                result = activecontour.segment(image, init_argument, callback=progress, **settings)
-            finally:
-                if progress is not None:
-                    progress.close()
-            elapsed = time.perf_counter() - started
-            metadata = {
-                "image": os.fspath(image_path),
-                "init": init_description,
-                "parameters": settings,
-                "wall_time_s": elapsed,
-            }
-            written = io.save_result(result, image, stem, args.formats, metadata=metadata,
-                                     color=color, protect=[p for p, _ in plans])
-            if not args.quiet:
-                print(_summary(Path(image_path).name, result, elapsed, written), flush=True)
-    except BaseException:
-        _remove_if_empty(created)
-        raise
-    return 0
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _naming(image_path, exc):
+    """The error's one line, prefixed by the image's path unless it already names it."""
+    text = _one_line(exc)
+    return text if os.fspath(image_path) in text else f"{os.fspath(image_path)}: {text}"
+
+
+def _report(progress, line, stream):
+    """Print a summary or error line, lifting the progress line out of the way first."""
+    if progress is not None:
+        progress.clear()
+    print(line, file=stream, flush=True)
+
+
+def _check_inputs_exist(images):
+    """A name that is not there is a mistake in the command line: nothing runs."""
+    for image_path in images:
+        if not os.path.exists(image_path):
+            raise UsageError(f"image file not found: {os.fspath(image_path)!r}")
 
 
 def _settings(args):
@@ -247,6 +344,7 @@ def _settings(args):
     settings = {name: getattr(args, name) for name in _PARAMETER_OPTIONS}
     if getattr(args, "options", None):
         settings["options"] = dict(args.options)
+        _check_option_types(settings["backend"], settings["options"])
     try:
         ChanVeseParameters(0.0 if settings["mu"] == "auto" else settings["mu"], settings["omega"],
                            settings["lambda_in"],
@@ -277,6 +375,42 @@ def _option(text):
         except ValueError:
             pass
     return key.strip(), {"true": True, "false": False}.get(value.lower(), value)
+
+
+def _check_option_types(backend, options):
+    """Each ``--option KEY=VALUE`` of the kind of its default: a number for a number, true/false
+    for a flag, text for text (unknown keys are left to segment(), which lists the valid ones)."""
+    for key, value in options.items():
+        default = _backend_option_defaults(backend).get(key)
+        if default is None:
+            continue
+        if isinstance(default, bool):
+            expected, ok = "true or false", isinstance(value, bool)
+        elif isinstance(default, (int, float)):
+            expected, ok = "a number", isinstance(value, (int, float)) and not isinstance(value, bool)
+            ok = ok and math.isfinite(value)
+        else:
+            expected, ok = "text", isinstance(value, str)
+        if not ok:
+            raise UsageError(f"--option {key}: expected {expected} (default {default!r}), got "
+                             f"{'true' if value is True else 'false' if value is False else value!r}")
+
+
+def _backend_option_defaults(backend):
+    """A backend's settings and their defaults: its keyword-only parameters, or the
+    ``DEFAULT_OPTIONS`` table of a backend that takes ``**options``."""
+    import importlib
+
+    from activecontour.segment import BACKENDS
+
+    module_name, function_name = BACKENDS[backend].split(":")
+    module = importlib.import_module(module_name)
+    parameters = inspect.signature(getattr(module, function_name)).parameters.values()
+    defaults = {p.name: p.default for p in parameters
+                if p.kind is inspect.Parameter.KEYWORD_ONLY and p.default is not inspect.Parameter.empty}
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
+        defaults.update(getattr(module, "DEFAULT_OPTIONS", {}))
+    return defaults
 
 
 def _with_option_names(message):
@@ -374,13 +508,16 @@ def _plan_outputs(images, output, formats):
     return plans
 
 
-def _check_image(image_path, init, settings):
-    """Load the image and check that it and the init are usable (no segmentation yet)."""
+def _check_image(image_path, init, settings, image=None):
+    """Check that the image (read from ``image_path`` unless given) and the init are usable
+    together (no segmentation yet)."""
     import activecontour
     from activecontour.image import normalize_image
     from activecontour.initial import initial_curves
 
-    image = activecontour.load_image(image_path)
+    if image is None:
+        image = activecontour.load_image(image_path)
+
     try:
         channels = normalize_image(image, color=settings["color"]).shape[2]
     except (ValueError, TypeError) as exc:
@@ -406,33 +543,49 @@ def _check_image(image_path, init, settings):
         raise UsageError(f"{image_path}: {_one_line(exc)}") from None
 
 
-def _make_directory(output):
-    """Create the output directory if needed; return the topmost directory this run created."""
+def _check_can_create(output):
+    """Before any work: the output directory exists, or its nearest existing parent is a writable
+    directory (it is created when the first image's files are written)."""
     if output is None or os.path.isdir(output):
-        return None
-    topmost = Path(os.path.abspath(output))
+        return
+    parent = Path(os.path.abspath(output))
+    while not os.path.lexists(parent):
+        parent = parent.parent
+    if not os.path.isdir(parent):
+        raise UsageError(f"cannot create the output directory {os.fspath(output)!r}: "
+                         f"{os.fspath(parent)!r} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise UsageError(f"cannot create the output directory {os.fspath(output)!r}: "
+                         f"{os.fspath(parent)!r} is not writable")
+
+
+def _make_directory(directory, created):
+    """Create the output directory when the first files go into it, and note in ``created`` the
+    topmost directory made, so that a run which ends up writing nothing leaves none behind."""
+    if os.path.isdir(directory):
+        return
+    leaf = Path(os.path.abspath(directory))
+    topmost = leaf
     while not topmost.parent.exists():
         topmost = topmost.parent
     try:
-        os.makedirs(output)
+        os.makedirs(directory)
     except OSError as exc:
-        raise UsageError(f"cannot create the output directory {os.fspath(output)!r}: "
+        raise UsageError(f"cannot create the output directory {os.fspath(directory)!r}: "
                          f"{exc.strerror or exc}") from None
-    return (Path(os.path.abspath(output)), topmost)
+    created.append((leaf, topmost))
 
 
 def _remove_if_empty(created):
     """Remove the directories this run created, from the leaf up, if nothing was written in them."""
-    if created is None:
-        return
-    leaf, topmost = created
-    for directory in [leaf, *leaf.parents]:
-        try:
-            os.rmdir(directory)  # only succeeds on an empty directory
-        except OSError:
-            return
-        if directory == topmost:
-            return
+    for leaf, topmost in created:
+        for directory in [leaf, *leaf.parents]:
+            try:
+                os.rmdir(directory)  # only succeeds on an empty directory
+            except OSError:
+                break
+            if directory == topmost:
+                break
 
 
 def _overlay_color(text):
@@ -452,11 +605,13 @@ def _overlay_color(text):
 
 
 def _summary(name, result, elapsed, written):
+    """One line per image; a result that did not converge says why."""
     stem = os.path.commonprefix([os.fspath(p) for p in written])
+    why = "" if result.success else f" ({result.message.rstrip('.')})"
     return (
         f"{name}: iterations={result.n_iter} energy={result.energy:.6g} mu={result.mu:.4g} "
         f"c_in={_format_constant(result.c_in)} c_out={_format_constant(result.c_out)} "
-        f"time={elapsed:.2f}s success={result.success} output={stem}*"
+        f"time={elapsed:.2f}s success={result.success}{why} output={stem}*"
     )
 
 
@@ -468,36 +623,82 @@ def _format_constant(value):
 
 
 class _Progress:
-    """A one-line text progress bar on stderr, redrawn in place at most ten times a second."""
+    """One status line on stderr, redrawn in place at most ten times a second.
 
-    width = 30
+    It shows the file (k/N) and its name, ``loading`` while the file is read, then the iteration,
+    the energy, the time since the run started and an estimate of the time left: the mean time of
+    the images finished so far times the images left (``?`` before the first one finishes).
+    Used as the ``callback`` of :func:`activecontour.segment`.
+    """
 
-    def __init__(self, name, stream=None):
-        self.name = name
+    width = 20
+
+    def __init__(self, total, stream=None, clock=time.monotonic):
+        self.total = total
         self.stream = stream if stream is not None else sys.stderr
-        self._last = 0.0
+        self.clock = clock
+        self.started = clock()
+        self.finished = 0
+        self.number = 0
+        self.name = ""
+        self.image_started = self.started
+        self._last = -math.inf
         self._drawn = False
 
+    def start(self, number, path):
+        """A new image: count the previous one as finished and show that this one is loading."""
+        now = self.clock()
+        if self.number:
+            self.finished += 1
+        self.number, self.name, self.image_started = number, Path(path).name, now
+        try:
+            size = f" ({os.path.getsize(path) / 1e6:.1f} MB)"
+        except OSError:
+            size = ""
+        self._draw(f"loading{size}", now)
+
     def __call__(self, state):
-        now = time.monotonic()
+        now = self.clock()
         if now - self._last < 0.1 and state.iteration < state.max_num_iter:
             return None
-        self._last = now
         total = max(int(state.max_num_iter), 1)
         filled = min(self.width, int(self.width * state.iteration / total))
         bar = "#" * filled + "-" * (self.width - filled)
-        self.stream.write(
-            f"\r{self.name} [{bar}] {state.iteration}/{state.max_num_iter} "
-            f"energy {state.energy:<12.6g}"
-        )
-        self.stream.flush()
-        self._drawn = True
+        self._draw(f"[{bar}] {state.iteration}/{state.max_num_iter} energy {state.energy:<11.6g}", now)
         return None
 
-    def close(self):
+    def remaining(self, now):
+        """Seconds left for the whole batch, or None before an image has finished."""
+        if not self.finished:
+            return None
+        per_image = (self.image_started - self.started) / self.finished
+        left = per_image * (self.total - self.number) + max(0.0, per_image - (now - self.image_started))
+        return left
+
+    def _draw(self, text, now):
+        left = self.remaining(now)
+        self.stream.write(
+            f"\r\033[K[{self.number}/{self.total}] {self.name}: {text} "
+            f"elapsed {_clock(now - self.started)} left {'?' if left is None else '~' + _clock(left)}"
+        )
+        self.stream.flush()
+        self._last = now
+        self._drawn = True
+
+    def clear(self):
+        """Erase the line (before a summary or error line is printed)."""
         if self._drawn:
-            self.stream.write("\r\033[K")  # clear the line for the summary
+            self.stream.write("\r\033[K")
             self.stream.flush()
+            self._drawn = False
+
+    close = clear
+
+
+def _clock(seconds):
+    minutes, seconds = divmod(int(round(seconds)), 60)
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours}:{minutes:02d}:{seconds:02d}" if hours else f"{minutes}:{seconds:02d}"
 
 
 # ------------------------------------------------------------------------------------------ view
@@ -513,7 +714,7 @@ def _run_view(args):
     shape = image.shape[:2]
     if isinstance(init, _ContourInit):
         init = list(init)
-    if init is not None:
+    if init is not None and not isinstance(init, str):  # "grid" and "checkerboard" fit any image
         try:
             initial_curves(init, shape)
         except (ValueError, TypeError) as exc:

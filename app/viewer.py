@@ -5,8 +5,15 @@ curve with the mouse (circle, box, polygon) or from a mask file, and runs, pause
 the flow of :func:`activecontour.segment` while showing the iteration, the energy (6.38), the
 constants c_in, c_out (6.42) and a small plot of the energy history.  Sliders set mu, omega,
 lambda_in, lambda_out and the polygon backend's step size; fields set max_num_iter and tol; radio
-buttons choose the backend and the init gesture.  Changes apply to the next run.  The result is
-saved with the CLI's writers (:func:`activecontour.io.save_result`).
+buttons choose the backend and the init gesture.  Changes apply to the next run.  Another image
+can be opened from the window (the "image" field, key i).  The result is saved with the CLI's
+writers (:func:`activecontour.io.save_result`), by default next to the input image, which is never
+overwritten.  The toolbar's readout gives the mouse position as (row, col), the convention of the
+whole package, and the image's value there.
+
+Without a drawn init the viewer starts from the library's: it passes ``init=None`` (or the named
+start given, ``"grid"`` or ``"checkerboard"``) to :func:`activecontour.segment`, and shows as the
+dashed initial curve what the library starts from (its result after zero iterations).
 
 The viewer holds no solver logic: every iteration is the library's, seen through its callback.
 
@@ -50,7 +57,7 @@ import numpy as np
 
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
-from activecontour.initial import default_init, initial_curves
+from activecontour.initial import initial_curves
 from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
 from app.viewer_layout import (
@@ -60,10 +67,18 @@ from app.viewer_layout import (
     STEP_OPTIONS,
     build_layout,
     new_figure,
+    refit_texts,
+    set_slider_value,
+    show_energy,
+    show_image,
 )
 from app.viewer_tools import INIT_MODES, CurveDrawer
 
-__all__ = ["CONTOUR_COLOR", "SHORTCUTS", "Viewer", "launch"]
+__all__ = ["CONTOUR_COLOR", "NAMED_INITS", "SHORTCUTS", "Viewer", "launch"]
+
+#: The library's named starts the viewer passes on as they are (the level set's checkerboard
+#: needs ``backend="levelset"``).
+NAMED_INITS = ("grid", "checkerboard")
 
 #: Seconds between two calls of ``flush_events`` during a run: the GUI answers within this time
 #: plus one iteration.
@@ -79,9 +94,12 @@ SHORTCUTS = (
     ("b", "b", "box"),
     ("p", "p", "polygon"),
     ("m", "m", "load mask"),
+    ("i", "i", "open image"),
     ("g", "g", "gray/colour"),
     ("q", "q", "quit"),
 )
+
+_SLIDER_LABELS = {name: label for name, label, *_ in SLIDERS}
 
 _STATUS_WORDS = {0: "converged", 1: "max_num_iter reached", 2: "paused", 3: "collapsed",
                  4: "stationary"}
@@ -102,9 +120,10 @@ class Viewer:
         library's default.
     c_in, c_out : float or sequence, optional
         Hold the region constants fixed (passed to :func:`activecontour.segment`; no control).
-    init : None, path, ndarray (K, 2), list of them, or bool ndarray (M, N)
-        The initial curve: a mask file (path), anything :func:`activecontour.segment` accepts, or
-        None for the library's default (a centred circle).
+    init : None, "grid", "checkerboard", path, ndarray (K, 2), list of them, or bool ndarray (M, N)
+        The initial curve: None for the library's default, a named start of the library
+        (:data:`NAMED_INITS`), a mask file (a path; any other string), or curves or a mask as
+        :func:`activecontour.segment` accepts them.
     color : {"gray", "vector"}
         How colour images are segmented (see :func:`activecontour.segment`).
     formats : sequence of str
@@ -122,8 +141,13 @@ class Viewer:
     layout : app.viewer_layout.Layout
         The window's artists and widgets, which are also attributes of the viewer
         (``ax_image``, ``sliders``, ``run_button``, ``save_box``, ...).
+    init : None, str or list of ndarray (K, 2)
+        What the next fresh run passes to :func:`activecontour.segment`: None (the library's
+        default), a name from :data:`NAMED_INITS`, or curves (drawn, loaded or given, clipped to
+        the image as the library does).
     init_curves : list of ndarray (K, 2)
-        The initial curves, clipped to the image as the library does.
+        The initial curves as shown: the curves of ``init``, or for None and a named init the
+        library's start for the selected backend (empty when the library refuses it).
     contours : list of ndarray (K, 2)
         The current contours (empty before the first run and after a reset).
     result : SegmentationResult or None
@@ -158,17 +182,20 @@ class Viewer:
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         display = normalize_image(self.image, color="vector")  # validates the image, too
         self.shape = display.shape[:2]
-        values = normalize_image(self.image, color=color)
-        if is_auto(settings["mu"]):  # the slider starts at the value segment(mu="auto") would use
-            settings["mu"] = auto_mu(values)
+        # mu="auto": the slider shows the value segment(mu="auto") would use, until it is moved
+        self._mu_auto = is_auto(settings["mu"])
+        if self._mu_auto:
+            settings["mu"] = self._auto_mu()
         self.image_path = None if image_path is None else Path(image_path)
+        # Save's relative stems start here, wherever the working directory goes later
+        self._image_folder = None if image_path is None else Path(os.path.abspath(image_path)).parent
         self.formats = formats
         self.redraw_every = int(redraw_every)
-        self.init_curves = default_init(self.shape, values, settings["mu"])  # segment's init=None
-        if init is not None:  # a bad init is an error here, before any window exists
-            if isinstance(init, (str, os.PathLike)):
-                init = _read_mask_file(init)
-            self.init_curves = initial_curves(init, self.shape)
+        # a bad init is an error here, before any window exists
+        if isinstance(init, (str, os.PathLike)) and init not in NAMED_INITS:
+            init = _read_mask_file(init)
+        self.init = init if init is None or isinstance(init, str) else initial_curves(init, self.shape)
+        self.init_curves = []
 
         self.result = None
         self.contours = []
@@ -194,29 +221,37 @@ class Viewer:
         self.live = (self.fig.canvas.required_interactive_framework is not None) if live is None \
             else bool(live)
         step_values = {name: _backend_default(name, option) for name, (option, *_) in STEP_OPTIONS.items()}
-        help_line = "   ".join(f"{shown} {action}" for _, shown, action in SHORTCUTS)
+        help_line = "  ".join(f"{shown} {action}" for _, shown, action in SHORTCUTS)
         with _no_redraw(self.fig.canvas):  # widgets redraw as they are built: once is enough
             layout = build_layout(
                 self.fig, display, backends=tuple(BACKENDS), backend=settings["backend"],
                 values={name: settings[name] for name, *_ in SLIDERS},
                 step_values={k: v for k, v in step_values.items() if v is not None},
                 max_num_iter=settings["max_num_iter"], tol=settings["tol"],
-                save_stem="" if self.image_path is None else os.fspath(self.image_path.with_suffix("")),
-                help_line=f"keys: {help_line}   |   polygon: click vertices, enter closes, esc cancels")
+                save_stem="" if self.image_path is None else self.image_path.stem,
+                help_line=f"keys:  {help_line}")
         self.layout = layout
         vars(self).update(vars(layout))  # its artists and widgets are the viewer's attributes
         self._valid_fields = {"max iter": self.maxiter_box.text, "tol": self.tol_box.text}
         self.drawer = CurveDrawer(self.ax_image, self._on_drawn_curve, self._set_message, self._redraw,
                                   color=PREVIEW_COLOR)
+        self.ax_image.format_coord = self.format_coord
+        self._show_mu_mode()
         self._show_step_slider(settings["backend"])
         if not self.live:
             for widget in layout.widgets:
                 widget.drawon = False
+        problem = self._preview_init()
+        if problem is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self.fig)
+            raise ValueError(problem)
         self._connect_events()
         self._show_curves()
         self._show_readout(None)
-        self._set_message("draw an initial curve with the mouse (or keep the default circle), "
-                          "then press space to run")
+        self._set_message("draw an initial curve with the mouse (or keep the library's start, "
+                          "dashed), then press space to run")
 
     # ------------------------------------------------------------------------------- controls
     def parameters(self):
@@ -245,7 +280,25 @@ class Viewer:
 
     @property
     def output_stem(self):
-        return self.save_box.text.strip()
+        """Where Save writes: the "save as" field, a relative path taken from the input image's
+        folder (the working directory when the image came from no file)."""
+        text = self.save_box.text.strip()
+        if not text:
+            return ""
+        stem = Path(text).expanduser()
+        if not stem.is_absolute() and self.image_path is not None:
+            stem = self._image_folder / stem
+        return os.fspath(stem)
+
+    def format_coord(self, x, y):
+        """The toolbar's readout for the image axes: (row, col) of the mouse and the image's value
+        at the nearest pixel centre."""
+        row, col = y, x
+        text = f"row {row:.1f}, col {col:.1f}"
+        i, j = int(np.floor(row + 0.5)), int(np.floor(col + 0.5))
+        if 0 <= i < self.shape[0] and 0 <= j < self.shape[1]:
+            text += f"  value {_format_constant(self.image[i, j])}"
+        return text
 
     # -------------------------------------------------------------------------------- actions
     def toggle_run(self):
@@ -285,7 +338,8 @@ class Viewer:
         self._set_message("reset to the initial curve")
 
     def set_init(self, init):
-        """Set the initial curve(s) from anything :func:`activecontour.segment` accepts.
+        """Set the initial curve(s) from anything :func:`activecontour.segment` accepts: None
+        (the library's default), a name from :data:`NAMED_INITS`, curves or a mask.
 
         Returns True when the init was accepted; otherwise the status line says why (for example
         a curve outside the image) and the previous init stays.
@@ -293,18 +347,77 @@ class Viewer:
         if self.running:
             self._set_message("running: press space to pause before setting a new init")
             return False
+        previous = self.init, self.init_curves
         try:
-            curves = initial_curves(init, self.shape)
+            named = init is None or (isinstance(init, str) and init in NAMED_INITS)
+            self.init = init if named else initial_curves(init, self.shape)
         except (ValueError, TypeError) as exc:
-            self._set_message(f"init not set: {exc}")
+            self._set_message(f"init not set: {_one_line(exc)}")
             return False
-        self.init_curves = curves
+        problem = self._preview_init()
+        if problem is not None:
+            self.init, self.init_curves = previous
+            self._set_message(f"init not set: {problem}")
+            return False
         self._clear_run()
         self._show_curves()
         self._show_readout(None)
-        clipped = not _same_curves(curves, init)
-        self._set_message(f"init set ({len(curves)} curve{'s' * (len(curves) > 1)}"
-                          f"{', clipped to the image' if clipped else ''}): press space to run")
+        self._set_message(f"init set ({self._describe_init(init)}): press space to run")
+        return True
+
+    def open_image(self, path=None):
+        """Open another image (a path, or the text of the "image" field) in this window.
+
+        The new image starts afresh: no result, the init back to the library's default (a named
+        init such as ``"grid"`` is kept), the save field on the new image's name.  Returns True
+        when it was opened; otherwise the status line gives the library's message and the shown
+        image stays.
+        """
+        if self.running:
+            self._set_message("running: press space to pause before opening another image")
+            return False
+        path = self.image_box.text.strip() if path is None else os.fspath(path)
+        if not path:
+            self._set_message("type an image file's path in the 'image' field, then press i")
+            return False
+        try:
+            image = load_image(Path(path).expanduser())
+            display = normalize_image(image, color="vector")
+        except (OSError, ValueError, TypeError) as exc:
+            self._set_message(f"image not opened: {_one_line(exc)}")
+            return False
+        previous = self.image, self.shape, self.init, self.init_curves
+        self.image, self.shape = np.asarray(image), display.shape[:2]
+        self._refresh_auto_mu()
+        if not isinstance(self.init, str):
+            self.init = None
+        problem = self._preview_init()
+        if problem is not None:  # a named init the new image cannot take: the default
+            self.init = None
+            problem = self._preview_init()
+        if problem is not None:
+            self.image, self.shape, self.init, self.init_curves = previous
+            self._refresh_auto_mu()
+            self._set_message(f"image not opened: {problem}")
+            return False
+        self.image_path = Path(path).expanduser()
+        self._image_folder = Path(os.path.abspath(self.image_path)).parent
+        self._clear_run()
+        self.drawer.cancel()
+        show_image(self.ax_image, display)
+        toolbar = getattr(self.fig.canvas, "toolbar", None)
+        if toolbar is not None:
+            toolbar.update()  # forget the zoom and pan history of the old image
+        self.save_box.set_val(self.image_path.stem)
+        self.image_box.set_val("")
+        manager = self.fig.canvas.manager
+        if manager is not None:
+            manager.set_window_title(f"activecontour view: {self.image_path.name}")
+        self._show_curves()
+        self._show_readout(None)
+        m, n = self.shape
+        self._set_message(f"opened {self.image_path.name} ({m} x {n}; init: "
+                          f"{self._describe_init(self.init)}): press space to run")
         return True
 
     def load_mask(self, path=None):
@@ -314,9 +427,9 @@ class Viewer:
             self._set_message("type a mask file's path in the 'mask file' field, then press m")
             return False
         try:
-            mask = _read_mask_file(path)
+            mask = _read_mask_file(Path(path).expanduser())
         except (OSError, ValueError) as exc:
-            self._set_message(f"mask not loaded: {exc}")
+            self._set_message(f"mask not loaded: {_one_line(exc)}")
             return False
         return self.set_init(mask)
 
@@ -345,7 +458,7 @@ class Viewer:
             paths = save_result(self.result, self.image, stem, self.formats, metadata=metadata,
                                 protect=protect)
         except (OSError, ValueError) as exc:
-            self._set_message(f"not saved: {exc}")
+            self._set_message(f"not saved: {_one_line(exc)}")
             return None
         folder = os.path.dirname(os.path.abspath(paths[0]))
         self._set_message(f"saved {', '.join(p.name for p in paths)} in {folder}")
@@ -370,9 +483,9 @@ class Viewer:
         if self.contours:  # continue: the last result carries the level set's phi, too
             same_backend = self.result is not None and self.result.backend == params["backend"]
             start = self.result if same_backend else self.contours
-        else:  # a fresh start from the init (also after a collapse)
+        else:  # a fresh start from the init (also after a collapse): exactly the library's
             self._clear_run()
-            start = self.init_curves
+            start = self.init
         self.drawer.cancel()
         self.running, self._stop, self._after_run = True, False, None
         self._run_offset = self.iteration
@@ -491,8 +604,10 @@ class Viewer:
         canvas.mpl_connect("motion_notify_event", self._on_motion)
         canvas.mpl_connect("button_release_event", self._on_release)
         canvas.mpl_connect("close_event", self._on_close)
+        canvas.mpl_connect("resize_event", lambda _event: refit_texts(self.layout))
         for slider in (*self.sliders.values(), *self.step_sliders.values()):
             slider.on_changed(self._on_slider)
+        self.sliders["mu"].on_changed(self._on_mu_slider)
         self.maxiter_box.on_submit(lambda text: self._on_field("max iter", self.maxiter_box, text))
         self.tol_box.on_submit(lambda text: self._on_field("tol", self.tol_box, text))
         self.backend_radio.on_clicked(self._on_backend_radio)
@@ -500,6 +615,7 @@ class Viewer:
         self.run_button.on_clicked(lambda _event: self.toggle_run())
         self.step_button.on_clicked(lambda _event: self.step())
         self.reset_button.on_clicked(lambda _event: self.reset())
+        self.image_button.on_clicked(lambda _event: self.open_image())
         self.mask_button.on_clicked(lambda _event: self.load_mask())
         self.save_button.on_clicked(lambda _event: self.save())
         self._key_actions = {
@@ -511,6 +627,7 @@ class Viewer:
             "b": lambda: self.set_init_mode("box"),
             "p": lambda: self.set_init_mode("polygon"),
             "m": self.load_mask,
+            "i": self.open_image,
             "g": self.toggle_color,
             "q": self.quit,
         }
@@ -544,6 +661,14 @@ class Viewer:
     def _on_release(self, event):
         if not self.running and self.drawer.busy:
             self.drawer.release(event)
+        if self._start_stale and not self.running:
+            self._start_stale = False
+            if self.init is None or isinstance(self.init, str):
+                problem = self._refresh_named_init()
+                if problem:
+                    self._set_message(problem.removeprefix("; "))
+                else:
+                    self._redraw()
 
     def _on_close(self, _event):
         self.closed = True
@@ -558,8 +683,32 @@ class Viewer:
             self._set_message("the image is gray: there is no colour to switch to")
             return
         self.color = "vector" if self.color == "gray" else "gray"
+        self._refresh_auto_mu()
+        problem = self._refresh_named_init()
         self._set_message(f"colour: {'each channel (vector)' if self.color == 'vector' else 'gray'}"
-                          "; applies to the next run (space)")
+                          f"; applies to the next run (space){problem}")
+
+    def _auto_mu(self):
+        return auto_mu(normalize_image(self.image, color=self.color))
+
+    def _refresh_auto_mu(self):
+        """While mu is automatic, show the value the current image (and colour mode) gets."""
+        if self._mu_auto:
+            self._mu_auto = False  # set_val below notifies _on_mu_slider, which would clear it
+            set_slider_value(self.sliders["mu"], self._auto_mu())
+            self._mu_auto = True
+            self._show_mu_mode()
+
+    def _show_mu_mode(self):
+        self.slider_labels["mu"].set_text("mu (auto)" if self._mu_auto else _SLIDER_LABELS["mu"])
+
+    def _on_mu_slider(self, _value):
+        if self._mu_auto:
+            self._mu_auto = False  # moved by hand: the value is the user's from now on
+            self._show_mu_mode()
+        # the library's start depends on mu (specks the length term removes): shown anew once
+        # the mouse is released, not for every value a drag passes
+        self._start_stale = True
 
     def _on_slider(self, _value):
         if self.running or self.result is not None:
@@ -590,12 +739,49 @@ class Viewer:
         for name, slider in self.step_sliders.items():
             slider.ax.set_visible(name == backend)
             slider.set_active(name == backend)
-            self.step_labels[name].set_visible(name == backend)
+            self.slider_labels[name].set_visible(name == backend)
 
     def _on_backend_radio(self, label):
         self._show_step_slider(label)
-        if self.running or self.result is not None:
-            self._set_message(f"backend {label}: applies to the next run")
+        problem = self._refresh_named_init()
+        if problem or self.running or self.result is not None:
+            self._set_message(f"backend {label}: applies to the next run{problem}")
+
+    def _preview_init(self):
+        """Set :attr:`init_curves` to what a fresh run starts from: the init's curves, or for None
+        and a named init the library's start (its result after zero iterations, so that the
+        viewer never reimplements it).  Returns None, or the library's message refusing it."""
+        self._start_stale = False
+        if not (self.init is None or isinstance(self.init, str)):
+            self.init_curves = self.init
+            return None
+        params = self.parameters()
+        params["max_num_iter"] = 0
+        try:
+            start = segment(self.image, self.init, **params)
+        except (ValueError, TypeError) as exc:
+            self.init_curves = []
+            return f"init {self._describe_init(self.init)}: {_one_line(exc)}"
+        self.init_curves = [np.array(c, dtype=np.float64) for c in start.contours]
+        return None
+
+    def _refresh_named_init(self):
+        """After a change of backend or colour: show the library's start anew (an empty text, or
+        the problem to append to the status line)."""
+        if self.running or not (self.init is None or isinstance(self.init, str)):
+            return ""
+        problem = self._preview_init()
+        self._show_curves()
+        return "" if problem is None else f"; {problem}"
+
+    def _describe_init(self, given):
+        if self.init is None:
+            return "the library's default"
+        if isinstance(self.init, str):
+            return self.init
+        count = len(self.init)
+        clipped = given is not None and not _same_curves(self.init, given)
+        return f"{count} curve{'s' * (count > 1)}{', clipped to the image' if clipped else ''}"
 
     def _on_mode_radio(self, label):
         self.drawer.set_mode(label)
@@ -626,22 +812,19 @@ class Viewer:
         else:
             energy = f"{state.energy:.6g}"
             c_in, c_out = _format_constant(state.c_in), _format_constant(state.c_out)
-        lines = [f"iteration {self.iteration:<7d} energy {energy}",
-                 f"c_in {c_in:<12}   c_out {c_out}"]
+        lines = [f"iteration {self.iteration:<6d} energy {energy}", f"c_in  {c_in}", f"c_out {c_out}"]
         if contours:
-            lines.append(f"{len(contours)} contour(s), {sum(len(c) for c in contours)} "
-                         f"vertices, length {sum(length(c) for c in contours):.1f} px")
+            lines.append(f"{len(contours)} contour{'s' * (len(contours) > 1)}, "
+                         f"{sum(len(c) for c in contours)} vertices, "
+                         f"{sum(length(c) for c in contours):.1f} px long")
         else:
             lines.append("initial curve (dashed)")
-        self.readout.set_text("\n".join(lines))
-        history = self.energy_history
-        self.energy_line.set_data(history[:, 0], history[:, 1])
-        self.ax_energy.relim()
-        self.ax_energy.autoscale_view()
+        self.layout.set_fitted_text(self.readout, "\n".join(lines))
+        show_energy(self.ax_energy, self.energy_line, self.energy_note, self.energy_history)
 
     def _set_message(self, text):
         self.message = text
-        self.status_text.set_text(text)
+        self.layout.set_fitted_text(self.status_text, text)
         self._redraw()
 
     def _redraw(self):
@@ -659,7 +842,8 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
     image_path : str or os.PathLike
         Any image :func:`activecontour.load_image` reads.
     backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats
-        See :class:`Viewer` (None: the library's default); ``init`` may be a mask file's path.
+        See :class:`Viewer` (None: the library's default); ``init`` may also be a name from
+        :data:`NAMED_INITS` (``"grid"``, ``"checkerboard"``) or a mask file's path.
 
     Returns
     -------
@@ -711,6 +895,11 @@ def _format_constant(value):
     if value.size == 1:
         return f"{float(value.reshape(-1)[0]):.4g}"
     return "(" + ", ".join(f"{v:.3g}" for v in value.reshape(-1)) + ")"
+
+
+def _one_line(exc):
+    """An exception's message on one line (some third-party messages span several)."""
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 def _same_curves(curves, init):

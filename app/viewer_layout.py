@@ -3,15 +3,22 @@
 :func:`build_layout` places every artist and widget in figure coordinates and returns them in a
 :class:`Layout`; it connects nothing (:class:`app.viewer.Viewer` wires the behaviour).  The window::
 
-    +------------------------------+  iteration, energy, c_in, c_out, contours
+    +------------------------------+  iteration, energy / c_in / c_out / contours
     |                              |  [energy history plot]
     |   image, initial curve       |  mu, omega, lambda_in, lambda_out, step sliders
     |   (dashed), contour (solid)  |  max iter [   ]  tol [   ]
     |                              |  (backend)  (init mode)
     |                              |  [Run] [Step] [Reset]
+    |                              |  image     [      ] [Open]
     +------------------------------+  mask file [      ] [Load mask]
-    status line                       save as   [      ] [Save]
+                                      save as   [      ] [Save]
+    status line (the whole width)
     help line (keyboard shortcuts)
+
+The positions are fractions of the figure, designed so that nothing overlaps at 900 x 600 pixels
+(at 100 dpi) with the fixed font sizes; a larger window only adds space.  The texts whose length
+varies (the readout, the status and help lines) are fitted to their width by :func:`fit_text`,
+again whenever the window is resized.
 """
 
 from __future__ import annotations
@@ -22,8 +29,9 @@ import numpy as np
 
 from app.viewer_tools import INIT_MODES, TextField
 
-__all__ = ["CONTOUR_COLOR", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS", "Layout",
-           "build_layout"]
+__all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS",
+           "Layout", "build_layout", "fit_text", "refit_texts", "set_slider_value", "show_energy",
+           "show_image"]
 
 #: Colour of the current contour: the default overlay colour of :func:`activecontour.io.save_result`.
 CONTOUR_COLOR = (1.0, 0.0, 0.0)
@@ -49,9 +57,15 @@ STEP_OPTIONS = {
     "levelset": ("dt", "first step dt", 4.0, 256.0),
 }
 
-_FIGSIZE = (12.0, 7.4)
-_PANEL_X = 0.665  # left edge of the control panel, figure fraction
+#: The window's size in inches (at matplotlib's default 100 dpi: 1200 x 740 pixels).
+DEFAULT_SIZE = (12.0, 7.4)
+_PANEL_X, _PANEL_RIGHT = 0.655, 0.985  # the control panel's edges, figure fraction
+_TEXT_X, _TEXT_RIGHT = 0.01, 0.99  # the status and help lines
 _LABEL_SIZE = 8
+_SMALLEST_FONT = 6.0  # fit_text shrinks no further, it cuts the text instead
+
+#: What the energy plot says before a run.
+ENERGY_PLACEHOLDER = "no run yet: space runs"
 
 
 @dataclass
@@ -64,9 +78,10 @@ class Layout:
     readout: object
     ax_energy: object
     energy_line: object
+    energy_note: object
     sliders: dict
     step_sliders: dict
-    step_labels: dict
+    slider_labels: dict
     maxiter_box: object
     tol_box: object
     backend_radio: object
@@ -74,6 +89,8 @@ class Layout:
     run_button: object
     step_button: object
     reset_button: object
+    image_box: object
+    image_button: object
     mask_box: object
     mask_button: object
     save_box: object
@@ -83,17 +100,28 @@ class Layout:
 
     @property
     def text_boxes(self):
-        return (self.maxiter_box, self.tol_box, self.mask_box, self.save_box)
+        return (self.maxiter_box, self.tol_box, self.image_box, self.mask_box, self.save_box)
 
     @property
     def buttons(self):
-        return (self.run_button, self.step_button, self.reset_button, self.mask_button,
-                self.save_button)
+        return (self.run_button, self.step_button, self.reset_button, self.image_button,
+                self.mask_button, self.save_button)
 
     @property
     def widgets(self):
         return (*self.sliders.values(), *self.step_sliders.values(), *self.text_boxes,
                 self.backend_radio, self.mode_radio, *self.buttons)
+
+    def set_fitted_text(self, text, string):
+        """Show ``string`` in one of the :attr:`fitted_texts`, fitted to its width."""
+        left, right = next((lo, hi) for t, lo, hi in self.fitted_texts if t is text)
+        fit_text(text, string, left, right)
+
+    @property
+    def fitted_texts(self):
+        """(text, left, right): the texts :func:`fit_text` keeps between two figure fractions."""
+        return ((self.readout, _PANEL_X, _PANEL_RIGHT), (self.status_text, _TEXT_X, _TEXT_RIGHT),
+                (self.help_text, _TEXT_X, _TEXT_RIGHT))
 
 
 def build_layout(fig, display, *, backends, backend, values, step_values, max_num_iter, tol,
@@ -120,59 +148,145 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     """
     ax_image, init_lines, contour_lines = _image_axes(fig, display)
     x0 = _PANEL_X
-    readout = fig.text(x0, 0.965, "", fontsize=9, family="monospace", va="top")
-    ax_energy, energy_line = _energy_axes(fig, x0)
-    sliders, step_sliders, step_labels = _sliders(fig, x0, values, step_values)
+    readout = fig.text(x0, 0.985, "", fontsize=8.5, family="monospace", va="top")
+    ax_energy, energy_line, energy_note = _energy_axes(fig, x0)
+    sliders, step_sliders, slider_labels = _sliders(fig, x0, values, step_values)
     maxiter_box, tol_box = _fields(fig, x0, max_num_iter, tol)
     backend_radio, mode_radio = _radios(fig, x0, backends, backend)
     run_button, step_button, reset_button = _run_buttons(fig, x0)
-    mask_box, mask_button, save_box, save_button = _file_rows(fig, x0, save_stem)
-    status_text = fig.text(0.035, 0.045, "", fontsize=9, color="0.1", va="center")
-    help_text = fig.text(0.035, 0.014, help_line, fontsize=_LABEL_SIZE, color="0.35", va="center")
-    return Layout(ax_image, init_lines, contour_lines, readout, ax_energy, energy_line, sliders,
-                  step_sliders, step_labels, maxiter_box, tol_box, backend_radio, mode_radio,
-                  run_button, step_button, reset_button, mask_box, mask_button, save_box,
-                  save_button, status_text, help_text)
+    file_rows = _file_rows(fig, x0, save_stem)
+    status_text = fig.text(_TEXT_X, 0.047, "", fontsize=9, color="0.1", va="center")
+    help_text = fig.text(_TEXT_X, 0.016, "", fontsize=_LABEL_SIZE, color="0.35", va="center")
+    layout = Layout(ax_image, init_lines, contour_lines, readout, ax_energy, energy_line,
+                    energy_note, sliders, step_sliders, slider_labels, maxiter_box, tol_box,
+                    backend_radio, mode_radio, run_button, step_button, reset_button, *file_rows,
+                    status_text, help_text)
+    fit_text(help_text, help_line, _TEXT_X, _TEXT_RIGHT)
+    return layout
 
 
 def new_figure():
     """The viewer's pyplot figure (pyplot, so that ``plt.show`` opens it)."""
     import matplotlib.pyplot as plt
 
-    return plt.figure(figsize=_FIGSIZE)
+    return plt.figure(figsize=DEFAULT_SIZE)
+
+
+def fit_text(text, string, left, right, *, size=None):
+    """Show ``string`` in the artist ``text``, shrunk (and, if need be, cut with an ellipsis) so
+    that it fits between the figure fractions ``left`` and ``right``.
+
+    ``size`` is the wanted font size; by default the one this function was first given, kept on
+    the artist, so that a text refitted after a resize grows back.
+    """
+    if size is None:
+        size = getattr(text, "_fit_size", None) or text.get_fontsize()
+    text._fit_size, text._fit_string = size, string
+    fig = text.get_figure(root=True)
+    width = (right - left) * fig.bbox.width
+    text.set_text(string)
+    text.set_fontsize(size)
+    actual = text.get_window_extent().width
+    if actual <= width or not string:
+        return
+    text.set_fontsize(max(_SMALLEST_FONT, size * width / actual * 0.98))
+    if text.get_window_extent().width <= width:
+        return
+    lines = string.split("\n")
+    low, high = 0, max(len(line) for line in lines)  # characters kept per line
+    while low < high:
+        keep = (low + high + 1) // 2
+        text.set_text("\n".join(_cut(line, keep) for line in lines))
+        if text.get_window_extent().width <= width:
+            low = keep
+        else:
+            high = keep - 1
+    text.set_text("\n".join(_cut(line, low) for line in lines))
+
+
+def refit_texts(layout):
+    """Fit the layout's variable texts again (after the window changed size)."""
+    for text, left, right in layout.fitted_texts:
+        fit_text(text, getattr(text, "_fit_string", text.get_text()), left, right)
+    for box in layout.text_boxes:
+        box.align_to_fit()
+
+
+def _cut(line, keep):
+    return line if len(line) <= keep else line[:max(keep - 1, 0)] + "\N{HORIZONTAL ELLIPSIS}"
+
+
+def show_image(ax, display):
+    """Show the normalised image (M, N, C) on the image axes, replacing the one shown, and reset
+    the view to the whole image."""
+    for old in list(ax.images):
+        old.remove()
+    if display.shape[2] == 1:
+        values = display[:, :, 0]
+        # as the CLI's overlay shows it: [0, 1], widened to the image's range when it exceeds it
+        image = ax.imshow(values, cmap="gray", interpolation="nearest",
+                          vmin=min(0.0, values.min()), vmax=max(1.0, values.max()))
+    else:
+        low, high = display.min(), display.max()
+        if low < 0.0 or high > 1.0:
+            display = (display - low) / (high - low) if high > low else display * 0.0
+        image = ax.imshow(np.clip(display, 0.0, 1.0), interpolation="nearest")
+    image.set_mouseover(False)  # the toolbar shows the viewer's format_coord (row, col, value) only
+    m, n = display.shape[:2]
+    ax.set_xlim(-0.5, n - 0.5)
+    ax.set_ylim(m - 0.5, -0.5)
+    return image
+
+
+def show_energy(ax, line, note, history):
+    """Plot the energy history (n, 2) of (iteration, energy); an empty history clears the plot
+    to its labelled placeholder."""
+    from matplotlib.ticker import AutoLocator
+
+    empty = len(history) == 0
+    note.set_visible(empty)
+    if empty:
+        line.set_data([], [])
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_xlim(0.0, 1.0)
+        ax.set_ylim(0.0, 1.0)
+        return
+    if not isinstance(ax.xaxis.get_major_locator(), AutoLocator):
+        ax.xaxis.set_major_locator(AutoLocator())
+        ax.yaxis.set_major_locator(AutoLocator())
+    line.set_data(history[:, 0], history[:, 1])
+    ax.relim()
+    ax.set_autoscale_on(True)  # the placeholder fixed the limits
+    ax.autoscale_view()
 
 
 def _image_axes(fig, display):
     from matplotlib.collections import LineCollection
 
-    ax = fig.add_axes((0.035, 0.12, 0.58, 0.84))
-    if display.shape[2] == 1:
-        values = display[:, :, 0]
-        # as the CLI's overlay shows it: [0, 1], widened to the image's range when it exceeds it
-        ax.imshow(values, cmap="gray", interpolation="nearest",
-                  vmin=min(0.0, values.min()), vmax=max(1.0, values.max()))
-    else:
-        low, high = display.min(), display.max()
-        if low < 0.0 or high > 1.0:
-            display = (display - low) / (high - low) if high > low else display * 0.0
-        ax.imshow(np.clip(display, 0.0, 1.0), interpolation="nearest")
-    ax.set_xlabel("col", fontsize=_LABEL_SIZE)
-    ax.set_ylabel("row", fontsize=_LABEL_SIZE)
+    ax = fig.add_axes((0.06, 0.165, 0.575, 0.82))
+    show_image(ax, display)
+    ax.set_xlabel("col", fontsize=_LABEL_SIZE, labelpad=2)
+    ax.set_ylabel("row", fontsize=_LABEL_SIZE, labelpad=2)
     ax.tick_params(labelsize=7)
     init_lines = LineCollection([], colors=[INIT_COLOR], linewidths=1.3, linestyles="--", zorder=3)
     contour_lines = LineCollection([], colors=[CONTOUR_COLOR], linewidths=2.0, zorder=4)
-    ax.add_collection(init_lines)
-    ax.add_collection(contour_lines)
+    ax.add_collection(init_lines, autolim=False)
+    ax.add_collection(contour_lines, autolim=False)
     return ax, init_lines, contour_lines
 
 
 def _energy_axes(fig, x0):
-    ax = fig.add_axes((x0 + 0.045, 0.71, 0.26, 0.15))
+    ax = fig.add_axes((x0 + 0.055, 0.745, _PANEL_RIGHT - x0 - 0.065, 0.1))
     ax.set_title("energy (6.38)", fontsize=_LABEL_SIZE, pad=3)
-    ax.tick_params(labelsize=7)
+    ax.tick_params(labelsize=7, pad=2)
     ax.set_xlabel("iteration", fontsize=7, labelpad=1)
+    ax.yaxis.get_offset_text().set_fontsize(7)
     (line,) = ax.plot([], [], color="0.2", linewidth=1.2)
-    return ax, line
+    note = ax.text(0.5, 0.5, ENERGY_PLACEHOLDER, transform=ax.transAxes, ha="center",
+                   va="center", fontsize=_LABEL_SIZE, color="0.45")
+    show_energy(ax, line, note, np.empty((0, 2)))
+    return ax, line, note
 
 
 def _sliders(fig, x0, values, step_values):
@@ -181,38 +295,44 @@ def _sliders(fig, x0, values, step_values):
     rows = [(name, label, low, high, values[name]) for name, label, low, high in SLIDERS]
     rows += [(backend, label, low, high, step_values[backend])
              for backend, (_option, label, low, high) in STEP_OPTIONS.items() if backend in step_values]
-    sliders, step_sliders, step_labels = {}, {}, {}
+    sliders, step_sliders, labels = {}, {}, {}
     for row, (name, label, low, high, value) in enumerate(rows):
-        y = 0.615 - 0.042 * min(row, len(SLIDERS))  # the step sliders share one row
+        y = 0.655 - 0.042 * min(row, len(SLIDERS))  # the step sliders share one row
         low, high = min(low, value), max(high, value)
-        slider = Slider(fig.add_axes((x0 + 0.095, y, 0.16, 0.026)), "", low, high, valinit=value,
+        slider = Slider(fig.add_axes((x0 + 0.105, y, 0.165, 0.03)), "", low, high, valinit=value,
                         valfmt="%.3g")
         slider.valtext.set_fontsize(_LABEL_SIZE)
-        text = fig.text(x0, y + 0.013, label, fontsize=_LABEL_SIZE, va="center")
-        if name in STEP_OPTIONS:
-            step_sliders[name], step_labels[name] = slider, text
-        else:
-            sliders[name] = slider
-    return sliders, step_sliders, step_labels
+        text = fig.text(x0, y + 0.015, label, fontsize=_LABEL_SIZE, va="center")
+        (step_sliders if name in STEP_OPTIONS else sliders)[name] = slider
+        labels[name] = text
+    return sliders, step_sliders, labels
+
+
+def set_slider_value(slider, value):
+    """Move a slider to ``value``, widening its range to include it."""
+    if value > slider.valmax or value < slider.valmin:
+        slider.valmin, slider.valmax = min(slider.valmin, value), max(slider.valmax, value)
+        slider.ax.set_xlim(slider.valmin, slider.valmax)
+    slider.set_val(value)
 
 
 def _fields(fig, x0, max_num_iter, tol):
-    y, field_x = 0.375, x0 + 0.095
-    fig.text(x0, y + 0.0175, "max iter", fontsize=_LABEL_SIZE, va="center")
-    maxiter_box = TextField(fig.add_axes((field_x, y, 0.07, 0.035)), str(int(max_num_iter)))
-    fig.text(field_x + 0.085, y + 0.0175, "tol", fontsize=_LABEL_SIZE, va="center")
-    tol_box = TextField(fig.add_axes((field_x + 0.11, y, 0.05, 0.035)), f"{tol:g}")
+    y, height, field_x = 0.43, 0.04, x0 + 0.105
+    fig.text(x0, y + height / 2, "max iter", fontsize=_LABEL_SIZE, va="center")
+    maxiter_box = TextField(fig.add_axes((field_x, y, 0.075, height)), str(int(max_num_iter)))
+    fig.text(x0 + 0.2, y + height / 2, "tol", fontsize=_LABEL_SIZE, va="center")
+    tol_box = TextField(fig.add_axes((x0 + 0.235, y, _PANEL_RIGHT - x0 - 0.245, height)), f"{tol:g}")
     return maxiter_box, tol_box
 
 
 def _radios(fig, x0, backends, backend):
     from matplotlib.widgets import RadioButtons
 
-    y, height = 0.235, 0.115
-    ax = fig.add_axes((x0, y, 0.145, height))
+    y, height, width = 0.3, 0.1, 0.155
+    ax = fig.add_axes((x0, y, width, height))
     ax.set_title("backend", fontsize=_LABEL_SIZE, pad=2)
     backend_radio = RadioButtons(ax, list(backends), active=list(backends).index(backend))
-    ax = fig.add_axes((x0 + 0.16, y, 0.155, height))
+    ax = fig.add_axes((_PANEL_RIGHT - width, y, width, height))
     ax.set_title("init (mouse)", fontsize=_LABEL_SIZE, pad=2)
     mode_radio = RadioButtons(ax, list(INIT_MODES), active=0)
     for radio in (backend_radio, mode_radio):
@@ -224,8 +344,9 @@ def _radios(fig, x0, backends, backend):
 def _run_buttons(fig, x0):
     from matplotlib.widgets import Button
 
-    y, width, height = 0.165, 0.095, 0.045
-    buttons = [Button(fig.add_axes((x0 + 0.11 * i, y, width, height)), label)
+    y, height, gap = 0.235, 0.05, 0.01
+    width = (_PANEL_RIGHT - x0 - 2 * gap) / 3
+    buttons = [Button(fig.add_axes((x0 + (width + gap) * i, y, width, height)), label)
                for i, label in enumerate(("Run", "Step", "Reset"))]
     for button in buttons:
         button.label.set_fontsize(9)
@@ -233,16 +354,19 @@ def _run_buttons(fig, x0):
 
 
 def _file_rows(fig, x0, save_stem):
+    """The rows (label, field, button) for opening an image, loading a mask and saving."""
     from matplotlib.widgets import Button
 
-    field_x, field_w, button_w, height = x0 + 0.075, 0.155, 0.075, 0.04
-    button_x = field_x + field_w + 0.01
-    fig.text(x0, 0.12, "mask file", fontsize=_LABEL_SIZE, va="center")
-    mask_box = TextField(fig.add_axes((field_x, 0.1, field_w, height)))
-    mask_button = Button(fig.add_axes((button_x, 0.1, button_w, height)), "Load mask")
-    fig.text(x0, 0.06, "save as", fontsize=_LABEL_SIZE, va="center")
-    save_box = TextField(fig.add_axes((field_x, 0.04, field_w, height)), save_stem)
-    save_button = Button(fig.add_axes((button_x, 0.04, button_w, height)), "Save")
-    for button in (mask_button, save_button):
+    field_x, button_w, height = x0 + 0.075, 0.1, 0.04
+    button_x = _PANEL_RIGHT - button_w
+    field_w = button_x - 0.008 - field_x
+    widgets = []
+    for y, label, initial, action in ((0.18, "image", "", "Open"),
+                                      (0.13, "mask file", "", "Load mask"),
+                                      (0.08, "save as", save_stem, "Save")):
+        fig.text(x0, y + height / 2, label, fontsize=_LABEL_SIZE, va="center")
+        box = TextField(fig.add_axes((field_x, y, field_w, height)), initial)
+        button = Button(fig.add_axes((button_x, y, button_w, height)), action)
         button.label.set_fontsize(9)
-    return mask_box, mask_button, save_box, save_button
+        widgets += [box, button]
+    return widgets

@@ -1,9 +1,11 @@
 """The viewer's input tools: drawing an initial curve with the mouse, and a text field.
 
 :class:`TextField` is matplotlib's ``TextBox`` with fixes that matter for a tool: Enter ends the
-editing (so the keyboard shortcuts work again); a click elsewhere does not redraw the whole figure
-when the field was not being edited (``TextBox`` redraws synchronously, once per field, on every
-click anywhere); and setting the text from code neither shows a cursor nor forces a redraw.
+editing (so the keyboard shortcuts work again); neither a key typed nor a click elsewhere draws the
+whole figure at once (``TextBox`` redraws synchronously on every key, and once per field on every
+click anywhere), they ask for a redraw; setting the text from code neither shows a cursor nor
+forces a redraw; and a text longer than the field stays inside it, showing its end (where a path
+has its file name and where one types).
 
 :class:`CurveDrawer` is a small state machine fed with matplotlib mouse and key events; it shows a
 dashed preview while the user drags or clicks, and hands the finished curve, in (row, col), to a
@@ -182,7 +184,33 @@ class TextField(TextBox):
     def __init__(self, ax, initial=""):
         super().__init__(ax, "", initial)
         self.text_disp.set_fontsize(8)
+        for artist in (self.text_disp, self.cursor):
+            artist.set_clip_box(ax.bbox)
+            artist.set_clip_on(True)
         self.on_submit(self._end_editing)
+        self.align_to_fit()
+
+    def align_to_fit(self):
+        """Left-aligned when the text fits the field, else right-aligned (its end shown)."""
+        self.text_disp.set_horizontalalignment("left")
+        self.text_disp.set_x(0.05)
+        if self.text_disp.get_window_extent().width > 0.9 * self.ax.bbox.width:
+            self.text_disp.set_horizontalalignment("right")
+            self.text_disp.set_x(0.95)
+
+    def _rendercursor(self):
+        """Place the cursor after the text before ``cursor_index``, as ``TextBox`` does, but ask
+        for a redraw instead of drawing the whole figure at once on every key typed."""
+        self.align_to_fit()
+        text, shown = self.text_disp.get_text(), self.text_disp.get_window_extent()
+        self.text_disp.set_text(text[:self.cursor_index] or ",")
+        before = self.text_disp.get_window_extent()
+        self.text_disp.set_text(text)
+        if shown.y0 == shown.y1:  # no text: the height of a comma
+            shown.y0, shown.y1 = shown.y0 - before.height / 2, shown.y1 + before.height / 2
+        x = shown.x0 + (before.width if text[:self.cursor_index] else 0.0)
+        self.cursor.set(segments=[[(x, shown.y0), (x, shown.y1)]], visible=True)
+        self.ax.get_figure(root=True).canvas.draw_idle()
 
     def stop_typing(self):
         if self.capturekeystrokes or self.cursor.get_visible():
@@ -198,6 +226,7 @@ class TextField(TextBox):
         if self.text == text:
             return
         self.text_disp.set_text(text)
+        self.align_to_fit()
         if self.drawon:
             self.ax.get_figure(root=True).canvas.draw_idle()
         if self.eventson:

@@ -41,6 +41,11 @@ border before scoring.
 The ratios printed per case are the wall time of ``chan_vese`` (and ``morph_cv``) over that of
 ``levelset``, the Dice differences and the energy ratios (< 1: the level set is lower).
 
+``--defaults`` runs every method with its own defaults and its own start instead: ours
+``segment(image, backend=...)`` (init=None, mu="auto"), ``chan_vese(image)``,
+``morphological_chan_vese(image, 250)`` (num_iter has no default); the energies are still scored
+with mu = MU.
+
 Run ``python benchmarks/bench_levelset.py`` (about a minute per case, mostly ``chan_vese``), or
 ``--quick`` for 256 x 256 images.
 """
@@ -131,11 +136,46 @@ def circle_radius(curves):
     return float(np.max(np.hypot(*(points - points.mean(axis=0)).T)))
 
 
+def run_levelset_defaults(image, start):
+    result = ac.segment(image, backend="levelset")
+    return result.mask, result.contours, result.n_iter
+
+
+def run_polygon_defaults(image, start):
+    result = ac.segment(image, backend="polygon")
+    return result.mask, result.contours, result.n_iter
+
+
+def run_chan_vese_defaults(image, start):
+    from skimage.segmentation import chan_vese
+
+    _, phi, energies = chan_vese(image, extended_output=True)
+    phi = _object_phase(phi)
+    return phi > 0, level_set_contours(phi), len(energies)
+
+
+def run_morphological_defaults(image, start):
+    from skimage.segmentation import morphological_chan_vese
+
+    # num_iter has no default; the rest (checkerboard start, smoothing=1) are its own
+    mask = morphological_chan_vese(image, MORPH_ITER).astype(bool)
+    mask = _object_phase(np.where(mask, 1.0, -1.0)) > 0
+    return mask, mask_to_curves(mask), MORPH_ITER
+
+
 METHODS = {
     "levelset": run_levelset,
     "chan_vese": run_chan_vese,
     "morph_cv": run_morphological,
     "polygon": run_polygon,
+}
+
+#: ``--defaults``: every method with its own defaults and start (mu, init, tolerances)
+DEFAULT_METHODS = {
+    "levelset": run_levelset_defaults,
+    "chan_vese": run_chan_vese_defaults,
+    "morph_cv": run_morphological_defaults,
+    "polygon": run_polygon_defaults,
 }
 
 
@@ -158,7 +198,13 @@ def main(argv=None):
     parser.add_argument("--case", action="append", help="run only this case (repeatable)")
     parser.add_argument("--start", choices=("circle", "checkerboard", "both"), default="circle",
                         help="the common start (default: circle)")
+    parser.add_argument("--defaults", action="store_true",
+                        help="every method with its own defaults and start (no common init, "
+                             "our mu='auto'); energies still by mu=MU")
     args = parser.parse_args(argv)
+    if args.defaults:
+        METHODS.update(DEFAULT_METHODS)
+        args.start = "circle"  # ignored by the default runners
     size = args.size or (256 if args.quick else 512)
     methods = ["levelset", "chan_vese", "morph_cv"] + (["polygon"] if args.polygon else [])
     cases = make_cases(size)

@@ -299,3 +299,155 @@ def test_backend_options_reach_the_solver(small, tmp_path, capsys):
         status, _, stderr = run(capsys, "segment", path, "-o", tmp_path / "b", *argv)
         assert_one_line_error(status, stderr, *words)
         assert not (tmp_path / "b").exists()
+
+
+def test_a_failing_image_is_reported_and_the_batch_goes_on(small, tmp_path, capsys):
+    path, truth = small
+    second = tmp_path / "in" / "second.png"
+    shutil.copy(path, second)
+    text = bad_text_image(tmp_path / "in")
+    out = tmp_path / "out"
+    status, stdout, stderr = run(capsys, "segment", path, text, second, "-o", out)
+    assert status == 2
+    errors = stderr.splitlines()
+    assert errors == [f"activecontour: error: cannot read image {str(text)!r}: the file holds text, "
+                      "not an image",
+                      "activecontour: error: 1 of 3 images failed; the others were written"]
+    assert [line.split(":")[0] for line in stdout.splitlines()] == ["disk.png", "second.png"]
+    assert sorted(os.listdir(out)) == sorted(
+        f"{stem}_{kind}" for stem in ("disk", "second")
+        for kind in ("mask.png", "overlay.png", "contours.json"))
+    assert synthetic.dice(io.read_mask(out / "second_mask.png"), truth) > 0.95
+
+
+def test_an_image_whose_files_cannot_be_written_does_not_stop_the_next(small, tmp_path, capsys,
+                                                                        monkeypatch):
+    path, _ = small
+    second = tmp_path / "in" / "second.png"
+    shutil.copy(path, second)
+    real_replace = os.replace
+
+    def full_disk_for_disk_png(src, dst):
+        if os.path.basename(dst) == "disk_contours.json":
+            raise OSError(28, "No space left on device", str(dst))
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", full_disk_for_disk_png)
+    status, stdout, stderr = run(capsys, "segment", path, second, "-o", tmp_path / "out")
+    assert status == 2
+    assert stderr.splitlines()[0].endswith(f"No space left on device: "
+                                           f"{str(tmp_path / 'out' / 'disk_contours.json')!r}")
+    assert sorted(os.listdir(tmp_path / "out")) == ["second_contours.json", "second_mask.png",
+                                                    "second_overlay.png"]
+    assert stdout.startswith("second.png: ")
+
+
+@pytest.mark.parametrize(
+    "option, message",
+    [
+        ("smoothing=abc", "--option smoothing: expected a number (default 30.0), got 'abc'"),
+        ("smoothing=inf", "--option smoothing: expected a number (default 30.0), got inf"),
+        ("nucleate=3", "--option nucleate: expected true or false (default True), got 3"),
+        ("velocity=1", "--option velocity: expected text (default 'h1'), got 1"),
+    ],
+)
+def test_backend_option_of_the_wrong_kind_gets_one_true_line(small, tmp_path, capsys, option, message):
+    path, _ = small
+    status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "out", "--option", option)
+    assert (status, stdout, stderr) == (2, "", f"activecontour: error: {message}\n")
+    assert not (tmp_path / "out").exists()
+
+
+def test_summary_of_an_unconverged_run_says_why(small, tmp_path, capsys):
+    from activecontour.result import STATUS_MESSAGES
+
+    path, _ = small
+    status, stdout, _ = run(capsys, "segment", path, "-o", tmp_path / "out", "--max-iter", 2)
+    assert status == 0
+    assert f"success=False ({STATUS_MESSAGES[1].rstrip('.')}) output=" in stdout
+
+
+def test_progress_shows_file_k_of_n_elapsed_and_time_left():
+    import io as stdio
+
+    now = [0.0]
+    stream = stdio.StringIO()
+    progress = cli._Progress(3, stream=stream, clock=lambda: now[0])
+    progress.start(1, "/data/a.png")
+    assert "[1/3] a.png: loading" in stream.getvalue() and "elapsed 0:00 left ?" in stream.getvalue()
+    now[0] = 4.0
+    progress(types.SimpleNamespace(iteration=5, max_num_iter=10, energy=1.5))
+    assert stream.getvalue().endswith("5/10 energy 1.5         elapsed 0:04 left ?")
+    now[0] = 10.0
+    progress.start(2, "/data/b.png")  # a.png took 10 s: b.png and c.png should take 20 s more
+    assert stream.getvalue().endswith("[2/3] b.png: loading elapsed 0:10 left ~0:20")
+    now[0] = 13.0
+    progress(types.SimpleNamespace(iteration=1, max_num_iter=10, energy=2.0))
+    assert stream.getvalue().endswith("elapsed 0:13 left ~0:17")
+    progress.clear()
+    assert stream.getvalue().endswith("\r\033[K")
+
+
+def test_interrupt_while_writing_restores_everything(small, tmp_path, capsys, monkeypatch):
+    path, _ = small
+    out = tmp_path / "out"
+    real_replace = os.replace
+
+    def interrupted_replace(src, dst):
+        if str(dst).endswith("_overlay.png"):
+            raise KeyboardInterrupt
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", interrupted_replace)
+    status, stdout, stderr = run(capsys, "segment", path, "-o", out)
+    assert (status, stdout, stderr) == (130, "", "activecontour: interrupted\n")
+    assert not out.exists()
+
+
+_SLOW_SEGMENT = """
+import sys, numba
+from app import cli
+import activecontour
+
+@numba.njit
+def spin(n):  # a compiled loop: Python cannot raise KeyboardInterrupt inside it
+    total = 0.0
+    for i in range(n):
+        total += (i % 7) * 1e-9
+    return total
+
+spin(10)
+def slow_segment(*args, **kwargs):
+    print("segmenting", file=sys.stderr, flush=True)
+    spin(10**12)
+
+activecontour.segment = slow_segment
+sys.argv[0] = "activecontour"
+sys.exit(cli.console_script())
+"""
+
+
+def test_ctrl_c_during_a_compiled_kernel_ends_the_run_within_a_second(small, tmp_path):
+    import signal
+    import time
+
+    path, _ = small
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-c", _SLOW_SEGMENT, "segment", str(path), "-o", str(out)],
+        cwd=Path(__file__).resolve().parents[1], stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        assert process.stderr.readline() == "segmenting\n"
+        time.sleep(0.2)
+        sent = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        process.wait(timeout=30)
+        answered = time.monotonic() - sent
+    finally:
+        process.kill()
+        process.wait()
+    assert process.returncode in (-signal.SIGINT, 130)
+    assert answered < 1.0
+    assert not out.exists()

@@ -119,3 +119,43 @@ def test_as_curve_rejects_bad_input(bad, match):
 def test_as_curve_drops_repeated_closing_vertex():
     square = [[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]]
     assert curve.as_curve(square).shape == (4, 2)
+
+
+def test_repeated_vertices_get_the_curvature_of_their_copy():
+    square = np.array([[0.0, 0.0], [0.0, 10.0], [10.0, 10.0], [10.0, 0.0]])
+    expected = curve.curvature(square)
+    assert np.all(np.isfinite(expected))
+    repeated = np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 10.0], [10.0, 10.0], [10.0, 10.0], [10.0, 0.0]])
+    np.testing.assert_allclose(curve.curvature(repeated), expected[[0, 0, 1, 2, 2, 3]], rtol=1e-12)
+    closed = np.vstack([square, square[:1]])  # a repeated closing vertex belongs to the first one
+    np.testing.assert_allclose(curve.curvature(closed), expected[[0, 1, 2, 3, 0]], rtol=1e-12)
+    np.testing.assert_allclose(curve.curvature_vector(closed)[4], curve.curvature_vector(square)[0])
+    with pytest.raises(ValueError, match="at least 3 distinct vertices"):
+        curve.curvature(np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]]))
+
+
+@pytest.mark.parametrize("scale", [1e-100, 1.0, 1e150, 1e200])
+def test_as_curve_decides_degeneracy_at_any_scale_without_overflow(scale):
+    triangle = np.array([[0.0, 0.0], [0.0, 2.0], [1.0, 0.5]]) * scale
+    with np.errstate(all="raise"):
+        if scale < 1e-6:  # area 1e-200 px^2 is below the absolute floor of 1e-12 px^2
+            with pytest.raises(ValueError, match="encloses no area"):
+                curve.as_curve(triangle)
+        else:
+            np.testing.assert_array_equal(curve.as_curve(triangle), triangle)
+        flat = np.array([[0.0, 0.0], [0.0, 2.0], [0.0, 0.5]]) * scale
+        with pytest.raises(ValueError, match="encloses no area"):
+            curve.as_curve(flat)
+
+
+@pytest.mark.parametrize("bad", [np.inf, -np.inf, np.nan])
+def test_resample_rejects_non_finite_points_and_spacing(bad):
+    points = circle((0.0, 0.0), 5.0, 12)
+    broken = points.copy()
+    broken[3, 1] = bad
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        curve.resample(broken, 1.0)
+    with pytest.raises(ValueError, match="spacing must be a finite number > 0"):
+        curve.resample(points, bad)
+    with pytest.raises(ValueError, match="spacing must be a finite number > 0"):
+        curve.resample(points, 0.0)

@@ -155,3 +155,26 @@ def test_energy_is_infinite_without_inside_or_outside():
 def test_parameters_are_validated(kwargs, error, match):
     with pytest.raises(error, match=match):
         ChanVeseParameters(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "vertex",
+    [(-100.0, -100.0), (5.0, 1e10), (1e200, 1e200), (-0.6, 10.0), (10.0, 39.5 + 1e-6)],
+)
+def test_energy_rejects_contours_outside_the_image_before_the_kernel(vertex):
+    image = np.random.default_rng(0).random((40, 40))
+    inside = circle((20.0, 20.0), 8.0, 24)
+    outside = np.array([[20.0, 20.0], [vertex[0], 20.0], vertex, [20.0, vertex[1]]])
+    with pytest.raises(ValueError, match=r"contours\[1\] has a vertex .* outside the image domain "
+                                         r"rows -0.5..39.5, cols -0.5..39.5"):
+        chan_vese_energy(image, [inside, outside])
+
+
+def test_energy_accepts_contours_on_the_domain_border():
+    image = np.random.default_rng(0).random((40, 30))
+    border = np.array([[-0.5, -0.5], [39.5, -0.5], [39.5, 29.5], [-0.5, 29.5]])
+    # the whole domain inside: outside is empty, so c_out must be fixed; J is the inside fit
+    energy = chan_vese_energy(image, [border], mu=0.0, c_in=0.5, c_out=0.5)
+    model = ImageModel(normalize_image(image))
+    expected = model.totals[2][0] - 2 * 0.5 * model.totals[1][0] + 0.25 * model.totals[0]
+    assert energy == pytest.approx(expected, rel=1e-12)

@@ -22,7 +22,7 @@ IMAGE[10:30, 15:35] = 1.0
         (IMAGE, {"tol": -1e-3}, ValueError, "tol must be"),
         (IMAGE, {"callback": 3}, TypeError, "callback must be callable"),
         (IMAGE, {"options": {"velocity": "h2"}}, ValueError, r"velocity must be one of \('h1', 'l2'\)"),
-        (IMAGE, {"options": {"spacing": 0}}, ValueError, "spacing must be a positive"),
+        (IMAGE, {"options": {"spacing": 0}}, ValueError, r"spacing must be a number of pixels >= 0.1"),
         (IMAGE, {"options": {"smoothing": 0.5}}, ValueError, "smoothing >= min_smoothing"),
         (IMAGE, {"options": {"bogus": 1}}, TypeError, "unknown option.s. .bogus. for backend .polygon."),
         (IMAGE, {"color": "hsv"}, ValueError, r"color must be one of \('gray', 'vector'\)"),

@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from matplotlib.backend_bases import CloseEvent, KeyEvent, MouseEvent  # noqa: E402
+from matplotlib.backend_bases import CloseEvent, KeyEvent, MouseEvent, ResizeEvent  # noqa: E402
 
 import activecontour as ac  # noqa: E402
 from activecontour import synthetic  # noqa: E402
@@ -23,6 +23,7 @@ from activecontour.io import read_contours, read_mask, write_mask  # noqa: E402
 from activecontour.raster import mask_to_curves  # noqa: E402
 from app import viewer as viewer_module  # noqa: E402
 from app.viewer import SHORTCUTS, Viewer, launch  # noqa: E402
+from app.viewer_layout import DEFAULT_SIZE  # noqa: E402
 
 SIZE = (128, 128)
 CENTER, RADIUS = (60.0, 66.0), 30.0
@@ -81,6 +82,13 @@ def drag(viewer, start, end, steps=3):
 
 def key(viewer, name):
     KeyEvent("key_press_event", viewer.fig.canvas, name)._process()
+
+
+def resize(viewer, size):
+    """Resize the window to ``size`` inches, as a GUI does (the canvas sends resize_event)."""
+    viewer.fig.set_size_inches(*size)
+    ResizeEvent("resize_event", viewer.fig.canvas)._process()
+    viewer.ax_image.apply_aspect()
 
 
 def click_axes(viewer, ax, x=None, y=None):
@@ -405,10 +413,21 @@ def test_shortcuts_are_off_while_typing_in_a_field(disk_image, make_viewer):
     viewer = make_viewer(image)
     viewer.save_box.set_val("")
     click_axes(viewer, viewer.save_box.ax)
+    gui_like(viewer)  # draw_idle only asks for a draw, as on a GUI canvas
+    draws = []
+    real_draw = viewer.fig.canvas.draw
+    viewer.fig.canvas.draw = lambda: (draws.append(1), real_draw())
     for name in "s ":  # save, run
         key(viewer, name)
     assert viewer.save_box.text == "s " and viewer.result is None
     assert "saved" not in viewer.message
+    assert draws == []  # a key typed asks for a redraw; it does not draw the figure at once
+    (cursor,) = viewer.save_box.cursor.get_segments()
+    text = viewer.save_box.text_disp
+    text.set_text("s")  # the cursor stands after what was typed (the trailing space has a width)
+    assert cursor[0, 0] > text.get_window_extent().x1
+    text.set_text("s ")
+    del viewer.fig.canvas.draw
     key(viewer, "enter")
     assert not viewer.save_box.capturekeystrokes
 
@@ -502,3 +521,364 @@ def test_colour_key_switches_to_vector_segmentation(make_viewer):
     gray_viewer = make_viewer(np.zeros((20, 20)))
     key(gray_viewer, "g")
     assert gray_viewer.parameters()["color"] == "gray" and "gray" in gray_viewer.message
+
+
+# ------------------------------------------------------------- named inits, CLI and library default
+def _write_png(path, image):
+    """A gray (M, N) or RGB (M, N, 3) image in [0, 1] as an 8-bit PNG; returns what load_image reads."""
+    import cv2
+
+    pixels = np.round(np.clip(image, 0.0, 1.0) * 255).astype(np.uint8)
+    cv2.imwrite(str(path), pixels[:, :, ::-1] if pixels.ndim == 3 else pixels)
+    return ac.load_image(path)
+
+
+@pytest.fixture(scope="module")
+def coins_image():
+    image, truth, _ = synthetic.coins()
+    return image, truth
+
+
+@pytest.fixture
+def headless_launch(monkeypatch):
+    """``launch`` builds its Viewer as the window would; keep the viewers (Agg cannot show them)."""
+    built = []
+
+    class Recorded(Viewer):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            built.append(self)
+
+    monkeypatch.setattr(viewer_module, "Viewer", Recorded)
+    yield built
+    for viewer in built:
+        plt.close(viewer.fig)
+
+
+@pytest.mark.parametrize("argv, init, backend", [
+    (["--init-grid"], "grid", "polygon"),
+    (["--init-checkerboard", "--backend", "levelset"], "checkerboard", "levelset"),
+])
+def test_view_command_takes_the_named_inits(coins_image, tmp_path, capsys, headless_launch,
+                                            argv, init, backend):
+    from app import cli
+
+    path = tmp_path / "coins.png"
+    image = _write_png(path, coins_image[0])
+    status = cli.main(["view", str(path), "--max-iter", "60", *argv])
+    err = capsys.readouterr().err
+    assert status == 1 and "cannot open a window" in err  # Agg; not the exit 2 of a refused init
+    (viewer,) = headless_launch
+    assert viewer.init == init and viewer.parameters()["backend"] == backend
+    expected = ac.segment(image, init, backend=backend, max_num_iter=60)
+    assert_same_contours(viewer.init_curves, ac.segment(image, init, backend=backend,
+                                                        max_num_iter=0).contours)
+    viewer.run()
+    assert_same_contours(viewer.contours, expected.contours)
+    assert synthetic.dice(viewer.result.mask, coins_image[1]) >= 0.95  # every coin, found anywhere
+
+
+def test_viewer_named_inits_are_the_librarys(coins_image, make_viewer):
+    image, truth = coins_image
+    for init, backend in (("grid", "polygon"), ("checkerboard", "levelset")):
+        viewer = make_viewer(image, init=init, backend=backend, max_num_iter=60)
+        key(viewer, " ")
+        expected = ac.segment(image, init, backend=backend, max_num_iter=60)
+        assert_same_contours(viewer.contours, expected.contours)
+        assert synthetic.dice(viewer.result.mask, truth) >= 0.95
+    # the polygon backend has no checkerboard: switching to it says so, and a run fails cleanly
+    click_radio(viewer, viewer.backend_radio, "polygon")
+    assert "checkerboard" in viewer.message and viewer.init_curves == []
+    key(viewer, "r")
+    key(viewer, " ")
+    assert "run failed" in viewer.message and viewer.result is None
+    figures = plt.get_fignums()
+    with pytest.raises(ValueError, match="checkerboard"):
+        Viewer(image, init="checkerboard", backend="polygon")
+    assert plt.get_fignums() == figures
+
+
+def test_without_a_drawn_init_the_viewer_passes_none(disk_image, make_viewer, monkeypatch):
+    """The library's default start, whatever it is, not a copy of it."""
+    image, _ = disk_image
+    calls = []
+    real = ac.segment
+
+    def spy(image, init=None, **kwargs):
+        calls.append((init, kwargs["max_num_iter"]))
+        return real(image, init, **kwargs)
+
+    monkeypatch.setattr(ac, "segment", spy)
+    monkeypatch.setattr(viewer_module, "segment", spy)
+    viewer = make_viewer(image, max_num_iter=40)
+    assert calls == [(None, 0)]  # what the dashed curve shows: the library's start
+    assert_same_contours(viewer.init_curves, real(image, None, max_num_iter=0).contours)
+    key(viewer, " ")
+    assert calls[-1] == (None, 40)
+    assert_same_contours(viewer.contours, real(image, None, max_num_iter=40).contours)
+    key(viewer, "r")
+    key(viewer, "n")  # a step after a reset starts from the library's default again
+    assert calls[-1] == (None, 1)
+
+
+# ------------------------------------------------------------------------- opening another image
+def test_open_another_image_resets_and_runs_on_it(disk_image, star_image, make_viewer, tmp_path):
+    first_path, second_path = tmp_path / "disk.png", tmp_path / "wide" / "star_mask.png"
+    second_path.parent.mkdir()
+    first = _write_png(first_path, disk_image[0])
+    wide = np.pad(star_image[0], ((0, 0), (0, 40)))  # (128, 168): a new shape
+    second = _write_png(second_path, wide)
+    viewer = make_viewer(first, image_path=first_path, max_num_iter=30)
+    drag(viewer, (64.0, 62.0), (64.0, 80.0))
+    key(viewer, " ")
+    assert viewer.result is not None
+    viewer.image_box.set_val(str(second_path))
+    key(viewer, "i")
+    assert viewer.shape == wide.shape and viewer.image_path == second_path
+    assert viewer.result is None and viewer.contours == [] and viewer.iteration == 0
+    assert viewer.init is None  # the drawn circle belonged to the old image
+    assert len(viewer.energy_history) == 0 and np.size(viewer.energy_line.get_xdata()) == 0
+    assert viewer.ax_image.get_xlim() == (-0.5, wide.shape[1] - 0.5)
+    np.testing.assert_array_equal(viewer.ax_image.images[0].get_array(), second / 255.0)
+    assert "star_mask.png" in viewer.message
+    key(viewer, " ")
+    assert_same_contours(viewer.contours, ac.segment(second, None, max_num_iter=30).contours)
+    # Save now goes next to the new image, and never over it
+    assert viewer.save_box.text == "star_mask"
+    viewer.save_box.set_val("star")
+    key(viewer, "s")
+    assert "not saved" in viewer.message and "overwrite" in viewer.message
+    np.testing.assert_array_equal(ac.load_image(second_path), second)
+
+
+def test_a_bad_image_path_keeps_the_shown_image(disk_image, make_viewer, tmp_path):
+    image, _ = disk_image
+    viewer = make_viewer(image, init="grid")
+    key(viewer, " ")
+    result = viewer.result
+    missing, text = tmp_path / "missing.png", tmp_path / "notes.png"
+    text.write_text("not an image\n")
+    for path in (missing, text, tmp_path):
+        with pytest.raises((OSError, ValueError)) as library:
+            ac.load_image(path)
+        assert not viewer.open_image(path)
+        expected = " ".join(str(library.value).split())
+        assert viewer.message == f"image not opened: {expected}" and "\n" not in viewer.message
+        assert viewer.image is image and viewer.result is result
+    viewer.image_box.set_val("")
+    click_axes(viewer, viewer.image_button.ax)
+    assert "type an image file" in viewer.message
+    # a named init is kept for the next image
+    other = tmp_path / "other.png"
+    _write_png(other, image[:100, :90])
+    assert viewer.open_image(other) and viewer.init == "grid"
+    assert_same_contours(viewer.init_curves,
+                         ac.segment(ac.load_image(other), "grid", max_num_iter=0).contours)
+
+
+# ------------------------------------------------------------------------ readouts and energy plot
+def _visible_tick_labels(ax):
+    return [t.get_text() for t in (*ax.get_xticklabels(), *ax.get_yticklabels()) if t.get_text()]
+
+
+def test_energy_plot_is_labelled_before_a_run_and_cleared_by_a_new_init(disk_image, make_viewer):
+    image, _ = disk_image
+    viewer = make_viewer(image)
+    viewer.fig.canvas.draw()
+
+    def assert_placeholder():
+        assert np.size(viewer.energy_line.get_xdata()) == 0
+        assert viewer.energy_note.get_visible() and "space" in viewer.energy_note.get_text()
+        assert _visible_tick_labels(viewer.ax_energy) == []  # no range of an old run
+
+    assert viewer.ax_energy.get_title() and viewer.ax_energy.get_xlabel() == "iteration"
+    assert_placeholder()
+    key(viewer, " ")
+    viewer.fig.canvas.draw()
+    energies = viewer.result.energies
+    np.testing.assert_array_equal(viewer.energy_line.get_ydata(), energies)
+    assert not viewer.energy_note.get_visible()
+    low, high = viewer.ax_energy.get_ylim()
+    assert low <= energies.min() and high >= energies.max()
+    drag(viewer, (64.0, 62.0), (64.0, 75.0))  # a new init
+    viewer.fig.canvas.draw()
+    assert_placeholder()
+    key(viewer, " ")
+    key(viewer, "r")
+    assert_placeholder()
+
+
+def test_colour_constants_fit_the_readout(make_viewer):
+    image, _ = synthetic.equal_gray_colour()
+    viewer = make_viewer(image, color="vector")
+    resize(viewer, (9.0, 6.0))
+    key(viewer, " ")
+    viewer.fig.canvas.draw()
+    text = viewer.readout.get_text()
+    for name in ("c_in", "c_out"):
+        line = next(t for t in text.splitlines() if t.startswith(name + " "))
+        values = np.atleast_1d(getattr(viewer.result, name))
+        assert len(values) == image.shape[2]
+        for value in values:
+            assert f"{value:.3g}" in line
+    assert "\N{HORIZONTAL ELLIPSIS}" not in text and viewer.readout.get_fontsize() >= 8
+    panel_right = viewer.ax_energy.get_window_extent().x1
+    assert viewer.readout.get_window_extent().x1 <= panel_right + 2.0
+
+
+def test_toolbar_readout_is_row_col_and_the_pixel_value(make_viewer):
+    from matplotlib.backend_bases import NavigationToolbar2
+
+    gray = np.zeros((40, 90))
+    gray[30, 70] = 0.625
+    viewer = make_viewer(gray)
+    assert viewer.ax_image.format_coord(70.2, 29.9) == "row 29.9, col 70.2  value 0.625"
+    x, y = _display(viewer.ax_image, 70.0, 30.0)
+    event = MouseEvent("motion_notify_event", viewer.fig.canvas, x, y)
+    message = NavigationToolbar2._mouse_event_to_message(event)
+    assert message.startswith("row 30.0, col 70.0") and message.endswith("value 0.625")
+    assert "\n" not in message  # the image's own [value] line would repeat it unlabelled
+    assert "value" not in viewer.ax_image.format_coord(95.0, 10.0)  # beyond the last column
+    colour = np.zeros((20, 30, 3), np.uint8)
+    colour[5, 25] = (255, 128, 7)
+    assert make_viewer(colour).ax_image.format_coord(25.0, 5.0).endswith("value (255, 128, 7)")
+
+
+def test_save_defaults_next_to_the_input_not_the_working_directory(disk_image, make_viewer,
+                                                                    tmp_path, monkeypatch):
+    image, _ = disk_image
+    (tmp_path / "images").mkdir()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    _write_png(tmp_path / "images" / "disk.png", image)
+    monkeypatch.chdir(tmp_path)
+    viewer = make_viewer(ac.load_image("images/disk.png"), image_path="images/disk.png")
+    monkeypatch.chdir(elsewhere)  # the working directory moves on; the input's folder stays
+    key(viewer, " ")
+    assert viewer.save_box.text == "disk"
+    paths = viewer.save()
+    assert {p.parent for p in paths} == {tmp_path / "images"}
+    assert (tmp_path / "images" / "disk_mask.png").exists() and list(elsewhere.iterdir()) == []
+    viewer.save_box.set_val("second")
+    viewer.save()
+    assert (tmp_path / "images" / "second_mask.png").exists()
+    viewer.save_box.set_val(str(elsewhere / "third"))  # an absolute stem is taken as it is
+    viewer.save()
+    assert (elsewhere / "third_mask.png").exists()
+
+
+# ---------------------------------------------------------------------------------------- layout
+def _text_boxes(viewer):
+    """(text, owner axes or None, window extent) of every text drawn on the viewer's figure,
+    except the contents of the text fields (clipped to their field by design)."""
+    fig, shown = viewer.fig, []
+    field_texts = {box.text_disp for box in viewer.layout.text_boxes}
+
+    def add(text, owner):
+        if text.get_visible() and text.get_text().strip() and text not in field_texts:
+            shown.append((text, owner, text.get_window_extent()))
+
+    for text in fig.texts:
+        add(text, None)
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        for axis in (ax.xaxis, ax.yaxis):
+            low, high = sorted(axis.get_view_interval())
+            margin = 1e-9 * max(1.0, high - low)
+            for tick in axis.get_major_ticks():  # only the ticks in the view are drawn
+                if tick.get_visible() and low - margin <= tick.get_loc() <= high + margin:
+                    add(tick.label1, ax)
+                    add(tick.label2, ax)
+            add(axis.label, ax)
+            add(axis.get_offset_text(), ax)
+        for text in (ax.title, *ax.texts):
+            add(text, ax)
+    return shown
+
+
+def _area(a, b):
+    width = min(a.x1, b.x1) - max(a.x0, b.x0)
+    height = min(a.y1, b.y1) - max(a.y0, b.y0)
+    return width * height if width > 0.5 and height > 0.5 else 0.0
+
+
+# 900 x 550 is a 900 x 600 window less the toolbar of TkAgg
+@pytest.mark.parametrize("size", [(9.0, 6.0), (9.0, 5.5), DEFAULT_SIZE, (16.0, 9.0)])
+def test_no_text_overlaps_another_or_leaves_the_window(make_viewer, tmp_path, size):
+    image, _ = synthetic.equal_gray_colour()
+    viewer = make_viewer(image, color="vector", image_path=tmp_path / "a_long_file_name_for_x.png")
+    resize(viewer, size)
+    key(viewer, " ")
+    viewer.set_init_mode("polygon")  # the longest status hint
+    viewer.fig.canvas.draw()
+    figure = viewer.fig.bbox
+    texts = _text_boxes(viewer)
+    assert len(texts) > 40  # tick labels, labels, readouts, widgets
+    every_axes = [a for a in viewer.fig.axes if a.get_visible()]
+    for i, (text, owner, box) in enumerate(texts):
+        label = repr(text.get_text()[:30])
+        assert box.x0 >= figure.x0 - 0.5 and box.x1 <= figure.x1 + 0.5, f"{label} leaves the window"
+        assert box.y0 >= figure.y0 - 0.5 and box.y1 <= figure.y1 + 0.5, f"{label} leaves the window"
+        for other, _, other_box in texts[i + 1:]:
+            assert _area(box, other_box) == 0.0, f"{label} overlaps {other.get_text()[:30]!r}"
+        for ax in every_axes:
+            if ax is not owner:
+                assert _area(box, ax.get_window_extent()) == 0.0, f"{label} overlaps an axes"
+    # a button's label stays inside its button
+    for button in viewer.layout.buttons:
+        inner, outer = button.label.get_window_extent(), button.ax.get_window_extent()
+        assert outer.x0 < inner.x0 and inner.x1 < outer.x1, button.label.get_text()
+    # a field's text stays in its field (clipped), showing the end of a long one
+    viewer.image_box.set_val(str(tmp_path / "folder" / ("a_long_name_" * 8 + "end.png")))
+    viewer.fig.canvas.draw()
+    for box in viewer.layout.text_boxes:
+        field, shown = box.ax.get_window_extent(), box.text_disp.get_window_extent()
+        assert box.text_disp.get_clip_on() and box.text_disp.get_clip_box() is box.ax.bbox
+        assert field.x0 < shown.x1 < field.x1, box.text
+    shot = tmp_path / f"viewer_{int(size[0] * 100)}x{int(size[1] * 100)}.png"
+    viewer.fig.savefig(shot)
+    assert plt.imread(shot).shape[:2] == (round(size[1] * 100), round(size[0] * 100))
+
+
+def test_a_long_status_line_is_fitted_into_the_window(disk_image, make_viewer, tmp_path):
+    image, _ = disk_image
+    viewer = make_viewer(image)
+    resize(viewer, (9.0, 6.0))
+    long_path = tmp_path / ("x" * 300 + ".png")
+    viewer.open_image(long_path)
+    assert str(long_path.name) in viewer.message  # the whole message is kept
+    box = viewer.status_text.get_window_extent()
+    assert box.x1 <= viewer.fig.bbox.x1
+    assert viewer.status_text.get_text().endswith("\N{HORIZONTAL ELLIPSIS}")
+
+
+def test_automatic_mu_follows_the_image_until_the_slider_is_moved(disk_image, make_viewer,
+                                                                 tmp_path):
+    noisy = tmp_path / "noisy.png"
+    clean = tmp_path / "clean.png"
+    first = _write_png(noisy, np.clip(disk_image[0], 0, 1))
+    second = _write_png(clean, disk_image[1] * 0.8 + 0.1)
+    viewer = make_viewer(first, image_path=noisy, max_num_iter=1)
+    mu = viewer.sliders["mu"]
+    assert viewer.slider_labels["mu"].get_text() == "mu (auto)"
+    assert mu.val == pytest.approx(ac.segment(first, max_num_iter=0).mu)
+    viewer.open_image(clean)
+    assert mu.val == pytest.approx(ac.segment(second, max_num_iter=0).mu)
+    assert ac.segment(second, max_num_iter=0).mu != ac.segment(first, max_num_iter=0).mu
+    set_slider(viewer, mu, 1.5)
+    assert viewer.slider_labels["mu"].get_text() == "mu (length)"
+    viewer.open_image(noisy)
+    assert viewer.parameters()["mu"] == pytest.approx(1.5, abs=1e-9)  # the user's value stays
+
+
+def test_the_shown_start_follows_mu_as_the_librarys_does(coins_image, make_viewer):
+    image, _ = coins_image
+    viewer = make_viewer(image)
+    mu = viewer.sliders["mu"]
+    before = ac.segment(image, max_num_iter=0, mu=mu.val).contours
+    assert_same_contours(viewer.init_curves, before)
+    set_slider(viewer, mu, 1.0)  # press and release on the slider
+    after = ac.segment(image, max_num_iter=0, mu=viewer.parameters()["mu"]).contours
+    assert len(after) != len(before)  # on this image the start depends on mu
+    assert_same_contours(viewer.init_curves, after)

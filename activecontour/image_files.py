@@ -1,0 +1,210 @@
+"""Masks and overlays: the segmentation written as images.
+
+A mask is an 8-bit image, 0 outside and 255 inside; an overlay is the image in 8-bit RGB with the
+contours drawn on it, anti-aliased at sub-pixel precision.  Both are written all or nothing
+(:mod:`activecontour.atomic`).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from activecontour.atomic import write_atomically
+from activecontour.contour_files import curve_list
+from activecontour.curve import to_xy
+from activecontour.image import load_image, normalize_image
+
+__all__ = [
+    "COLORS",
+    "IMAGE_SUFFIXES",
+    "encode_mask",
+    "encode_overlay",
+    "read_mask",
+    "render_overlay",
+    "write_mask",
+    "write_overlay",
+]
+
+#: Suffixes of the lossless formats masks and overlays are written in.
+IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".bmp")
+
+#: Named overlay colours, RGB.
+COLORS = {
+    "red": (255, 0, 0),
+    "green": (0, 255, 0),
+    "blue": (0, 0, 255),
+    "yellow": (255, 255, 0),
+    "cyan": (0, 255, 255),
+    "magenta": (255, 0, 255),
+    "white": (255, 255, 255),
+    "black": (0, 0, 0),
+}
+
+
+# Sub-pixel precision of the overlay polylines: OpenCV's ``shift`` (coordinates * 2**shift).
+_DRAW_SHIFT = 4
+
+
+def write_mask(path, mask):
+    """Write a boolean mask as an 8-bit image with 0 outside and 255 inside.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Destination; ``.png`` (recommended), ``.tif``/``.tiff`` or ``.bmp`` (lossless formats only).
+    mask : array_like of bool, shape (M, N)
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    path = Path(path)
+    write_atomically(path, encode_mask(path, mask))
+    return path
+
+
+def read_mask(path):
+    """Read a mask image: nonzero pixels are inside.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any image :func:`activecontour.image.load_image` reads.  Gray images are used as they are; a
+        gray + alpha image by its gray channel; an RGB or RGBA image is inside where any of R, G, B
+        is nonzero (the alpha channel is ignored).
+
+    Returns
+    -------
+    ndarray of bool, shape (M, N)
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ValueError
+        For an unreadable file or one that is not a 2-D image after dropping the channels.
+    """
+    image = load_image(path)
+    if image.ndim == 3:
+        channels = image.shape[2]
+        if channels in (1, 2):
+            image = image[:, :, 0]
+        elif channels in (3, 4):
+            image = np.any(image[:, :, :3] != 0, axis=2)
+        else:
+            raise ValueError(
+                f"mask {os.fspath(path)!r} has {channels} channels; expected a gray, gray+alpha, "
+                "RGB or RGBA image"
+            )
+    if image.ndim != 2:
+        raise ValueError(f"mask {os.fspath(path)!r} is not a 2-D image (shape {image.shape})")
+    return np.asarray(image != 0)
+
+
+def encode_mask(path, mask):
+    """The bytes of the mask file ``path`` (its suffix picks the format), for :func:`write_mask`."""
+    import cv2
+
+    suffix = Path(path).suffix.lower()
+    if suffix not in IMAGE_SUFFIXES:
+        raise ValueError(f"mask file must end in one of {IMAGE_SUFFIXES}, got {os.fspath(path)!r}")
+    mask = np.asarray(mask)
+    if mask.ndim != 2 or mask.size == 0:
+        raise ValueError(f"mask must be a 2-D array of shape (M, N), got shape {mask.shape}")
+    if mask.dtype != bool:
+        if not (np.issubdtype(mask.dtype, np.number) and np.all(np.isfinite(mask))):
+            raise ValueError("mask must be a bool array (or numbers, nonzero = inside) without NaN")
+        mask = mask != 0
+    ok, buffer = cv2.imencode(suffix, np.where(mask, 255, 0).astype(np.uint8))
+    if not ok:
+        raise ValueError(f"OpenCV could not encode a mask as {suffix}")
+    return buffer.tobytes()
+
+
+def write_overlay(path, image, contours, *, color="red", thickness=1):
+    """Draw the contours on the image and write it as an 8-bit RGB image (PNG recommended).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    image : ndarray of shape (M, N) or (M, N, C)
+        Gray or colour image, normalised as by :func:`activecontour.image.normalize_image` (integer
+        dtypes by their range; floats as given, clipped to [0, 1], or stretched from their
+        min..max when they fall outside it).
+    contours : list of ndarray (K, 2), or a SegmentationResult
+        Closed curves in (row, col); drawn anti-aliased at sub-pixel precision.
+    color : str or (int, int, int)
+        A name from :data:`COLORS` or an RGB triple in 0..255.
+    thickness : int
+        Line width in pixels, >= 1.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    path = Path(path)
+    write_atomically(path, encode_overlay(path, image, contours, color, thickness))
+    return path
+
+
+def render_overlay(image, contours, color="red", thickness=1):
+    """The overlay as an (M, N, 3) uint8 RGB array (see :func:`write_overlay`)."""
+    import cv2
+
+    rgb = _display_rgb(image)
+    curves = curve_list(contours)
+    if isinstance(thickness, bool) or not isinstance(thickness, (int, np.integer)) or thickness < 1:
+        raise ValueError(f"thickness must be an integer >= 1, got {thickness!r}")
+    polylines = [
+        np.round(to_xy(curve) * (1 << _DRAW_SHIFT)).astype(np.int32).reshape(-1, 1, 2)
+        for curve in curves
+    ]
+    if polylines:
+        cv2.polylines(rgb, polylines, True, _rgb_color(color), int(thickness), cv2.LINE_AA,
+                      _DRAW_SHIFT)
+    return rgb
+
+
+def encode_overlay(path, image, contours, color, thickness):
+    """The bytes of the overlay file ``path``, for :func:`write_overlay`."""
+    import cv2
+
+    suffix = Path(path).suffix.lower()
+    if suffix not in IMAGE_SUFFIXES:
+        raise ValueError(
+            f"overlay file must end in one of {IMAGE_SUFFIXES}, got {os.fspath(path)!r}"
+        )
+    rgb = render_overlay(image, contours, color, thickness)
+    ok, buffer = cv2.imencode(suffix, np.ascontiguousarray(rgb[:, :, ::-1]))  # OpenCV wants BGR
+    if not ok:
+        raise ValueError(f"OpenCV could not encode an overlay as {suffix}")
+    return buffer.tobytes()
+
+
+def _display_rgb(image):
+    values = normalize_image(image, color="vector", normalize="dtype")
+    low, high = float(values.min()), float(values.max())
+    if low < 0.0 or high > 1.0:
+        # float images outside [0, 1] (e.g. 0..255 floats) are shown from their own range
+        values = (values - low) / (high - low) if high > low else np.zeros_like(values)
+    if values.shape[2] == 1:
+        values = np.repeat(values, 3, axis=2)
+    return np.ascontiguousarray(np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8))
+
+
+def _rgb_color(color):
+    if isinstance(color, str):
+        if color.lower() not in COLORS:
+            raise ValueError(f"color must be one of {tuple(COLORS)} or an RGB triple, got {color!r}")
+        return COLORS[color.lower()]
+    try:
+        values = tuple(int(v) for v in color)
+    except (TypeError, ValueError):
+        raise ValueError(f"color must be a name or an RGB triple in 0..255, got {color!r}") from None
+    if len(values) != 3 or not all(0 <= v <= 255 for v in values):
+        raise ValueError(f"color must be an RGB triple in 0..255, got {color!r}")
+    return values
