@@ -261,7 +261,10 @@ class Viewer:
         params.update(backend=backend, max_num_iter=self._max_num_iter, tol=self._tol,
                       color=self.color, **self.fixed_constants)
         if backend in self.step_sliders:
-            params["options"] = {STEP_OPTIONS[backend][0]: float(self.step_sliders[backend].val)}
+            option = STEP_OPTIONS[backend][0]
+            value = float(self.step_sliders[backend].val)
+            if value != _backend_default(backend, option):  # untouched: the backend's own default
+                params["options"] = {option: value}
         return params
 
     @property

@@ -88,7 +88,6 @@ def _clockwise_outline():
     return curve
 
 
-LEVEL_SET_ENERGY = lead("the level-set energy is not chan_vese_energy of its contours (about 2x)")
 
 API_USABLE = {
     "float64 noisy disk, default init": lambda: usable(IMAGE),
@@ -113,10 +112,9 @@ API_USABLE = {
     "repeated closing vertex": lambda: usable(IMAGE, np.vstack([ac.circle(CENTER, 9),
                                                                 ac.circle(CENTER, 9)[:1]])),
     "bool mask init": lambda: usable(IMAGE, synthetic.render(synthetic.disk(CENTER, 8), SHAPE)[1]),
-    "previous polygon result into the level set": pytest.param(
-        lambda: usable(IMAGE, ac.segment(IMAGE), backend="levelset"), marks=LEVEL_SET_ENERGY),
-    "level set, default init": pytest.param(lambda: usable(IMAGE, backend="levelset"),
-                                            marks=LEVEL_SET_ENERGY),
+    "previous polygon result into the level set":
+        lambda: usable(IMAGE, ac.segment(IMAGE), backend="levelset"),
+    "level set, default init": lambda: usable(IMAGE, backend="levelset"),
     "grid init on coins": lambda: usable(skimage.data.coins()[::4, ::4], "grid"),
     "max_num_iter=0": lambda: usable(IMAGE, max_num_iter=0),
     "fixed c_in and c_out": lambda: usable(IMAGE, c_in=0.75, c_out=0.25,
@@ -141,12 +139,10 @@ API_USABLE = {
         lambda: _small_checkerboard_finds_the_disk(),
         marks=lead("the checkerboard is empty on images under 16 px")),
     "uint8 0/255 mask as init": lambda: usable(IMAGE, (TRUTH * 255).astype(np.uint8)),
-    "constant image, level set": pytest.param(
-        lambda: usable(np.full((32, 32), 0.5), backend="levelset"),
-        marks=lead("level-set c is NaN after a collapse")),
+    "constant image, level set": lambda: usable(np.full((32, 32), 0.5), backend="levelset"),
     "spacing of 1e-3 px": lambda: _tiny_spacing_is_refused_or_bounded(),
-    "microaneurysms, grid init, level set": pytest.param(
-        lambda: usable(skimage.data.microaneurysms(), "grid", backend="levelset"), marks=LEVEL_SET_ENERGY),
+    "microaneurysms, grid init, level set":
+        lambda: usable(skimage.data.microaneurysms(), "grid", backend="levelset"),
 }
 
 
@@ -355,8 +351,7 @@ def _cli_usable_argv(name, tmp_path, png):
     return ["segment", png, "-o", tmp_path / "out", "--init-contours", init]
 
 
-@pytest.mark.parametrize("name", [pytest.param(name, marks=LEVEL_SET_ENERGY) if name == "levelset" else name
-                                  for name in CLI_USABLE])
+@pytest.mark.parametrize("name", list(CLI_USABLE))
 def test_cli_writes_a_usable_result(tmp_path, disk_png, capsys, name):
     status, stdout, stderr = run_cli(capsys, *_cli_usable_argv(name, tmp_path, disk_png))
     assert (status, stderr) == (0, ""), stderr

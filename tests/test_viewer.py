@@ -451,7 +451,10 @@ def test_backend_radio_selects_the_backend(disk_image, make_viewer):
     except ImportError:
         assert viewer.result is None and "run failed" in viewer.message
         return
-    assert viewer.parameters()["options"] == {"dt": DEFAULT_OPTIONS["dt"]}  # the step slider
+    # an untouched step slider leaves the backend's own default (and its rules) in force
+    assert "options" not in viewer.parameters()
+    viewer.step_sliders["levelset"].set_val(DEFAULT_OPTIONS["dt"] / 2)
+    assert viewer.parameters()["options"] == {"dt": DEFAULT_OPTIONS["dt"] / 2}
     assert viewer.result.backend == "levelset"
     assert synthetic.dice(viewer.result.mask, truth) >= 0.98
 
