@@ -2,7 +2,9 @@
 
 Run ``python benchmarks/bench_scale.py`` from the repository root, after ``pip install -e .``
 (``--huge`` adds 8192^2: ~30 s to make the image once, ~1 GB of cache; ``--max-iter`` fixes the
-iteration count so that the sizes compare; ``--importtime`` prints the import profile).  Every
+iteration count so that the sizes compare; ``--importtime`` prints the import profile).  On a
+shared two-core machine OpenBLAS's threads in the flow's long vector products have cost up to 10x
+per iteration: compare a run under ``OPENBLAS_NUM_THREADS=1``.  Every
 measurement runs in a fresh process, so peak RSS (``os.wait4``) is that run's alone.  The machine's
 load average is printed with the timings: compare ratios taken in the same run.
 
