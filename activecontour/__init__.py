@@ -23,6 +23,14 @@ Conventions: points are (row, col) with pixel centres at integer coordinates; ou
 positively oriented (signed area > 0), holes negatively; the normal points out of the inside region.
 """
 
+try:
+    from activecontour import _kernels  # noqa: F401  (compiled loops, built at install by setup.py)
+except ImportError as exc:  # a source tree that was never installed, or pulled new kernels
+    raise ImportError(
+        "activecontour's compiled kernels are not built: run `python3 -m pip install -e .` "
+        "in the source tree (needs a C compiler)"
+    ) from exc
+
 from activecontour.batch import segment_many
 from activecontour.energy import chan_vese_energy
 from activecontour.image import load_image

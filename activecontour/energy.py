@@ -29,9 +29,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.curve import as_curve
 
 __all__ = [
@@ -42,7 +42,6 @@ __all__ = [
     "region_moments",
     "stack_curves",
 ]
-
 
 
 @dataclass(frozen=True)
@@ -151,12 +150,13 @@ def region_moments(model, curves):
 
 
 def _moments(model, points, next_index):
+    next_index = np.ascontiguousarray(next_index, dtype=np.intp)
     channels = model.n_channels
     s1, s2 = np.zeros(channels), np.zeros(channels)
     sums = np.zeros(2)  # area, length
     unused = np.zeros(channels)
-    _edge_integrals(np.ascontiguousarray(points), next_index, model.table, 0, unused, unused,
-                    unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
+    _kernels.edge_integrals(np.ascontiguousarray(points), next_index, model.values, model.table, 0,
+                            unused, unused, unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
     return sums[0], sums[1], s1, s2
 
 
@@ -211,99 +211,13 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     result = Evaluation(float(energy), c_in, c_out, area, length)
     if gradient:
         load = np.zeros_like(points)
-        _edge_integrals(np.ascontiguousarray(points), next_index, model.table, 1,
-                        np.ascontiguousarray(c_in), np.ascontiguousarray(c_out),
-                        np.ascontiguousarray(lambda_in), np.ascontiguousarray(lambda_out),
-                        float(params.omega), float(params.mu), s1, s2, np.zeros(2), load)
+        _kernels.edge_integrals(np.ascontiguousarray(points), np.ascontiguousarray(next_index, dtype=np.intp),
+                                model.values, model.table, 1, np.ascontiguousarray(c_in),
+                                np.ascontiguousarray(c_out), np.ascontiguousarray(lambda_in),
+                                np.ascontiguousarray(lambda_out), float(params.omega), float(params.mu),
+                                s1, s2, np.zeros(2), load)
         result.load = load
     return result
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _edge_integrals(points, next_index, table, stage, c_in, c_out, lambda_in,
-                    lambda_out, omega, mu, s1, s2, sums, load):
-    """Exact integrals along every edge, split where it crosses a grid line.
-
-    ``stage`` 0 accumulates the moments ``closed integral of G dc`` into s1, s2 and the signed area
-    and length into ``sums``; stage 1 adds the load (6.41) into ``load``.  Each piece between grid
-    lines lies in one interpolation cell [a, a + 1] x [j, j + 1], read once: there, with local
-    coordinates (t, w), I is bilinear and its row-antiderivatives are the table values at row a
-    plus the exact integral from a to u, so the integrands are polynomials of degree <= 5 in the
-    edge parameter and 3-point Gauss-Legendre is exact.
-    """
-    channels = table.shape[2]
-    nodes = (0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6))
-    weights = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
-    density = np.empty(3)
-    for e in range(points.shape[0]):
-        b = next_index[e]
-        u0, v0 = points[e, 0] + 1.0, points[e, 1] + 1.0
-        du, dv = points[b, 0] + 1.0 - u0, points[b, 1] + 1.0 - v0
-        # next grid lines in the direction of travel
-        step_u = 1 if du > 0 else -1
-        step_v = 1 if dv > 0 else -1
-        k_u = np.floor(u0) + 1.0 if du > 0 else np.ceil(u0) - 1.0
-        k_v = np.floor(v0) + 1.0 if dv > 0 else np.ceil(v0) - 1.0
-        at_start, at_end = 0.0, 0.0
-        t_prev = 0.0
-        while True:
-            t_u = (k_u - u0) / du if du != 0.0 else 2.0
-            t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
-            t_next = min(t_u, t_v, 1.0)
-            span = t_next - t_prev
-            if span > 0.0:
-                t_mid = t_prev + 0.5 * span
-                a = min(max(int(np.floor(u0 + t_mid * du)), 0), table.shape[0] - 2)
-                j = min(max(int(np.floor(v0 + t_mid * dv)), 0), table.shape[1] - 2)
-                density[:] = omega
-                for ch in range(channels):
-                    here, right = table[a, j, ch], table[a, j + 1, ch]  # (P, t1, t2, t3)
-                    p0, q0 = here[0], right[0]
-                    dp, dq = table[a + 1, j, ch, 0] - p0, table[a + 1, j + 1, ch, 0] - q0
-                    for g in range(3):
-                        t_edge = t_prev + span * nodes[g]
-                        t = u0 + t_edge * du - a
-                        w = v0 + t_edge * dv - j
-                        w0 = 1.0 - w
-                        intensity = w0 * (p0 + t * dp) + w * (q0 + t * dq)
-                        if stage == 0:
-                            half, third = 0.5 * t * t, t * t * t / 3.0
-                            g1 = w0 * (here[1] + t * p0 + half * dp) + w * (right[1] + t * q0 + half * dq)
-                            b_pp = here[2] + p0 * p0 * t + 2.0 * p0 * dp * half + dp * dp * third
-                            b_qq = right[2] + q0 * q0 * t + 2.0 * q0 * dq * half + dq * dq * third
-                            b_pq = here[3] + p0 * q0 * t + (p0 * dq + q0 * dp) * half + dp * dq * third
-                            g2 = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
-                            weight = span * weights[g] * dv
-                            s1[ch] += weight * g1
-                            s2[ch] += weight * g2
-                        else:
-                            density[g] += (lambda_in[ch] * (intensity - c_in[ch]) ** 2
-                                           - lambda_out[ch] * (intensity - c_out[ch]) ** 2)
-                if stage == 1:
-                    for g in range(3):
-                        t_edge = t_prev + span * nodes[g]
-                        weight = span * weights[g] * density[g]
-                        at_start += weight * (1.0 - t_edge)
-                        at_end += weight * t_edge
-            if t_next >= 1.0:
-                break
-            if t_u <= t_next:
-                k_u += step_u
-            if t_v <= t_next:
-                k_v += step_v
-            t_prev = t_next
-        length = np.sqrt(du * du + dv * dv)
-        if stage == 0:
-            sums[0] += 0.5 * ((u0 - 1.0) * (v0 - 1.0 + dv) - (u0 - 1.0 + du) * (v0 - 1.0))
-            sums[1] += length
-        else:
-            # nu |e| = (dv, -du): the edge normal (section 4.5.2) times its length
-            tangent_r = du / length if length > 0.0 else 0.0
-            tangent_c = dv / length if length > 0.0 else 0.0
-            load[e, 0] += at_start * dv - mu * tangent_r
-            load[e, 1] += -at_start * du - mu * tangent_c
-            load[b, 0] += at_end * dv + mu * tangent_r
-            load[b, 1] += -at_end * du + mu * tangent_c
 
 
 def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, lambda_out=1.0,

@@ -14,9 +14,9 @@ several polygons in one call: no dense inverse, no general sparse LU.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
-import scipy.sparse
+
+from activecontour import _kernels
 
 __all__ = [
     "cyclic_apply",
@@ -48,6 +48,8 @@ def stiffness_diagonals(h, previous=None):
 
 def cyclic_matrix(diagonal, off):
     """The sparse (CSR) symmetric cyclic tridiagonal matrix with these diagonals."""
+    import scipy.sparse  # for checks and users; the flow never builds a matrix
+
     k = len(diagonal)
     i = np.arange(k)
     j = (i + 1) % k
@@ -97,46 +99,11 @@ def cyclic_solve(diagonal, off, rhs, offsets=None):
     squeeze = rhs.ndim == 1
     b = np.ascontiguousarray(rhs[:, None] if squeeze else rhs)
     offsets = np.array([0, len(diagonal)] if offsets is None else offsets, dtype=np.intp)
+    if not (len(off) == len(b) == len(diagonal) == offsets[-1] and offsets[0] == 0):
+        raise ValueError(f"diagonal, off and rhs must all have offsets[-1] = {offsets[-1]} rows, got "
+                         f"{len(diagonal)}, {len(off)} and {len(b)}")
     if np.any(np.diff(offsets) < 3):
         raise ValueError(f"a closed polygon needs at least 3 vertices, got {np.diff(offsets).min()}")
     x = np.empty_like(b)
-    _cyclic_thomas(diagonal, off, b, offsets, x)
+    _kernels.cyclic_thomas(diagonal, off, b, offsets, x)
     return x[:, 0] if squeeze else x
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _cyclic_thomas(diagonal, off, rhs, offsets, out):
-    columns = rhs.shape[1]
-    for block in range(offsets.shape[0] - 1):
-        first, stop = offsets[block], offsets[block + 1]
-        k = stop - first
-        d = diagonal[first:stop].copy()
-        e = off[first:stop]
-        gamma = -d[0]
-        corner = e[k - 1]
-        d[0] -= gamma
-        d[k - 1] -= corner * corner / gamma
-        # right-hand sides: the block's columns plus u = (gamma, 0, ..., 0, corner)
-        y = np.zeros((k, columns + 1))
-        y[:, :columns] = rhs[first:stop]
-        y[0, columns] = gamma
-        y[k - 1, columns] += corner
-        # Thomas: forward elimination on the tridiagonal part (super-diagonal e[:k-1])
-        c_prime = np.empty(k)
-        c_prime[0] = e[0] / d[0]
-        for col in range(columns + 1):
-            y[0, col] /= d[0]
-        for i in range(1, k):
-            denominator = d[i] - e[i - 1] * c_prime[i - 1]
-            c_prime[i] = e[i] / denominator if i < k - 1 else 0.0
-            for col in range(columns + 1):
-                y[i, col] = (y[i, col] - e[i - 1] * y[i - 1, col]) / denominator
-        for i in range(k - 2, -1, -1):
-            for col in range(columns + 1):
-                y[i, col] -= c_prime[i] * y[i + 1, col]
-        z0, zk = y[0, columns], y[k - 1, columns]
-        scale = 1.0 + z0 + (corner / gamma) * zk
-        for col in range(columns):
-            factor = (y[0, col] + (corner / gamma) * y[k - 1, col]) / scale
-            for i in range(k):
-                out[first + i, col] = y[i, col] - factor * y[i, columns]

@@ -6,15 +6,16 @@ integer (row, col), extended by a constant over the half-pixel margin, on the do
 
 Region integrals of 1, I and I^2 over Omega_i turn into boundary integrals by Green's theorem,
 ``int_Omega g = closed integral of G(r, c) dc``, with ``G(r, c) = int^r g(s, c) ds`` the
-antiderivative of g along the rows.  :class:`ImageModel` precomputes G at the pixel centres as
-cumulative sums once; G at any other point is a short polynomial evaluation.  Because the bilinear
+antiderivative of g along the rows.  :class:`ImageModel` precomputes G at the pixel centres of
+every 8th row in one pass; G at any other point is a few increments from the stored row below plus
+a short polynomial evaluation.  Because the bilinear
 interpolant is a polynomial on each grid cell, both G and I are integrated *exactly* along the
 pieces of a polygon edge between grid lines, which is what makes the discrete energy and its shape
 derivative consistent to rounding error (see :mod:`activecontour.energy`).
 
 The tables live in *padded* coordinates ``(u, v) = (r + 1, c + 1)`` of the image padded by one
-replicated pixel, so that the interpolation cell of every point of D exists; the polynomial
-evaluation on a cell is :func:`activecontour.energy._cell_values`.
+replicated pixel, so that the interpolation cell of every point of D exists; the evaluation on a
+cell is in :func:`activecontour._kernels.edge_integrals`.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ import os
 import warnings
 
 import numpy as np
+
+from activecontour import _kernels
 
 __all__ = ["NORMALIZATIONS", "ImageModel", "intensity_scale", "load_image", "normalize_image"]
 
@@ -74,19 +77,35 @@ def load_image(path):
         raise FileNotFoundError(f"image file not found: {path!r}")
     if os.path.isdir(path):
         raise ValueError(f"image path is a directory, not a file: {path!r}")
-    import skimage.io
+    image = _read_opencv(path)
+    if image is None:  # a format or variant OpenCV does not read
+        import skimage.io
 
-    try:
-        with warnings.catch_warnings():  # imageio's plugin probing warns about unrelated plugins
-            warnings.simplefilter("ignore", DeprecationWarning)
-            image = skimage.io.imread(path)
-    except Exception as exc:  # every reader raises its own type; report them all the same way
-        raise ValueError(f"cannot read image {path!r}: {_why_unreadable(path, exc)}") from None
+        try:
+            with warnings.catch_warnings():  # imageio's plugin probing warns about unrelated plugins
+                warnings.simplefilter("ignore", DeprecationWarning)
+                image = skimage.io.imread(path)
+        except Exception as exc:  # every reader raises its own type; report them all the same way
+            raise ValueError(f"cannot read image {path!r}: {_why_unreadable(path, exc)}") from None
     image = np.asarray(image)
     if image.ndim == 3 and image.shape[0] in (3, 4) and image.shape[2] not in (3, 4):
         image = np.moveaxis(image, 0, -1)  # channel-first TIFF
     if image.ndim not in (2, 3) or image.size == 0:
         raise ValueError(f"image {path!r} is not a 2-D image (shape {image.shape})")
+    return image
+
+
+def _read_opencv(path):
+    """The image as OpenCV reads it, in RGB(A) order, or None.
+
+    OpenCV comes first: the command line imports it for its outputs anyway, and it reads a PNG
+    several times faster than scikit-image's imageio plugins, which also cost ~0.3 s to import.
+    """
+    import cv2
+
+    image = cv2.imread(path, cv2.IMREAD_UNCHANGED)  # stored dtype and channels, EXIF ignored
+    if image is not None and image.ndim == 3 and image.shape[2] in (3, 4):
+        image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB if image.shape[2] == 3 else cv2.COLOR_BGRA2RGBA)
     return image
 
 
@@ -201,40 +220,18 @@ class ImageModel:
     """
 
     def __init__(self, values):
-        values = np.asarray(values, dtype=np.float64)
+        values = np.ascontiguousarray(values, dtype=np.float64)
         if values.ndim != 3:
             raise ValueError("ImageModel expects normalised values of shape (M, N, C)")
         self.values = values
         self.shape = values.shape[:2]
         self.n_channels = values.shape[2]
-        padded = np.pad(values, ((1, 1), (1, 1), (0, 0)), mode="edge")
-        # Cumulative exact integrals along rows of the piecewise-linear column profiles:
-        # t1[a, j] = int_0^a P(s, j) ds, t2 = int P(s, j)^2, t3 = int P(s, j) P(s, j + 1)
-        # (t3's last column, which has no right neighbour, stays 0).
-        p0, p1 = padded[:-1], padded[1:]
-        q0, q1 = p0[:, 1:], p1[:, 1:]
-        inc1 = 0.5 * (p0 + p1)
-        inc2 = (p0 * p0 + p0 * p1 + p1 * p1) / 3.0
-        inc3 = np.zeros_like(inc1)
-        inc3[:, :-1] = (2 * p0[:, :-1] * q0 + p0[:, :-1] * q1 + p1[:, :-1] * q0 + 2 * p1[:, :-1] * q1) / 6.0
-        #: (M + 2, N + 2, C, 4): padded image, t1, t2, t3 side by side, so that the data of one
-        #: interpolation cell sits in two cache lines (what the edge integrals read)
-        self.table = np.ascontiguousarray(
-            np.stack([padded, _cumulative(inc1), _cumulative(inc2), _cumulative(inc3)], axis=-1))
         m, n = self.shape
+        #: (M // ANCHOR_ROWS + 1, N + 2, C, 3): the row-antiderivatives (t1, t2, t3) at every
+        #: ANCHOR_ROWS-th padded row, built in one pass without temporaries
+        #: (:func:`activecontour._kernels.build_tables`, which also says why float64)
+        self.table = np.empty(((m + 1) // _kernels.ANCHOR_ROWS + 1, n + 2, self.n_channels, 3))
+        total1, total2 = np.empty(self.n_channels), np.empty(self.n_channels)
+        _kernels.build_tables(values, self.table, total1, total2)
         self.bounds = np.array([[-0.5, -0.5], [m - 0.5, n - 0.5]])
-        self.totals = self._domain_totals()
-
-    def _domain_totals(self):
-        from activecontour.energy import region_moments  # energy builds on this module
-
-        m, n = self.shape
-        box = np.array([[-0.5, -0.5], [m - 0.5, -0.5], [m - 0.5, n - 0.5], [-0.5, n - 0.5]])
-        area, s1, s2 = region_moments(self, [box])
-        return float(area), s1, s2
-
-
-def _cumulative(increments):
-    out = np.zeros((increments.shape[0] + 1,) + increments.shape[1:])
-    np.cumsum(increments, axis=0, out=out[1:])
-    return out
+        self.totals = (float(m * n), total1, total2)

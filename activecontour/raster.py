@@ -13,6 +13,9 @@ from activecontour.curve import signed_area
 
 __all__ = ["level_curves", "mask_to_curves", "rasterize"]
 
+#: pixels per band of rows in :func:`rasterize` (16 MB of int32 winding numbers)
+_BAND_CELLS = 1 << 22
+
 
 def rasterize(curves, shape):
     """Boolean mask of the pixel centres inside the curves (nonzero winding rule).
@@ -22,12 +25,33 @@ def rasterize(curves, shape):
     curves : list of ndarray (K, 2)
         Closed curves in (row, col).
     shape : tuple (M, N)
+
+    Only the rows the curves span are visited, in bands of about ``_BAND_CELLS`` pixels, so the
+    memory beyond the mask itself stays small however large the image.
     """
     m, n = shape
-    # winding[i, j] accumulates, at the first pixel centre right of each upward/downward crossing
-    # of the row line r = i, the crossing's direction; a cumulative sum along the row then gives
-    # the winding number of every pixel centre.
-    winding = np.zeros((m, n + 1), dtype=np.int32)
+    mask = np.zeros((m, n), dtype=bool)
+    row, first, direction = _row_crossings(curves, m, n)
+    if row.size == 0:
+        return mask
+    order = np.argsort(row, kind="stable")
+    row, first, direction = row[order], first[order], direction[order]
+    band = max(1, _BAND_CELLS // (n + 1))
+    for start in range(int(row[0]), int(row[-1]) + 1, band):
+        low, high = np.searchsorted(row, [start, start + band])
+        # winding[i, j] accumulates, at the first pixel centre right of each upward/downward
+        # crossing of the row line r = start + i, the crossing's direction; a cumulative sum along
+        # the row then gives the winding number of every pixel centre.
+        winding = np.zeros((min(band, m - start), n + 1), dtype=np.int32)
+        np.add.at(winding, (row[low:high] - start, first[low:high]), direction[low:high])
+        np.cumsum(winding, axis=1, dtype=np.int32, out=winding)
+        mask[start: start + len(winding)] = winding[:, :n] != 0
+    return mask
+
+
+def _row_crossings(curves, m, n):
+    """Where the edges cross the row lines r = 0..M-1: row, first pixel column to the right, +-1."""
+    rows, firsts, directions = [np.zeros(0, np.intp)], [np.zeros(0, np.intp)], [np.zeros(0, np.int32)]
     for curve in curves:
         start = np.asarray(curve, dtype=np.float64)
         end = np.roll(start, -1, axis=0)
@@ -44,10 +68,10 @@ def rasterize(curves, shape):
         row = np.clip(low, 0, m)[edge] + rank
         t = (row - r0[edge]) / (r1 - r0)[edge]
         col = start[edge, 1] + t * (end[edge, 1] - start[edge, 1])
-        first = np.clip(np.ceil(col), 0, n).astype(np.intp)
-        direction = np.where(r1[edge] > r0[edge], 1, -1).astype(np.int32)
-        np.add.at(winding, (row.astype(np.intp), first), direction)
-    return np.cumsum(winding[:, :n], axis=1) != 0
+        rows.append(row.astype(np.intp))
+        firsts.append(np.clip(np.ceil(col), 0, n).astype(np.intp))
+        directions.append(np.where(r1[edge] > r0[edge], 1, -1).astype(np.int32))
+    return np.concatenate(rows), np.concatenate(firsts), np.concatenate(directions)
 
 
 def mask_to_curves(mask, *, min_area=0.0):

@@ -19,12 +19,15 @@ as large as the longest edge: an iteration costs O(K) on average, not O(K^2).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.curve import signed_area
 
 __all__ = ["crossings", "curve_areas", "nucleation_sites", "repair", "winding_number"]
+
+#: pixels per band of rows in :func:`nucleation_sites` (a few float32 arrays of 16 MB)
+_BAND_PIXELS = 1 << 22
 
 
 def crossings(points, next_index):
@@ -39,75 +42,12 @@ def crossings(points, next_index):
         both strictly inside (0, 1).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    found = _crossings(points, np.ascontiguousarray(next_index, dtype=np.intp))
+    found = _kernels.crossings(points, np.ascontiguousarray(next_index, dtype=np.intp))
     first = np.array([f[0] for f in found], dtype=np.intp)
     second = np.array([f[1] for f in found], dtype=np.intp)
     s = np.array([f[2] for f in found], dtype=np.float64)
     t = np.array([f[3] for f in found], dtype=np.float64)
     return first, second, s, t
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _crossings(points, next_index):
-    """Grid hashing: every edge is filed, in a linked list per cell, under the cell of its bounding
-    box's low corner.  Cells are at least as large as the largest edge extent (and the grid has at
-    most 256 x 256 cells), so edges whose boxes overlap sit in the same or neighbouring cells; only
-    those pairs are tested: O(K) on average."""
-    n = points.shape[0]
-    found = [(0, 0, 0.0, 0.0)]
-    found.pop()
-    if n < 4:
-        return found
-    low = np.empty((n, 2))
-    cell = 1e-9
-    for e in range(n):
-        b = next_index[e]
-        for k in range(2):
-            low[e, k] = min(points[e, k], points[b, k])
-            cell = max(cell, abs(points[b, k] - points[e, k]))
-    origin_r, origin_c = low[:, 0].min(), low[:, 1].min()
-    extent = max(low[:, 0].max() - origin_r, low[:, 1].max() - origin_c)
-    cell = max(cell, extent / 255.0) * 1.0001
-    rows = int((low[:, 0].max() - origin_r) / cell) + 1
-    cols = int((low[:, 1].max() - origin_c) / cell) + 1
-    head = np.full(rows * cols, -1, dtype=np.int64)
-    following = np.empty(n, dtype=np.int64)
-    row = np.empty(n, dtype=np.int64)
-    col = np.empty(n, dtype=np.int64)
-    for e in range(n):
-        row[e] = int((low[e, 0] - origin_r) / cell)
-        col[e] = int((low[e, 1] - origin_c) / cell)
-        key = row[e] * cols + col[e]
-        following[e] = head[key]
-        head[key] = e
-    for e in range(n):
-        a, b = e, next_index[e]
-        r0, r1 = points[b, 0] - points[a, 0], points[b, 1] - points[a, 1]
-        for dr in (-1, 0, 1):
-            cell_row = row[e] + dr
-            if cell_row < 0 or cell_row >= rows:
-                continue
-            for dc in (-1, 0, 1):
-                cell_col = col[e] + dc
-                if cell_col < 0 or cell_col >= cols:
-                    continue
-                f = head[cell_row * cols + cell_col]
-                while f >= 0:
-                    other = f
-                    f = following[f]
-                    if other <= e or next_index[e] == other or next_index[other] == e:
-                        continue
-                    c, d = other, next_index[other]
-                    u0, u1 = points[d, 0] - points[c, 0], points[d, 1] - points[c, 1]
-                    denominator = r0 * u1 - r1 * u0
-                    if denominator == 0.0:
-                        continue
-                    q0, q1 = points[c, 0] - points[a, 0], points[c, 1] - points[a, 1]
-                    s = (q0 * u1 - q1 * u0) / denominator
-                    t = (q0 * r1 - q1 * r0) / denominator
-                    if 0.0 < s < 1.0 and 0.0 < t < 1.0:
-                        found.append((e, other, s, t))
-    return found
 
 
 def winding_number(points, next_index, probes, offsets=None):
@@ -138,23 +78,9 @@ def winding_number(points, next_index, probes, offsets=None):
     return out
 
 
-@numba.njit(cache=True, error_model="numpy")
 def _winding(points, next_index, probes):
-    out = np.zeros(probes.shape[0], dtype=np.int64)
-    for i in range(probes.shape[0]):
-        r, c = probes[i, 0], probes[i, 1]
-        count = 0
-        for e in range(points.shape[0]):
-            r0, r1 = points[e, 0], points[next_index[e], 0]
-            upward = r0 <= r < r1
-            if not (upward or r1 <= r < r0):
-                continue
-            t = (r - r0) / (r1 - r0)
-            if points[e, 1] + t * (points[next_index[e], 1] - points[e, 1]) > c:
-                # a positively oriented curve (area > 0) runs towards smaller rows on its
-                # larger-column side: a downward crossing to the right counts +1
-                count += -1 if upward else 1
-        out[i] = count
+    out = np.empty(len(probes), dtype=np.int64)
+    _kernels.winding(points, next_index, probes, out)
     return out
 
 
@@ -278,27 +204,63 @@ def nucleation_sites(values, inside, params, c_in, c_out, radius):
     c_in, c_out : ndarray (C,)
     radius : float
     """
-    import scipy.ndimage
+    import cv2
 
     lambda_in, lambda_out = params.weights(values.shape[2])
-    g = params.omega + ((values - c_in) ** 2) @ lambda_in - ((values - c_out) ** 2) @ lambda_out
+    # mean_B g = omega + sum_ch [(l_in - l_out) mean_B I^2 - 2 (l_in c_in - l_out c_out) mean_B I]
+    #            + sum_ch (l_in c_in^2 - l_out c_out^2): local means of I (and I^2), in float32
+    # (a mean of a few tens of values in [0, 1]: float32 is exact to ~1e-7, far below any threshold)
+    square = lambda_in - lambda_out
+    linear = -2.0 * (lambda_in * c_in - lambda_out * c_out)
+    constant = params.omega + float(np.sum(lambda_in * c_in**2 - lambda_out * c_out**2))
     size = int(np.ceil(radius))
     yy, xx = np.mgrid[-size: size + 1, -size: size + 1]
     disk = (yy**2 + xx**2) <= radius**2
-    mean = scipy.ndimage.convolve(g, disk / disk.sum(), mode="nearest")
+    kernel = (disk / disk.sum()).astype(np.float32)
+    footprint = disk.astype(np.uint8)
     threshold = 2.0 * params.mu / radius
+    m, n = inside.shape
+    inside_u8 = np.ascontiguousarray(inside, dtype=bool).view(np.uint8)
+    found = {True: ([], []), False: ([], [])}  # flat index and gain of every candidate pixel
+    band = max(1, _BAND_PIXELS // n)
+    for start in range(0, m, band):
+        stop = min(m, start + band)
+        low, high = max(0, start - size), min(m, stop + size)  # margins: the filters see real data
+        keep = slice(start - low, stop - low)
+        mean = None
+        for ch in range(values.shape[2]):
+            channel = np.ascontiguousarray(values[low:high, :, ch], dtype=np.float32)
+            terms = [(channel, linear[ch])] + ([(channel * channel, square[ch])] if square[ch] != 0 else [])
+            for data, factor in terms:
+                part = cv2.filter2D(data, -1, kernel * np.float32(factor), delta=0.0 if mean is not None
+                                    else constant, borderType=cv2.BORDER_REPLICATE)
+                mean = part if mean is None else cv2.add(mean, part)
+        mean = mean[keep]
+        region = inside_u8[low:high]
+        # pixels whose whole disk lies inside (erosion) or outside (no dilation reaches them); the
+        # image's outside counts as either region, as for a disk cut by the border
+        room = {True: cv2.erode(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=1)[keep],
+                False: cv2.dilate(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=0)[keep]}
+        for hole, sign in ((True, 1.0), (False, -1.0)):
+            room_ok = room[hole].view(bool)  # 0/1 bytes
+            chosen = (mean > threshold) & room_ok if hole else (mean < -threshold) & ~room_ok
+            where = np.flatnonzero(chosen)
+            found[hole][0].append(where + start * n)
+            found[hole][1].append(sign * mean.ravel()[where].astype(np.float64) - threshold)
     sites = []
-    for hole, region, sign in ((True, inside, 1.0), (False, ~inside, -1.0)):
-        room = scipy.ndimage.binary_erosion(region, structure=disk, border_value=1)
-        gain = sign * mean - threshold
-        candidates = room & (gain > 0)
-        labels, count = scipy.ndimage.label(candidates)
-        if count == 0:
+    for hole in (True, False):
+        index, gain = np.concatenate(found[hole][0]), np.concatenate(found[hole][1])
+        if index.size == 0:
             continue
-        index = np.arange(1, count + 1)
-        best = scipy.ndimage.maximum_position(gain, labels, index)
-        strength = scipy.ndimage.maximum(gain, labels, index)
-        sites.extend((float(s), np.array(p, dtype=np.float64), hole)
-                     for s, p in zip(strength, best, strict=True))
+        rows, cols = np.divmod(index, n)
+        box = np.zeros((rows.max() - rows.min() + 1, cols.max() - cols.min() + 1), np.uint8)
+        box[rows - rows.min(), cols - cols.min()] = 1
+        _, labels = cv2.connectedComponents(box, connectivity=4, ltype=cv2.CV_32S)
+        label = labels[rows - rows.min(), cols - cols.min()]
+        # the best pixel of each component, the first in raster order on ties
+        order = np.lexsort((index, -gain, label))
+        best = order[np.r_[True, label[order][1:] != label[order][:-1]]]
+        sites.extend((float(gain[b]), np.array(divmod(int(index[b]), n), dtype=np.float64), hole)
+                     for b in best)
     sites.sort(key=lambda site: -site[0])
     return [(center, hole) for _, center, hole in sites]

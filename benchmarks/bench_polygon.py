@@ -101,7 +101,7 @@ def scaling_table(sizes):
 
 
 def warm_up():
-    """Load the compiled kernels (numba caches them on disk) before timing anything."""
+    """Run every code path once (imports, first allocations) before timing anything."""
     image, _ = noisy_image("disk", 0, size=64)
     ac.segment(image)
     skimage.segmentation.chan_vese(image, max_num_iter=2)

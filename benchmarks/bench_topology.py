@@ -33,7 +33,7 @@ def cases():
 
 
 def warm_up():
-    """Load both backends' compiled code (numba caches it on disk) before timing anything."""
+    """Run both backends once (imports, first allocations) before timing anything."""
     image, _ = synthetic.render(synthetic.disk((20, 20), 8), (40, 40))
     for backend in ("polygon", "levelset"):
         ac.segment(image, backend=backend)
