@@ -398,8 +398,8 @@ class _Memory:
             if new[0].shape != old[0].shape or not np.array_equal(new[2], old[2]):
                 return
         s, y = (new[0] - old[0]).ravel(), (new_load - old_load).ravel()
-        curvature = s @ y
-        if curvature > 1e-12 * np.sqrt((s @ s) * (y @ y)):
+        curvature = _dot(s, y)
+        if curvature > 1e-12 * np.sqrt(_dot(s, s) * _dot(y, y)):
             self.pairs = (self.pairs + [(s, y, 1.0 / curvature)])[-self.size:]
         self.signature = (new[0].shape, new[2].copy())
 
@@ -410,17 +410,22 @@ class _Memory:
         q = load.ravel().copy()
         alphas = []
         for s, y, rho in reversed(self.pairs):
-            alpha = rho * (s @ q)
+            alpha = rho * _dot(s, q)
             q -= alpha * y
             alphas.append(alpha)
         s, y, _ = self.pairs[-1]
         metric_y = -velocity(geometry, y.reshape(load.shape)).ravel()  # b^{-1} y
-        r = (s @ y) / max(y @ metric_y, 1e-300) * -velocity(geometry, q.reshape(load.shape)).ravel()
+        r = _dot(s, y) / max(_dot(y, metric_y), 1e-300) * -velocity(geometry, q.reshape(load.shape)).ravel()
         for (s, y, rho), alpha in zip(self.pairs, reversed(alphas), strict=True):
-            r += s * (alpha - rho * (y @ r))
+            r += s * (alpha - rho * _dot(y, r))
         direction = -r.reshape(load.shape)
         direction[held] = 0.0
         return direction if np.sum(load * direction) < 0 else None
+
+
+def _dot(a, b):
+    """``a . b`` of two long vectors without BLAS (its threads cost more than the product here)."""
+    return float(np.einsum("i,i->", a, b))
 
 
 def _unhealthy(geometry, spacing):
