@@ -436,3 +436,77 @@ def winding(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
                     # larger-column side: a downward crossing to the right counts +1
                     count += -1 if upward else 1
             out[i] = count
+
+
+cdef inline double _segment_gap(double pr, double pc, Py_ssize_t k, const double[::1] start_r,
+                                const double[::1] start_c, const double[::1] dir_r,
+                                const double[::1] dir_c, const double[::1] inverse) noexcept nogil:
+    """Squared distance from (pr, pc) to segment k (the last one is a far sentinel)."""
+    cdef double off_r = pr - start_r[k], off_c = pc - start_c[k]
+    cdef double t = (off_r * dir_r[k] + off_c * dir_c[k]) * inverse[k]
+    t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+    off_r -= t * dir_r[k]
+    off_c -= t * dir_c[k]
+    return off_r * off_r + off_c * off_c
+
+
+def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, int[::1] chosen,
+              Py_ssize_t n_ring, const Py_ssize_t[::1] steps, Py_ssize_t width, Py_ssize_t max_rings,
+              int sweeps, const double[::1] start_r, const double[::1] start_c,
+              const double[::1] dir_r, const double[::1] dir_c, const double[::1] inverse,
+              const Py_ssize_t[:, ::1] links):
+    """The rings of the level set's narrow band (:func:`activecontour.levelset._propagate`).
+
+    ``out[:n_ring]`` holds the front pixels (flat indices of the framed grid, their ``owner`` set);
+    each further ring's pixels take the nearest of their neighbours' segments as of the previous
+    sweep (a second sweep lets a ring learn from itself), then walk twice along Gamma to both
+    neighbouring segments while that is nearer.  Fills ``owner`` and ``out``; returns the number
+    of band pixels.  ``chosen`` is scratch space of the size of ``out``.
+    """
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1
+    cdef Py_ssize_t count = n_ring, begin = 0, end, i, s, q, p, k, own
+    cdef Py_ssize_t ring_index, sweep, walk, side
+    cdef double pr, pc, best, gap
+    for ring_index in range(max_rings):
+        with nogil:
+            end = count
+            for i in range(begin, end):
+                for s in range(steps.shape[0]):
+                    q = out[i] + steps[s]
+                    if not visited[q]:
+                        visited[q] = 1
+                        out[count] = q
+                        count += 1
+            if count > end:
+                for sweep in range(sweeps):
+                    for i in range(end, count):
+                        p = out[i]
+                        pr = <double>(p // width - 1)
+                        pc = <double>(p % width - 1)
+                        own = -1
+                        best = 1e300
+                        for s in range(steps.shape[0]):
+                            k = owner[p + steps[s]]
+                            if k < 0:
+                                continue
+                            gap = _segment_gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
+                            if gap < best:
+                                own, best = k, gap
+                        for walk in range(2):
+                            for side in range(2):
+                                if own < 0:
+                                    break
+                                k = links[own, side]
+                                if k < 0 or k == sentinel:
+                                    continue
+                                gap = _segment_gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
+                                if gap < best:
+                                    own, best = k, gap
+                        chosen[i] = <int>own
+                    for i in range(end, count):
+                        owner[out[i]] = chosen[i]
+        if count == end:
+            break
+        begin = end
+        PyErr_CheckSignals()
+    return count

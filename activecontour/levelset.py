@@ -100,10 +100,10 @@ is non-increasing at every iteration, reinitialisations included.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 import scipy.fft
 
+from activecontour import _kernels
 from activecontour.energy import evaluate
 from activecontour.initial import initial_curves
 from activecontour.raster import level_curves, rasterize
@@ -372,7 +372,7 @@ class _Segments:
 def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
     eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
-    :func:`_grow_band`, O(pixels in the band))."""
+    :func:`activecontour._kernels.grow_band`, O(pixels in the band))."""
     m, n = positive.shape
     width = n + 2  # a one-pixel frame, marked visited, spares every bounds check
     visited = np.zeros((m + 2, width), dtype=bool)
@@ -386,8 +386,12 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     # a pixel k rings away from the front pixels is at least k - 1 from Gamma
     max_rings = int(np.ceil(band)) + 1 if np.isfinite(band) else m + n
     start_r, start_c, dir_r, dir_c, inverse = segments.columns
-    flat = _grow_band(visited, owner, ring, steps, width, max_rings, sweeps, start_r, start_c,
-                      dir_r, dir_c, inverse, segments.links)
+    out = np.empty(visited.size, dtype=np.intp)
+    out[: ring.size] = ring
+    count = _kernels.grow_band(visited.view(np.uint8), owner, out, np.empty(visited.size, np.int32),
+                               ring.size, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
+                               dir_c, inverse, np.ascontiguousarray(segments.links, dtype=np.intp))
+    flat = out[:count]
     r, c = np.divmod(flat, width)
     distance = np.sqrt(segments.squared_gap((r - 1).astype(np.float64), (c - 1).astype(np.float64),
                                             owner[flat], exact=True))
@@ -396,71 +400,6 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     phi = _clipped(positive, band)
     phi.ravel()[flat] = np.clip(signed, -band, band)
     return _Redistanced(phi, positive, flat, signed)
-
-
-@numba.njit(cache=True)
-def _gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse):
-    """Squared distance from (pr, pc) to segment k (the last one is a far sentinel)."""
-    off_r, off_c = pr - start_r[k], pc - start_c[k]
-    t = min(max((off_r * dir_r[k] + off_c * dir_c[k]) * inverse[k], 0.0), 1.0)
-    off_r -= t * dir_r[k]
-    off_c -= t * dir_c[k]
-    return off_r * off_r + off_c * off_c
-
-
-@numba.njit(cache=True)
-def _grow_band(visited, owner, ring, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
-               dir_c, inverse, links):
-    """The rings of :func:`_propagate`: returns the band's flat (framed) indices, fills ``owner``.
-
-    Each ring's pixels first take the nearest of their neighbours' segments as of the previous
-    sweep (a second sweep lets a ring learn from itself), then walk twice along Gamma to both
-    neighbouring segments while that is nearer.
-    """
-    sentinel = start_r.size - 1
-    out = np.empty(visited.size, dtype=np.intp)
-    out[: ring.size] = ring
-    count, begin = ring.size, 0
-    for _ring in range(max_rings):
-        end = count
-        for i in range(begin, end):
-            for step in steps:
-                q = out[i] + step
-                if not visited[q]:
-                    visited[q] = True
-                    out[count] = q
-                    count += 1
-        if count == end:
-            break
-        fresh = out[end:count]
-        chosen = np.empty(fresh.size, dtype=np.int32)
-        for _sweep in range(sweeps):
-            for i in range(fresh.size):
-                p = fresh[i]
-                pr, pc = float(p // width - 1), float(p % width - 1)
-                own, best = -1, np.inf
-                for step in steps:
-                    k = owner[p + step]
-                    if k < 0:
-                        continue
-                    gap = _gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
-                    if gap < best:
-                        own, best = k, gap
-                for _walk in range(2):
-                    for side in range(2):
-                        if own < 0:
-                            break
-                        k = links[own, side]
-                        if k < 0 or k == sentinel:
-                            continue
-                        gap = _gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
-                        if gap < best:
-                            own, best = k, gap
-                chosen[i] = own
-            for i in range(fresh.size):
-                owner[fresh[i]] = chosen[i]
-        begin = end
-    return out[:count].copy()
 
 
 def curves_level_set(curves, shape, band=np.inf):

@@ -117,7 +117,7 @@ def main(argv=None):
 
 def console_script():
     """The ``activecontour`` executable: :func:`main`, and after Ctrl-C an exit without the
-    interpreter's teardown of numba, SciPy and OpenCV (0.5-1.3 s), so that it answers at once."""
+    interpreter's teardown of SciPy and OpenCV, so that it answers at once."""
     status = main()
     if status == EXIT_INTERRUPTED:
         sys.stdout.flush()
@@ -360,7 +360,7 @@ def _interrupt_at_once():
     Python turns SIGINT into KeyboardInterrupt only between bytecodes, and a compiled kernel
     holds the interpreter for as long as it runs (20 s in ``topology.winding_number`` on a
     speckle init).  Nothing is being written in this phase (the files of an image are written
-    after it, all or none; numba's cache files are written to a temporary name and renamed too),
+    after it, all or none),
     so the signal's default action, ending the process, loses nothing that was finished.  Left
     alone when SIGINT is not Python's default (ignored, or the caller's).
     """

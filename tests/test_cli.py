@@ -421,21 +421,18 @@ def test_interrupt_while_writing_restores_everything(small, tmp_path, capsys, mo
 
 
 _SLOW_SEGMENT = """
-import sys, numba
+import sys
+import numpy as np
 from app import cli
 import activecontour
+from activecontour import _kernels
 
-@numba.njit
-def spin(n):  # a compiled loop: Python cannot raise KeyboardInterrupt inside it
-    total = 0.0
-    for i in range(n):
-        total += (i % 7) * 1e-9
-    return total
-
-spin(10)
 def slow_segment(*args, **kwargs):
+    # a compiled loop that never looks at signals: 10^11 point-edge tests in winding()
+    points = np.random.default_rng(0).random((300_000, 2))
+    next_index = np.roll(np.arange(len(points)), -1)
     print("segmenting", file=sys.stderr, flush=True)
-    spin(10**12)
+    _kernels.winding(points, next_index, points, np.zeros(len(points), dtype=np.int64))
 
 activecontour.segment = slow_segment
 sys.argv[0] = "activecontour"
