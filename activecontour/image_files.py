@@ -21,6 +21,7 @@ __all__ = [
     "COLORS",
     "IMAGE_SUFFIXES",
     "encode_mask",
+    "OVERLAY_MAX_SIDE",
     "encode_overlay",
     "read_mask",
     "render_overlay",
@@ -125,7 +126,14 @@ def encode_mask(path, mask):
     return buffer.tobytes()
 
 
-def write_overlay(path, image, contours, *, color="red", thickness=1):
+#: The longest side of the overlay :func:`activecontour.io.save_result` writes (and so the CLI): a
+#: larger image's overlay is shrunk by area averaging, its contours with it.  An 8192^2 overlay
+#: would be a 200 MB PNG that takes longer to encode than the segmentation; the mask and the
+#: contour files keep the full resolution.
+OVERLAY_MAX_SIDE = 4096
+
+
+def write_overlay(path, image, contours, *, color="red", thickness=1, max_side=None):
     """Draw the contours on the image and write it as an 8-bit RGB image (PNG recommended).
 
     Parameters
@@ -141,26 +149,42 @@ def write_overlay(path, image, contours, *, color="red", thickness=1):
         A name from :data:`COLORS` or an RGB triple in 0..255.
     thickness : int
         Line width in pixels, >= 1.
+    max_side : int, optional
+        Shrink an image whose longer side exceeds this (see :func:`render_overlay`); None keeps
+        the full size.
 
     Returns
     -------
     pathlib.Path
     """
     path = Path(path)
-    write_atomically(path, encode_overlay(path, image, contours, color, thickness))
+    write_atomically(path, encode_overlay(path, image, contours, color, thickness, max_side))
     return path
 
 
-def render_overlay(image, contours, color="red", thickness=1):
-    """The overlay as an (M, N, 3) uint8 RGB array (see :func:`write_overlay`)."""
+def render_overlay(image, contours, color="red", thickness=1, max_side=None):
+    """The overlay as an (M, N, 3) uint8 RGB array (see :func:`write_overlay`).
+
+    With ``max_side``, an image whose longer side exceeds it is shrunk to that side first (area
+    averaging), and the contours are mapped with it: pixel centres stay pixel centres,
+    ``x' = (x + 1/2) s - 1/2``.
+    """
     import cv2
 
     rgb = _display_rgb(image)
     curves = curve_list(contours)
     if isinstance(thickness, bool) or not isinstance(thickness, (int, np.integer)) or thickness < 1:
         raise ValueError(f"thickness must be an integer >= 1, got {thickness!r}")
+    if max_side is not None and not (isinstance(max_side, (int, np.integer)) and max_side >= 16):
+        raise ValueError(f"max_side must be None or an integer >= 16, got {max_side!r}")
+    scale = 1.0
+    if max_side is not None and max(rgb.shape[:2]) > max_side:
+        scale = max_side / max(rgb.shape[:2])
+        size = (max(1, round(rgb.shape[1] * scale)), max(1, round(rgb.shape[0] * scale)))
+        rgb = np.ascontiguousarray(cv2.resize(rgb, size, interpolation=cv2.INTER_AREA))
     polylines = [
-        np.round(to_xy(curve) * (1 << _DRAW_SHIFT)).astype(np.int32).reshape(-1, 1, 2)
+        np.round(((to_xy(curve) + 0.5) * scale - 0.5) * (1 << _DRAW_SHIFT)).astype(np.int32)
+        .reshape(-1, 1, 2)
         for curve in curves
     ]
     if polylines:
@@ -169,7 +193,7 @@ def render_overlay(image, contours, color="red", thickness=1):
     return rgb
 
 
-def encode_overlay(path, image, contours, color, thickness):
+def encode_overlay(path, image, contours, color, thickness, max_side=None):
     """The bytes of the overlay file ``path``, for :func:`write_overlay`."""
     import cv2
 
@@ -178,7 +202,7 @@ def encode_overlay(path, image, contours, color, thickness):
         raise ValueError(
             f"overlay file must end in one of {IMAGE_SUFFIXES}, got {os.fspath(path)!r}"
         )
-    rgb = render_overlay(image, contours, color, thickness)
+    rgb = render_overlay(image, contours, color, thickness, max_side)
     ok, buffer = cv2.imencode(suffix, np.ascontiguousarray(rgb[:, :, ::-1]))  # OpenCV wants BGR
     if not ok:
         raise ValueError(f"OpenCV could not encode an overlay as {suffix}")
@@ -186,14 +210,21 @@ def encode_overlay(path, image, contours, color, thickness):
 
 
 def _display_rgb(image):
-    values = normalize_image(image, color="vector", normalize="dtype")
+    """The image as (M, N, 3) uint8 RGB, computed in place (no full-size temporaries)."""
+    values = normalize_image(image, color="vector", normalize="dtype")  # a fresh float64 copy
     low, high = float(values.min()), float(values.max())
     if low < 0.0 or high > 1.0:
         # float images outside [0, 1] (e.g. 0..255 floats) are shown from their own range
-        values = (values - low) / (high - low) if high > low else np.zeros_like(values)
-    if values.shape[2] == 1:
-        values = np.repeat(values, 3, axis=2)
-    return np.ascontiguousarray(np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8))
+        values -= low
+        values *= 1.0 / (high - low) if high > low else 0.0
+    values *= 255.0
+    np.clip(values, 0.0, 255.0, out=values)
+    np.rint(values, out=values)
+    display = values.astype(np.uint8)
+    del values
+    if display.shape[2] == 1:
+        display = np.repeat(display, 3, axis=2)
+    return np.ascontiguousarray(display)
 
 
 def _rgb_color(color):

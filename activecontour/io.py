@@ -32,6 +32,7 @@ from activecontour.contour_files import (
 )
 from activecontour.image_files import (
     COLORS,
+    OVERLAY_MAX_SIDE,
     encode_mask,
     encode_overlay,
     read_mask,
@@ -71,7 +72,8 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
     metadata : dict, optional
         Extra entries for the contour files (see :func:`write_contours`).
     color, thickness
-        Of the overlay's contour lines (see :func:`write_overlay`).
+        Of the overlay's contour lines (see :func:`write_overlay`).  The overlay's longer side is
+        at most :data:`~activecontour.image_files.OVERLAY_MAX_SIDE` (4096) pixels.
     protect : sequence of path
         Files that must not be overwritten (e.g. the input image): ValueError if an output is one.
 
@@ -107,7 +109,7 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
             raise ValueError(f"refusing to overwrite the input file {os.fspath(path)!r}")
     contents = [
         encode_mask(paths[0], mask),
-        encode_overlay(paths[1], image, result, color, thickness),
+        encode_overlay(paths[1], image, result, color, thickness, OVERLAY_MAX_SIDE),
     ]
     contents += [
         encode_contours(path, result, metadata, None, fmt)

@@ -11,6 +11,7 @@ import pytest
 import activecontour as ac
 from activecontour import io
 from activecontour.curve import orient, signed_area
+from activecontour.image_files import render_overlay
 from activecontour.raster import rasterize
 from activecontour.result import SegmentationResult
 
@@ -246,3 +247,18 @@ def test_svg_coordinates_are_x_col_y_row(tmp_path):
     d = ElementTree.parse(path).getroot().find("{http://www.w3.org/2000/svg}path").get("d")
     x, y = (float(v) for v in d.split()[1].split(","))
     assert (x, y) == (20.5, 14.25)
+
+
+def test_a_large_overlay_is_shrunk_with_its_contours():
+    image = np.full((600, 400), 0.5)
+    circle = ac.circle((299.5, 199.5), 100.0)
+    rgb = render_overlay(image, [circle], color="red", max_side=300)
+    assert rgb.shape == (300, 200, 3)
+    red = (rgb[:, :, 0] > 200) & (rgb[:, :, 1] < 100)
+    rows, cols = np.nonzero(red)
+    # pixel centres map by x' = (x + 1/2) / 2 - 1/2: the circle lands at (149.5, 99.5), radius 50
+    radius = np.hypot(rows - 149.5, cols - 99.5)
+    assert red.sum() > 2 * np.pi * 50 * 0.8 and np.all(np.abs(radius - 50.0) < 1.5)
+    assert rgb[150, 100, 0] == rgb[150, 100, 1] == 128  # the gray image, shrunk, unchanged
+    full = render_overlay(image, [circle], color="red")
+    assert full.shape == (600, 400, 3)
