@@ -3,8 +3,8 @@
 The inside region is ``Omega_i = {phi > 0}`` and Gamma is the zero level set of phi.  The backend
 minimises the same functional as the polygon backend, with the same parameters and units,
 
-    J = mu |Gamma| + omega |Omega_i| + lambda_in  int_{Omega_i} sum_ch (I - c_in)^2
-                                     + lambda_out int_{Omega_o} sum_ch (I - c_out)^2          (6.38)
+    J = mu |Gamma| + omega |Omega_i| + lambda_in  int_{Omega_i} mean_ch (I - c_in)^2
+                                     + lambda_out int_{Omega_o} mean_ch (I - c_out)^2         (6.38)
 
 but Gamma may split, merge, open holes and grow new components.  The zero level set is returned
 as sub-pixel contours (marching squares) in the polygon backend's convention, so either backend
@@ -15,8 +15,8 @@ One iteration
 1. ``c_in, c_out`` by (6.42) for the current zero set, from the common evaluator (below), unless
    they are fixed.
 2. A semi-implicit step of the level-set form of the gradient flow of (6.38).  Every level line
-   moves with the normal velocity ``-(mu kappa + f)``, where ``f = omega + lambda_in sum (I -
-   c_in)^2 - lambda_out sum (I - c_out)^2`` is the integrand of (6.41); in level-set form
+   moves with the normal velocity ``-(mu kappa + f)``, where ``f = omega + lambda_in mean (I -
+   c_in)^2 - lambda_out mean (I - c_out)^2`` is the integrand of (6.41); in level-set form
    ``phi_t = |grad phi| (mu div(grad phi / |grad phi|) - f)``, and as phi is kept a signed
    distance (``|grad phi| = 1``) this is ``phi_t = mu Laplace(phi) - f``.  (With delta(phi) in place
    of |grad phi| it would be the equation of Chan & Vese 2001; |grad phi| makes it the level-set
@@ -605,7 +605,7 @@ class _Problem:
     def force(self, c_in, c_out):
         """f of (6.41) per pixel and its contrast scale.
 
-        ``f = omega + lambda_in sum (I - c_in)^2 - lambda_out sum (I - c_out)^2``, plus ``mu`` per
+        ``f = omega + lambda_in mean (I - c_in)^2 - lambda_out mean (I - c_out)^2``, plus ``mu`` per
         side of the image that a pixel lies on: a region that covers a border pixel closes along
         the domain edge there, and the evaluator counts that length (the wall term).  The scale
         is the mean ``|f|`` over the pixels (a regular sample of about 2^16 of them): about
