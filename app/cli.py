@@ -429,21 +429,24 @@ def _option(text):
 
 
 def _check_option_types(backend, options):
-    """Each ``--option KEY=VALUE`` of the kind of its default: a number for a number, true/false
-    for a flag, text for text (unknown keys are left to segment(), which lists the valid ones)."""
+    """Each ``--option KEY=VALUE`` of the kind of its default: a number for a number (or for None,
+    a number chosen automatically), true/false for a flag, text for text (unknown keys are left
+    to segment(), which lists the valid ones)."""
+    defaults = _backend_option_defaults(backend)
     for key, value in options.items():
-        default = _backend_option_defaults(backend).get(key)
-        if default is None:
+        if key not in defaults:
             continue
+        default = defaults[key]
         if isinstance(default, bool):
             expected, ok = "true or false", isinstance(value, bool)
-        elif isinstance(default, (int, float)):
+        elif default is None or isinstance(default, (int, float)):
             expected, ok = "a number", isinstance(value, (int, float)) and not isinstance(value, bool)
             ok = ok and math.isfinite(value)
         else:
             expected, ok = "text", isinstance(value, str)
         if not ok:
-            raise UsageError(f"--option {key}: expected {expected} (default {default!r}), got "
+            shown = "automatic" if default is None else repr(default)
+            raise UsageError(f"--option {key}: expected {expected} (default {shown}), got "
                              f"{'true' if value is True else 'false' if value is False else value!r}")
 
 

@@ -347,8 +347,8 @@ def test_an_image_whose_files_cannot_be_written_does_not_stop_the_next(small, tm
 @pytest.mark.parametrize(
     "option, message",
     [
-        ("smoothing=abc", "--option smoothing: expected a number (default 30.0), got 'abc'"),
-        ("smoothing=inf", "--option smoothing: expected a number (default 30.0), got inf"),
+        ("smoothing=abc", "--option smoothing: expected a number (default automatic), got 'abc'"),
+        ("smoothing=inf", "--option smoothing: expected a number (default automatic), got inf"),
         ("nucleate=3", "--option nucleate: expected true or false (default True), got 3"),
         ("velocity=1", "--option velocity: expected text (default 'h1'), got 1"),
     ],

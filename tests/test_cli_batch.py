@@ -153,9 +153,9 @@ def test_bad_batch_input_exits_2_before_any_work(folder, tmp_path, capsys, case,
 @pytest.mark.skipif(sys.platform == "win32", reason="process groups and SIGINT are POSIX")
 def test_ctrl_c_stops_a_parallel_batch_without_tracebacks(folder, tmp_path):
     path, _ = folder
-    process = subprocess.Popen(  # tol 0: each image runs to --max-iter, about 10 s
+    process = subprocess.Popen(  # tol 0 and steps of 1e-4 px: each image runs to --max-iter, ~10 s
         [sys.executable, "-m", "app", "segment", str(path), "-o", str(tmp_path / "out"), "--jobs", "2",
-         "--max-iter", "20000", "--tol", "0"],
+         "--max-iter", "20000", "--tol", "0", "--option", "max_step=1e-4"],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )
     try:

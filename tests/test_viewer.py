@@ -197,7 +197,7 @@ def test_larger_mu_from_slider_gives_shorter_contour(star_image, make_viewer):
         key(viewer, " ")
         lengths[mu] = sum(length(c) for c in viewer.contours)
     # the slider's value is what the solver got
-    expected = ac.segment(image, viewer.init_curves, mu=viewer.parameters()["mu"])
+    expected = ac.segment(image, viewer.init, mu=viewer.parameters()["mu"])
     assert_same_contours(viewer.contours, expected.contours)
     assert lengths[4.0] < lengths[0.1]
 
@@ -333,11 +333,11 @@ def test_step_is_one_library_iteration(disk_image, make_viewer):
     image, _ = disk_image
     viewer = make_viewer(image)
     key(viewer, "n")
-    first = ac.segment(image, viewer.init_curves, max_num_iter=1)
+    first = ac.segment(image, max_num_iter=1)  # no drawn init: the library's default start
     assert viewer.iteration == 1
     assert_same_contours(viewer.contours, first.contours)
     click_axes(viewer, viewer.step_button.ax)
-    second = ac.segment(image, first.contours, max_num_iter=1)
+    second = ac.segment(image, first, max_num_iter=1)  # resumed from the result
     assert viewer.iteration == 2
     assert_same_contours(viewer.contours, second.contours)
 
