@@ -1,7 +1,8 @@
-"""``python -m app``: the same as the ``activecontour`` console script."""
+"""``python -m activecontour_app`` (``python -m app`` in the source tree): the ``activecontour``
+console script."""
 
 import sys
 
-from app.cli import console_script
+from .cli import console_script
 
 sys.exit(console_script())

@@ -117,7 +117,7 @@ class BatchProgress:
         return (now - self.started) / self.done * (self.total - self.done)
 
     def draw(self):
-        from app.cli import _clock  # the command line's one clock format
+        from .cli import _clock  # the command line's one clock format
 
         now = self.clock()
         filled = self.width * self.done // max(self.total, 1)

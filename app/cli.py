@@ -292,7 +292,7 @@ def _segment_serially(plans, batch, show_progress):
 
 def _segment_in_parallel(plans, batch, jobs, show_progress):
     """``--jobs N``: each image read, segmented and written by a worker (:mod:`app.batch`)."""
-    from app import batch as parallel
+    from . import batch as parallel
 
     for directory in dict.fromkeys(Path(stem).parent for _, stem in plans):
         with contextlib.suppress(UsageError):  # made here, not raced for by the workers; a failure
@@ -789,11 +789,11 @@ def _run_view(args):
         except (ValueError, TypeError) as exc:
             raise UsageError(f"{args.image}: {_one_line(exc)}") from None
     try:
-        from app import viewer
+        from . import viewer
     except ModuleNotFoundError as exc:
-        if exc.name not in ("app.viewer",):
+        if exc.name != f"{__package__}.viewer":
             raise
-        raise UsageError("the interactive viewer (app.viewer) is not installed") from None
+        raise UsageError(f"the interactive viewer ({__package__}.viewer) is not installed") from None
     launch = viewer.launch
     accepted = inspect.signature(launch).parameters
     takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())

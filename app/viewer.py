@@ -60,7 +60,8 @@ from activecontour.image import load_image, normalize_image
 from activecontour.initial import initial_curves
 from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
-from app.viewer_layout import (
+
+from .viewer_layout import (
     CONTOUR_COLOR,
     PREVIEW_COLOR,
     SLIDERS,
@@ -72,7 +73,7 @@ from app.viewer_layout import (
     show_energy,
     show_image,
 )
-from app.viewer_tools import INIT_MODES, CurveDrawer
+from .viewer_tools import INIT_MODES, CurveDrawer
 
 __all__ = ["CONTOUR_COLOR", "NAMED_INITS", "SHORTCUTS", "Viewer", "launch"]
 
@@ -138,7 +139,7 @@ class Viewer:
     Attributes
     ----------
     fig : matplotlib.figure.Figure
-    layout : app.viewer_layout.Layout
+    layout : viewer_layout.Layout
         The window's artists and widgets, which are also attributes of the viewer
         (``ax_image``, ``sliders``, ``run_button``, ``save_box``, ...).
     init : None, str or list of ndarray (K, 2)
