@@ -11,8 +11,9 @@ estimate of the time left).
 from __future__ import annotations
 
 import functools
-import sys
 import time
+
+from .status_line import StatusLine, duration
 
 __all__ = ["BatchProgress", "run"]
 
@@ -75,7 +76,7 @@ def _run_plan(plan, *, segment_one):
     return segment_one(image_path, stem)
 
 
-class BatchProgress:
+class BatchProgress(StatusLine):
     """One status line on a terminal: images done of all, elapsed time, estimated time left.
 
     The time left is the elapsed time per finished image times the images left (``?`` before the
@@ -96,13 +97,12 @@ class BatchProgress:
     width = 20
 
     def __init__(self, total, *, jobs=1, stream=None, clock=time.monotonic):
+        super().__init__(stream)
         self.total = total
         self.jobs = jobs
         self.done = 0
-        self.stream = stream if stream is not None else sys.stderr
         self.clock = clock
         self.started = clock()
-        self._drawn = False
         self.draw()
 
     def advance(self):
@@ -117,24 +117,11 @@ class BatchProgress:
         return (now - self.started) / self.done * (self.total - self.done)
 
     def draw(self):
-        from .cli import _clock  # the command line's one clock format
-
         now = self.clock()
         filled = self.width * self.done // max(self.total, 1)
         left = self.remaining(now)
-        self.stream.write(
-            f"\r\033[K[{self.done}/{self.total}] images done, {self.jobs} jobs: "
-            f"[{'#' * filled}{'-' * (self.width - filled)}] elapsed {_clock(now - self.started)} "
-            f"left {'?' if left is None else '~' + _clock(left)}"
+        self.write(
+            f"[{self.done}/{self.total}] images done, {self.jobs} jobs: "
+            f"[{'#' * filled}{'-' * (self.width - filled)}] elapsed {duration(now - self.started)} "
+            f"left {'?' if left is None else '~' + duration(left)}"
         )
-        self.stream.flush()
-        self._drawn = True
-
-    def clear(self):
-        """Erase the line (before a summary or error line is printed)."""
-        if self._drawn:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
-            self._drawn = False
-
-    close = clear

@@ -57,6 +57,8 @@ import threading
 import time
 from pathlib import Path
 
+from .status_line import StatusLine, duration
+
 PROG = "activecontour"
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -676,7 +678,7 @@ def _format_constant(value):
         return ",".join(f"{float(v):.4g}" for v in value)
 
 
-class _Progress:
+class _Progress(StatusLine):
     """One status line on stderr, redrawn in place at most ten times a second.
 
     It shows the file (k/N) and its name, ``loading`` while the file is read, ``setting up`` until
@@ -691,8 +693,8 @@ class _Progress:
     width = 20
 
     def __init__(self, total, stream=None, clock=time.monotonic):
+        super().__init__(stream)
         self.total = total
-        self.stream = stream if stream is not None else sys.stderr
         self.clock = clock
         self.started = clock()
         self.finished = 0
@@ -701,7 +703,6 @@ class _Progress:
         self.image_started = self.started
         self._rate = None  # (time, iteration) of this image's first callback, and its latest state
         self._last = -math.inf
-        self._drawn = False
 
     def start(self, number, path):
         """A new image: count the previous one as finished and show that this one is loading."""
@@ -737,37 +738,18 @@ class _Progress:
         if self.finished:
             per_image = (self.image_started - self.started) / self.finished
             left = per_image * (self.total - self.number) + max(0.0, per_image - (now - self.image_started))
-            return "~" + _clock(left)
+            return "~" + duration(left)
         if self.total == 1 and self._rate is not None:
             (start, first), (latest, iteration, max_num_iter) = self._rate
             if iteration > first:
                 per_iteration = (latest - start) / (iteration - first)
-                return "<=" + _clock(per_iteration * (max_num_iter - iteration))
+                return "<=" + duration(per_iteration * (max_num_iter - iteration))
         return "?"
 
     def _draw(self, text, now):
-        self.stream.write(
-            f"\r\033[K[{self.number}/{self.total}] {self.name}: {text} "
-            f"elapsed {_clock(now - self.started)} left {self.remaining(now)}"
-        )
-        self.stream.flush()
+        self.write(f"[{self.number}/{self.total}] {self.name}: {text} "
+                   f"elapsed {duration(now - self.started)} left {self.remaining(now)}")
         self._last = now
-        self._drawn = True
-
-    def clear(self):
-        """Erase the line (before a summary or error line is printed)."""
-        if self._drawn:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
-            self._drawn = False
-
-    close = clear
-
-
-def _clock(seconds):
-    minutes, seconds = divmod(int(round(seconds)), 60)
-    hours, minutes = divmod(minutes, 60)
-    return f"{hours}:{minutes:02d}:{seconds:02d}" if hours else f"{minutes}:{seconds:02d}"
 
 
 # ------------------------------------------------------------------------------------------ view
