@@ -567,6 +567,8 @@ def _plan_outputs(images, output, formats):
 def _check_image(image_path, init, settings, image=None):
     """Check that the image (read from ``image_path`` unless given) and the init are usable
     together (no segmentation yet)."""
+    import numpy as np
+
     import activecontour
     from activecontour.image import normalize_image
     from activecontour.initial import initial_curves
@@ -574,8 +576,11 @@ def _check_image(image_path, init, settings, image=None):
     if image is None:
         image = activecontour.load_image(image_path)
 
+    # the channel count from a corner (every axis cut to 8): normalising a huge image here would
+    # cost a float64 copy of it before the run makes its own
+    corner = np.asarray(image)[tuple(slice(0, 8) for _ in np.shape(image))]
     try:
-        channels = normalize_image(image, color=settings["color"]).shape[2]
+        channels = normalize_image(corner, color=settings["color"]).shape[2]
     except (ValueError, TypeError) as exc:
         raise UsageError(f"{image_path}: {_one_line(exc)}") from None
     for name in ("c_in", "c_out"):
