@@ -175,7 +175,10 @@ def normalize_image(image, *, color="gray", normalize="range"):
         raise ValueError("image contains NaN or infinite values")
     if normalize == "range" and image.dtype != bool:
         low, high = values.min(), values.max()
-        values = (values - low) / (high - low) if high > low else np.zeros_like(values)
+        # ``values`` is this function's own copy (astype copies): scale it in place
+        values -= low
+        if high > low:
+            values /= high - low
     if values.ndim == 3 and color == "gray":
         values = values @ np.array([0.2125, 0.7154, 0.0721])
     if values.ndim == 2:

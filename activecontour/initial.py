@@ -106,7 +106,13 @@ def _object_class(values, iterations=20, sample=1_000_000):
     if label.all() or not label.any():
         return np.zeros(values.shape[:2], dtype=bool), 0.0
     low, high = fit[~label].mean(axis=0), fit[label].mean(axis=0)
-    label = (flat @ (high - low) > 0.5 * (high + low) @ (high - low)).reshape(values.shape[:2])
+    direction = high - low
+    threshold = 0.5 * (high + low) @ direction
+    if len(direction) == 1:  # gray: one comparison per pixel, no float temporary
+        plane = values[:, :, 0]
+        label = plane > threshold / direction[0] if direction[0] > 0 else plane < threshold / direction[0]
+    else:
+        label = (flat @ direction > threshold).reshape(values.shape[:2])
     border = np.concatenate([label[0], label[-1], label[:, 0], label[:, -1]])
     # the fit terms are the channels' mean: so is the contrast
     contrast = float(np.mean((high - low) ** 2))
