@@ -13,7 +13,11 @@ circle, rectangle  initial curves (any (K, 2) array, list of them, or bool mask 
 chan_vese_energy   the common evaluator of (6.38) for any contours
 curve, fem         polygon geometry (tangent, normal, curvature) and P1 finite elements
 image, energy      the image model with its cumulative tables; the functional and its derivative
+noise              the image's noise level and the default mu it implies
+initial, result    starts (the default one, circles, grids, masks); the one result constructor
 flow, levelset     the two backends
+topology, pyramid  crossings and their repair, nucleation; a start from a reduced copy
+_kernels           the compiled loops (Cython, built at install)
 io, raster         writers/readers of masks, overlays and contours (atomic, image_files,
                    contour_files, vector_formats); curves <-> masks
 synthetic          anti-aliased test images with exact ground truth
