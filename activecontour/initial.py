@@ -160,6 +160,7 @@ def default_init(shape, values=None, mu=0.0):
                                borderType=cv2.BORDER_REFLECT) for ch in range(values.shape[2])]
     smooth = planes[0][:, :, np.newaxis] if len(planes) == 1 else np.stack(planes, axis=-1)
     inside, contrast = _object_class(smooth)
+    del planes, smooth  # image-sized: free before tracing the mask's outlines
     if contrast <= 0:
         return fallback
     speck = max(DEFAULT_INIT_MIN_AREA, np.pi * (2.0 * mu / contrast) ** 2)
