@@ -153,7 +153,7 @@ def build_parser():
         help="output directory, created if missing (default: the directory of each image)",
     )
     segment.add_argument(
-        "-j", "--jobs", type=_positive_int, default=None, metavar="N",
+        "-j", "--jobs", type=_int_at_least(1), default=None, metavar="N",
         help="segment N images at a time in worker processes; 1 runs them one after another "
         "(default: every core)",
     )
@@ -209,7 +209,7 @@ def _add_parameter_options(parser):
                        help="weight of the inside fitting term, > 0 (default: %(default)s)")
     group.add_argument("--lambda-out", type=float, default=defaults["lambda_out"],
                        help="weight of the outside fitting term, > 0 (default: %(default)s)")
-    group.add_argument("--max-iter", dest="max_num_iter", type=_nonnegative_int,
+    group.add_argument("--max-iter", dest="max_num_iter", type=_int_at_least(0),
                        default=defaults["max_num_iter"], metavar="N",
                        help="iteration limit (default: %(default)s)")
     group.add_argument("--tol", type=_nonnegative_float, default=defaults["tol"],
@@ -832,24 +832,19 @@ def _formats(text):
     return list(dict.fromkeys(formats))
 
 
-def _nonnegative_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
+def _int_at_least(low):
+    """An argparse type: an integer >= ``low``."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or value < low:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}")
+        return value
 
-
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
+    parse.__name__ = f"integer >= {low}"
+    return parse
 
 
 def _nonnegative_float(text):
