@@ -405,13 +405,14 @@ class _Memory:
             and np.array_equal(geometry[2], self.signature[1])
 
     def remember(self, old, new, old_load, new_load):
+        """Store the pair of an accepted step; a step that changed the vertices ends the memory."""
         if not self.enabled:
             return
-        if not (self._matches(old) or not self.pairs) or new[0].shape != old[0].shape \
-                or not np.array_equal(new[2], old[2]):
+        if new[0].shape != old[0].shape or not np.array_equal(new[2], old[2]):
             self.clear()
-            if new[0].shape != old[0].shape or not np.array_equal(new[2], old[2]):
-                return
+            return
+        if self.pairs and not self._matches(old):  # pairs of other vertices (after a remesh)
+            self.pairs = []
         s, y = (new[0] - old[0]).ravel(), (new_load - old_load).ravel()
         curvature = _dot(s, y)
         if curvature > 1e-12 * np.sqrt(_dot(s, s) * _dot(y, y)):
