@@ -18,7 +18,7 @@ __all__ = ["BACKENDS", "segment"]
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
     "polygon": "activecontour.flow:segment_polygon",
-    "levelset": "activecontour.levelset:segment_levelset",
+    "levelset": "activecontour.backends.levelset:segment_levelset",
 }
 
 
@@ -70,7 +70,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         ``result.c_out_image`` in the input's own.
     options : dict, optional
         Backend-specific settings, documented by the backend function
-        (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
+        (:func:`activecontour.flow.segment_polygon`,
+        :func:`activecontour.backends.levelset.segment_levelset`).
 
     Returns
     -------

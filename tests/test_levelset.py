@@ -1,4 +1,4 @@
-"""Tests of the level-set backend (activecontour/levelset.py).
+"""Tests of the level-set backend (activecontour/backends/levelset/).
 
 Every expected number is derived: analytic distances, areas and lengths, Dice against the ground
 truth of :mod:`activecontour.synthetic`, the thresholds of the issue (Dice >= 0.99 between the
@@ -10,13 +10,8 @@ import pytest
 
 import activecontour as ac
 from activecontour import synthetic as sy
-from activecontour.curve import signed_area
-from activecontour.energy import ChanVeseParameters
-from activecontour.image import ImageModel, normalize_image
-from activecontour.levelset import (
+from activecontour.backends.levelset import (
     DEFAULT_OPTIONS,
-    _Problem,
-    _redistance,
     checkerboard_level_set,
     curves_level_set,
     heaviside,
@@ -24,6 +19,11 @@ from activecontour.levelset import (
     level_set_contours,
     signed_distance,
 )
+from activecontour.backends.levelset.redistancing import _redistance
+from activecontour.backends.levelset.scheme import _Problem, _swept_area
+from activecontour.curve import signed_area
+from activecontour.energy import ChanVeseParameters
+from activecontour.image import ImageModel, normalize_image
 
 MU = 0.5
 
@@ -443,8 +443,8 @@ def test_edge_soup_scores_exactly_as_the_chained_contours():
     # random phi: many components, holes, saddles and regions on the border; Green's theorem
     # makes (6.38) a sum over edges, so the unchained, oriented soup gives the same energy, area
     # and length as the marching-squares contours
+    from activecontour.backends.levelset import zero_set_edges
     from activecontour.energy import evaluate, stack_curves
-    from activecontour.levelset import zero_set_edges
 
     rng = np.random.default_rng(4)
     phi = rng.normal(size=(40, 50))
@@ -462,8 +462,6 @@ def test_edge_soup_scores_exactly_as_the_chained_contours():
 @pytest.mark.parametrize("shift", [0.1, 0.37, 1.5])
 def test_swept_area_of_a_straight_front_is_exact(shift):
     # a vertical front moved by `shift` pixels sweeps shift x (number of rows), at any offset
-    from activecontour.levelset import _swept_area
-
     shape = (30, 40)
     cols = np.indices(shape, dtype=np.float64)[1]
     old = _redistance(17.3 - cols, 4.0)

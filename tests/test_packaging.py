@@ -14,7 +14,10 @@ PYPROJECT = Path(__file__).resolve().parents[1] / "pyproject.toml"
 def test_the_front_ends_install_as_activecontour_app_not_app():
     config = tomllib.loads(PYPROJECT.read_text())
     setuptools = config["tool"]["setuptools"]
-    assert setuptools["packages"] == ["activecontour", "activecontour_app"]
+    library = Path(__file__).resolve().parents[1] / "activecontour"
+    sub_packages = sorted(".".join(("activecontour",) + init.parent.relative_to(library).parts)
+                          for init in library.rglob("__init__.py"))
+    assert sorted(setuptools["packages"]) == sorted(sub_packages + ["activecontour_app"])
     assert setuptools["package-dir"] == {"activecontour_app": "app"}
     module, function = config["project"]["scripts"]["activecontour"].split(":")
     assert module == "activecontour_app.cli"
