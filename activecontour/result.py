@@ -151,8 +151,17 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     if not cleaned:
         status = 3
     energies = list(energies)
-    if energies and abs(energies[-1] - final.energy) <= _SAME_ENERGY * max(abs(final.energy), 1.0):
+    if energies and _same_energy(energies[-1], final.energy):
+        # the backend's last energy is this one computed another way (the level set scores an
+        # unchained edge soup): the history ends with the common evaluator's number, and entries
+        # just below it that are the same number too (steps that left the curve in place) take it,
+        # so that a last rounding difference never shows as an increase
         energies[-1] = final.energy
+        before = len(energies) - 2
+        while (before >= 0 and energies[before] < final.energy
+               and _same_energy(energies[before], final.energy)):
+            energies[before] = final.energy
+            before -= 1
     else:
         energies.append(final.energy)
     return SegmentationResult(
@@ -160,6 +169,10 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
         energy=final.energy, energies=energies, n_iter=n_iter, status=status, backend=backend,
         phi=phi,
     )
+
+
+def _same_energy(first, second):
+    return abs(first - second) <= _SAME_ENERGY * max(abs(second), 1.0)
 
 
 def _evaluate(model, params, contours):

@@ -47,6 +47,8 @@ def signed_distance(phi, band=np.inf):
     nearest of its eight neighbours' segments and walks along Gamma from it to nearer ones
     (closest-segment propagation, ordered like fast marching).  Within the band this is exact to
     ~1e-3 px in practice; the cost is a few passes over the image plus O(pixels in the band).
+    When phi is positive everywhere, Gamma is the domain's edge (where :func:`level_set_contours`
+    closes the inside, half a pixel beyond the outermost pixel centres) and phi its distance.
     """
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
@@ -54,6 +56,8 @@ def signed_distance(phi, band=np.inf):
 def _redistance(phi, band):
     positive = phi > 0
     front = np.flatnonzero(_front_pixels(positive))
+    if front.size == 0 and positive.all():
+        return _domain_edge_distance(phi.shape, band)
     if front.size == 0:
         return _Redistanced(_clipped(positive, band), positive, np.zeros(0, dtype=np.intp),
                             np.zeros(0))
@@ -63,6 +67,22 @@ def _redistance(phi, band):
     # of a narrow band, one sweep and the walk along Gamma are
     sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
     return _propagate(positive, rows, cols, segments, nearest, band, sweeps)
+
+
+def _domain_edge_distance(shape, band):
+    """The whole image inside: the distance to the domain's edge, Gamma of the closed padding.
+
+    A region that fills the image is bounded by the edge of the domain, half a pixel beyond the
+    outermost pixel centres; its distance lets the force move that boundary inwards like any
+    other (a plateau at ``+band`` would hold the narrow-band step still).
+    """
+    m, n = shape
+    to_rows = np.minimum(np.arange(m), np.arange(m)[::-1]) + 0.5
+    to_cols = np.minimum(np.arange(n), np.arange(n)[::-1]) + 0.5
+    distance = np.minimum(to_rows[:, None], to_cols[None, :])
+    near = np.flatnonzero(distance < band)
+    return _Redistanced(np.minimum(distance, band), np.ones(shape, dtype=bool), near,
+                        distance.ravel()[near])
 
 
 def _clipped(positive, band):
@@ -218,7 +238,8 @@ def curves_level_set(curves, shape, band=np.inf):
     Raises
     ------
     ValueError
-        When the curves contain no pixel centre, or all of them.
+        When the curves contain no pixel centre.  (Curves around every pixel centre give the
+        distance to the domain's edge, as :func:`signed_distance` does.)
     """
     import scipy.spatial
 
@@ -226,7 +247,7 @@ def curves_level_set(curves, shape, band=np.inf):
     if not positive.any():
         raise ValueError("init selects no pixel centre of the image: nothing would be inside")
     if positive.all():  # the whole image inside: the flow starts from the domain's edge
-        return _clipped(positive, band if np.isfinite(band) else float(max(shape)))
+        return _domain_edge_distance(shape, band).phi
     rows, cols = np.divmod(np.flatnonzero(_front_pixels(positive)), shape[1])
     pieces = [_densify(np.asarray(c, dtype=np.float64), 0.5) for c in curves]
     starts = np.concatenate(pieces)
