@@ -54,6 +54,17 @@ class SegmentationResult:
     c_in_image, c_out_image : float or ndarray (C,) or None
         ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
         normalised units the functional uses), set by :func:`activecontour.segment`.
+    labels : int32 ndarray (M, N) or None
+        0 = background, 1..n one id per object (:mod:`activecontour.objects`); with
+        ``separate=True`` touching objects have their own ids.  Set by :func:`activecontour.segment`.
+    objects : dict of str to ndarray, or None
+        Per-object measurements, one row per id (``regionprops_table`` names; see
+        :func:`activecontour.objects.measure` for which columns are exact).
+    object_contours : list of list of ndarray, or None
+        Object k (id k + 1): its outer boundary, then its holes.  Split objects share their split
+        lines; ``contours`` stays the boundary of the inside region, which the energy is of.
+    classes : int ndarray (M, N) or None
+        The region of each pixel, 0 = background (two regions: ``mask.astype(int)``).
     """
 
     mask: np.ndarray
@@ -69,6 +80,10 @@ class SegmentationResult:
     mu: float | None = None
     c_in_image: object = None
     c_out_image: object = None
+    labels: np.ndarray | None = None
+    objects: dict | None = None
+    object_contours: list | None = None
+    classes: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
