@@ -33,6 +33,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.curve import as_curve
+from activecontour.models import ChanVeseParameters
 
 __all__ = [
     "ChanVeseParameters",
@@ -42,75 +43,6 @@ __all__ = [
     "region_moments",
     "stack_curves",
 ]
-
-
-@dataclass(frozen=True)
-class ChanVeseParameters:
-    """Weights of (6.38) and, optionally, fixed region constants.
-
-    ``c_in``/``c_out`` of None are updated by (6.42) at every evaluation; a number (or one per
-    channel) holds them fixed, as the book allows when the intensities are known.
-    ``lambda_in``/``lambda_out`` are numbers or, for a vector-valued image, one weight per channel
-    (Chan, Sandberg and Vese 2000).
-    """
-
-    mu: float = 0.2
-    omega: float = 0.0
-    lambda_in: float = 1.0
-    lambda_out: float = 1.0
-    c_in: object = None
-    c_out: object = None
-
-    def __post_init__(self):
-        for name in ("mu", "omega", "lambda_in", "lambda_out"):
-            value = getattr(self, name)
-            if name.startswith("lambda") and isinstance(value, (list, tuple, np.ndarray)):
-                value = np.asarray(value, dtype=np.float64)
-                if value.ndim != 1 or value.size == 0:
-                    raise ValueError(f"{name} must be a number or one number per channel")
-                object.__setattr__(self, name, value)
-            elif isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-                raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-            if not np.all(np.isfinite(value)):
-                raise ValueError(f"{name} must be finite, got {value}")
-        if self.mu < 0:
-            raise ValueError(f"mu must be >= 0 (length weight), got {self.mu}")
-        if np.any(self.lambda_in <= 0) or np.any(self.lambda_out <= 0):
-            raise ValueError(
-                f"lambda_in and lambda_out must be > 0, got {self.lambda_in}, {self.lambda_out}"
-            )
-        for name in ("c_in", "c_out"):
-            value = getattr(self, name)
-            if value is not None:
-                arr = np.atleast_1d(np.asarray(value, dtype=np.float64))
-                if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-                    raise ValueError(f"{name} must be None, a finite number or one per channel")
-                object.__setattr__(self, name, arr)
-
-    def weights(self, n_channels):
-        """(lambda_in, lambda_out) per channel, divided by the number of channels.
-
-        The fitting terms of a vector-valued image are the *mean* of the channel terms (Chan,
-        Sandberg and Vese's sum with weights lambda / C), so mu and omega mean the same relative to
-        the contrast of a gray image and of a colour one: three equal channels segment exactly
-        like their gray image.
-        """
-        out = []
-        for name in ("lambda_in", "lambda_out"):
-            value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
-            if value.size not in (1, n_channels):
-                raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} channels")
-            out.append(np.broadcast_to(value / n_channels, (n_channels,)))
-        return out
-
-    def constant(self, name, n_channels):
-        """The fixed constant ``name`` broadcast to ``n_channels``, or None when optimised."""
-        value = getattr(self, name)
-        if value is None:
-            return None
-        if value.size not in (1, n_channels):
-            raise ValueError(f"{name} has {value.size} values for an image with {n_channels}")
-        return np.broadcast_to(value, (n_channels,)).astype(np.float64)
 
 
 @dataclass
@@ -156,7 +88,7 @@ def _moments(model, points, next_index):
     sums = np.zeros(2)  # area, length
     unused = np.zeros(channels)
     _kernels.edge_integrals(np.ascontiguousarray(points), next_index, model.values, model.table, 0,
-                            unused, unused, unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
+                            unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
     return sums[0], sums[1], s1, s2
 
 
@@ -183,38 +115,23 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     -------
     Evaluation
     """
-    channels = model.n_channels
     area, length, s1, s2 = _moments(model, points, next_index)
     total_area, total1, total2 = model.totals
-    outside_area = total_area - area
-    c_in = params.constant("c_in", channels)
-    c_out = params.constant("c_out", channels)
-    empty_in, empty_out = area <= 1e-9, outside_area <= 1e-9
-    if (empty_in and c_in is None) or (empty_out and c_out is None):
-        if not empty_ok:
-            nan = np.full(channels, np.nan)
-            return Evaluation(np.inf, nan, nan, area, length, None)
-        if empty_in:  # the whole image is outside (or, below, inside)
-            c_out = total1 / total_area if c_out is None else c_out
-            c_in = c_out if c_in is None else c_in
-        else:
-            c_in = total1 / total_area if c_in is None else c_in
-            c_out = c_in if c_out is None else c_out
-    if c_in is None:
-        c_in = s1 / area
-    if c_out is None:
-        c_out = (total1 - s1) / outside_area
-    lambda_in, lambda_out = params.weights(channels)
-    inside = lambda_in @ (s2 - 2.0 * c_in * s1 + c_in * c_in * area)
-    outside = lambda_out @ ((total2 - s2) - 2.0 * c_out * (total1 - s1) + c_out * c_out * outside_area)
-    energy = params.mu * length + params.omega * area + inside + outside
+    constants = params.fit_constants(area, s1, model.totals, empty_ok=empty_ok)
+    if constants is None:
+        nan = np.full(model.n_channels, np.nan)
+        return Evaluation(np.inf, nan, nan, area, length, None)
+    c_in, c_out = constants
+    outside, inside = params.region_forms(c_in, c_out)
+    energy = (params.mu * length + inside.integral(area, s1, s2)
+              + outside.integral(total_area - area, total1 - s1, total2 - s2))
     result = Evaluation(float(energy), c_in, c_out, area, length)
     if gradient:
+        form = inside - outside  # the integrand of (6.41)
         load = np.zeros_like(points)
         _kernels.edge_integrals(np.ascontiguousarray(points), np.ascontiguousarray(next_index, dtype=np.intp),
-                                model.values, model.table, 1, np.ascontiguousarray(c_in),
-                                np.ascontiguousarray(c_out), np.ascontiguousarray(lambda_in),
-                                np.ascontiguousarray(lambda_out), float(params.omega), float(params.mu),
+                                model.values, model.table, 1, np.ascontiguousarray(form.linear),
+                                np.ascontiguousarray(form.square), form.constant, float(params.mu),
                                 s1, s2, np.zeros(2), load)
         result.load = load
     return result
