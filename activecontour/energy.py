@@ -38,8 +38,11 @@ from activecontour.models import ChanVeseParameters
 __all__ = [
     "ChanVeseParameters",
     "Evaluation",
+    "PartitionEvaluation",
     "chan_vese_energy",
     "evaluate",
+    "evaluate_partition",
+    "partition_moments",
     "region_moments",
     "stack_curves",
 ]
@@ -137,11 +140,73 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     return result
 
 
-def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, lambda_out=1.0,
-                     c_in=None, c_out=None, color="gray", normalize="range"):
+@dataclass
+class PartitionEvaluation:
+    """Energy of a partition into K regions, with each region's constants, area and the length."""
+
+    energy: float
+    constants: np.ndarray
+    areas: np.ndarray
+    length: float
+
+
+def partition_moments(model, boundary, n_classes):
+    """``int 1``, ``int I`` and ``int I^2`` over every region of a partition.
+
+    Parameters
+    ----------
+    model : ImageModel
+    boundary : activecontour.partition.Boundary
+    n_classes : int
+
+    Returns
+    -------
+    areas : ndarray (K,)
+    first, second : ndarray (K, C)
+    """
+    from activecontour.partition import class_soup
+
+    areas = np.zeros(n_classes)
+    first = np.zeros((n_classes, model.n_channels))
+    second = np.zeros((n_classes, model.n_channels))
+    for k in range(n_classes):
+        starts, ends = class_soup(boundary, k)
+        points = np.empty((2 * len(starts), 2))
+        points[0::2], points[1::2] = starts, ends
+        next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
+        areas[k], _, first[k], second[k] = _moments(model, points, next_index)
+    return areas, first, second
+
+
+def evaluate_partition(model, boundary, params, n_classes, constants=None):
+    """The N-region functional of a partition (:meth:`ChanVeseParameters.class_forms`).
+
+    ``J = mu L + sum_k int_{Omega_k} g_k`` with L the length of the interfaces between regions,
+    each counted once, plus the domain's edge where a region other than the background (0) lies
+    on it: for two regions this is (6.38) of the contours of region 1 (:func:`evaluate`), which
+    close along the image border there.  ``constants`` (K, C), by default the region means (6.42);
+    an empty region's term is 0 whatever its constant, which is then the image mean.
+    """
+    areas, first, second = partition_moments(model, boundary, n_classes)
+    if constants is None:
+        mean = model.totals[1] / model.totals[0]
+        filled = areas > 1e-9
+        constants = np.where(filled[:, None], first / np.where(filled, areas, 1.0)[:, None], mean)
+    lengths = boundary.length
+    length = float(lengths[boundary.outer >= 0].sum() + lengths[(boundary.outer < 0) & (boundary.inner > 0)].sum())
+    forms = params.class_forms(constants)
+    energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
+                                      in zip(forms, areas, first, second, strict=True))
+    return PartitionEvaluation(float(energy), constants, areas, length)
+
+
+def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,
+                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
-    Any backend's result can be scored the same way: pass ``result.contours``.
+    Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
+    ``classes=result.classes`` (a result with ``n_regions > 2``, whose class boundaries are those
+    of its label image, see :mod:`activecontour.partition`).
 
     Parameters
     ----------
@@ -149,6 +214,12 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     contours : list of ndarray (K, 2)
         Closed curves in (row, col), outer boundaries positive, holes negative.  An empty list is
         the empty set: J is then the outside term alone.
+    classes : int ndarray (M, N), optional
+        Instead of ``contours``: a label image, 0 = the background region, 1..K-1 the others.
+        Scored as the partition of the domain it stands for (:mod:`activecontour.partition`:
+        boundaries through the midpoints between pixels of different classes, junctions at cell
+        centres) with the N-region functional of :func:`evaluate_partition`; for two classes it
+        is (6.38) of the marching-squares contours of ``classes == 1``.
     mu, omega, lambda_in, lambda_out : float
         Weights of (6.38); ``mu="auto"`` as in :func:`activecontour.segment` (``result.mu`` is the
         value a result used).
@@ -175,6 +246,10 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     model = ImageModel(normalize_image(image, color=color, normalize=normalize))
     params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
+    if (contours is None) == (classes is None):
+        raise TypeError("chan_vese_energy takes either contours or classes")
+    if classes is not None:
+        return _classes_energy(model, classes, params)
     if isinstance(contours, np.ndarray) and contours.ndim == 2:
         contours = [contours]
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
@@ -197,3 +272,27 @@ def _check_in_domain(curve, bounds, name):
             f"{name} has a vertex at (row, col) = ({row:.6g}, {col:.6g}) outside the image domain "
             f"rows {low_r:g}..{high_r:g}, cols {low_c:g}..{high_c:g}"
         )
+
+
+def _classes_energy(model, classes, params):
+    from activecontour.partition import class_boundary
+
+    classes = np.asarray(classes)
+    if classes.shape != tuple(model.shape) or not np.issubdtype(classes.dtype, np.integer):
+        raise ValueError(f"classes must be an integer array of the image's shape {tuple(model.shape)}, "
+                         f"got {classes.dtype} {classes.shape}")
+    if classes.min() < 0:
+        raise ValueError("classes must be >= 0 (0 = the background region)")
+    n_classes = int(classes.max()) + 1
+    constants = None
+    if params.c_in is not None or params.c_out is not None:
+        if n_classes > 2:
+            raise ValueError("c_in and c_out fix the constants of two regions; leave them None "
+                             "for classes with more than two regions")
+        fit = evaluate_partition(model, class_boundary(classes), params, 2)
+        constants = np.array([fit.constants[0] if params.c_out is None else
+                              params.constant("c_out", model.n_channels),
+                              fit.constants[1] if params.c_in is None else
+                              params.constant("c_in", model.n_channels)])
+    return evaluate_partition(model, class_boundary(classes), params, max(n_classes, 2),
+                              constants).energy

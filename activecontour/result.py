@@ -54,6 +54,14 @@ class SegmentationResult:
     c_in_image, c_out_image : float or ndarray (C,) or None
         ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
         normalised units the functional uses), set by :func:`activecontour.segment`.
+    classes : int ndarray (M, N) or None
+        The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
+        by increasing mean intensity; set by :func:`activecontour.segment`.
+    constants : ndarray (K, C) or None
+        The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
+        :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
+        ``c_in`` the area-weighted mean of the others (the inside is every region but the
+        background).
     """
 
     mask: np.ndarray
@@ -69,6 +77,8 @@ class SegmentationResult:
     mu: float | None = None
     c_in_image: object = None
     c_out_image: object = None
+    classes: np.ndarray | None = None
+    constants: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 

@@ -126,9 +126,24 @@ class ChanVeseParameters:
 
     def region_forms(self, c_in, c_out):
         """The integrands ``(g_0, g_1)`` of the outside and the inside as quadratic forms."""
-        lambda_in, lambda_out = self.weights(len(np.atleast_1d(c_in)))
-        return (QuadraticForm.of_fit(lambda_out, c_out),
-                QuadraticForm.of_fit(lambda_in, c_in, self.omega))
+        return self.class_forms(np.array([np.atleast_1d(c_out), np.atleast_1d(c_in)]))
+
+    def class_forms(self, constants):
+        """The integrand of every region of a partition, as quadratic forms.
+
+        Region 0 is the background (the outside, weight ``lambda_out``); every other region k is
+        an inside region (weight ``lambda_in`` and the area weight omega), with the constant
+        ``constants[k]``.  Two regions are (6.38); more are its N-region form (Vese and Chan 2002
+        with one weight per side): ``sum_k int_{Omega_k} g_k`` plus mu times the interfaces.
+
+        Parameters
+        ----------
+        constants : ndarray (K, C)
+        """
+        constants = np.asarray(constants, dtype=np.float64)
+        lambda_in, lambda_out = self.weights(constants.shape[1])
+        return [QuadraticForm.of_fit(lambda_out, constants[0])] + [
+            QuadraticForm.of_fit(lambda_in, c, self.omega) for c in constants[1:]]
 
     def load_form(self, c_in, c_out):
         """``g_1 - g_0``: the integrand of the shape derivative (6.41) and of the level set's force."""
