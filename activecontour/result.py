@@ -64,7 +64,13 @@ class SegmentationResult:
         Object k (id k + 1): its outer boundary, then its holes.  Split objects share their split
         lines; ``contours`` stays the boundary of the inside region, which the energy is of.
     classes : int ndarray (M, N) or None
-        The region of each pixel, 0 = background (two regions: ``mask.astype(int)``).
+        The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
+        by increasing mean intensity; set by :func:`activecontour.segment`.
+    constants : ndarray (K, C) or None
+        The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
+        :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
+        ``c_in`` the area-weighted mean of the others (the inside is every region but the
+        background).
     """
 
     mask: np.ndarray
@@ -84,6 +90,7 @@ class SegmentationResult:
     objects: dict | None = None
     object_contours: list | None = None
     classes: np.ndarray | None = None
+    constants: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
