@@ -244,8 +244,9 @@ class _Flow:
         """
         curves = _split(*geometry[::2])
         inside = rasterize(curves, self.model.shape)
-        sites = topology.nucleation_sites(self.model.values, inside, self.params, current.c_in,
-                                          current.c_out, _NUCLEATION_RADIUS)
+        sites = topology.nucleation_sites(self.model.values, inside,
+                                          self.params.load_form(current.c_in, current.c_out),
+                                          self.params.mu, _NUCLEATION_RADIUS)
         seeds = [np.clip(circle(center, _NUCLEATION_RADIUS), self.low, self.high)[:: -1 if hole else 1]
                  for center, hole in sites]
         best = None

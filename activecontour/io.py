@@ -7,6 +7,7 @@ The parts live in modules named after what they hold; this module gathers their 
 :mod:`~activecontour.image_files`  masks (0/255 PNG) and overlays (the contours drawn on the image)
 :mod:`~activecontour.contour_files`  contour files: JSON, CSV, NPZ and the formats' dispatch
 :mod:`~activecontour.vector_formats`  the (x, y) formats, GeoJSON and SVG
+:mod:`~activecontour.object_formats`  one id per object: label image, GeoJSON, ImageJ ROIs, CSV
 =============================  ================================================================
 
 Every writer renders its whole output in memory first and then moves it into place with
@@ -43,6 +44,7 @@ from activecontour.image_files import (
     write_mask,
     write_overlay,
 )
+from activecontour.object_formats import OBJECT_FORMATS, encode_objects, object_paths
 
 __all__ = [
     "COLORS",
@@ -50,6 +52,7 @@ __all__ = [
     "CONVENTION",
     "MAX_PIXELS",
     "MAX_POINTS",
+    "OBJECT_FORMATS",
     "SizeLimitError",
     "display_rgb",
     "output_paths",
@@ -66,7 +69,7 @@ __all__ = [
 
 
 def save_result(result, image, output_stem, formats=("json",), *, metadata=None, color="auto",
-                thickness="auto", protect=()):
+                thickness="auto", protect=(), objects=()):
     """Write a result's mask, overlay and contours as a group: all of them, or none.
 
     Parameters
@@ -88,11 +91,15 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
         side is at most :data:`~activecontour.image_files.OVERLAY_MAX_SIDE` (4096) pixels.
     protect : sequence of path
         Files that must not be overwritten (e.g. the input image): ValueError if an output is one.
+    objects : sequence of str
+        Object files, from :data:`~activecontour.object_formats.OBJECT_FORMATS` (``labels``,
+        ``labels-tif``, ``geojson``, ``roi``, ``csv``): the label image, one GeoJSON Feature
+        or ImageJ ROI per object, the measurement table (:mod:`activecontour.object_formats`).
 
     Returns
     -------
     list of pathlib.Path
-        The paths written: mask, overlay, then one per format.
+        The paths written: mask, overlay, then one per format, then one per object format.
 
     Raises
     ------
@@ -106,6 +113,7 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
     if isinstance(formats, str):
         formats = [formats]
     formats = list(dict.fromkeys(formats))
+    objects = list(dict.fromkeys([objects] if isinstance(objects, str) else objects))
     for fmt in formats:
         if fmt not in CONTOUR_FORMATS:
             raise ValueError(f"formats must be chosen from {CONTOUR_FORMATS}, got {fmt!r}")
@@ -115,7 +123,7 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
         raise ValueError(
             f"image has shape {image.shape}, but the result's mask has shape {mask.shape}"
         )
-    paths = output_paths(output_stem, formats)
+    paths = output_paths(output_stem, formats, objects)
     protected = [Path(p) for p in protect]
     for path in paths:
         if any(_same_file(path, other) for other in protected):
@@ -126,19 +134,21 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
     ]
     contents += [
         encode_contours(path, result, metadata, None, fmt)
-        for path, fmt in zip(paths[2:], formats, strict=True)
+        for path, fmt in zip(paths[2:], formats, strict=False)
     ]
+    contents += [encode_objects(result, fmt) for fmt in objects]
     write_group(list(zip(paths, contents, strict=True)))
     return paths
 
 
-def output_paths(output_stem, formats=("json",)):
-    """The files :func:`save_result` writes for a stem: mask, overlay, then one per format."""
+def output_paths(output_stem, formats=("json",), objects=()):
+    """The files :func:`save_result` writes for a stem: mask, overlay, one per format, then one
+    per object format."""
     stem = os.fspath(output_stem)
     formats = list(dict.fromkeys([formats] if isinstance(formats, str) else formats))
     return [Path(f"{stem}_mask.png"), Path(f"{stem}_overlay.png")] + [
         Path(f"{stem}_contours.{fmt}") for fmt in formats
-    ]
+    ] + object_paths(stem, objects)
 
 
 def output_stem(directory, source):

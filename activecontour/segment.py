@@ -11,6 +11,7 @@ import numpy as np
 from activecontour.energy import ChanVeseParameters
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
 from activecontour.noise import auto_mu, is_auto
+from activecontour.objects import find_objects
 from activecontour.result import scalar_if_gray
 
 __all__ = ["BACKENDS", "segment"]
@@ -18,13 +19,13 @@ __all__ = ["BACKENDS", "segment"]
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
     "polygon": "activecontour.flow:segment_polygon",
-    "levelset": "activecontour.levelset:segment_levelset",
+    "levelset": "activecontour.backends.levelset:segment_levelset",
 }
 
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", options=None):
+            color="gray", normalize="range", n_regions=2, separate=True, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -70,13 +71,30 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         (default), the dtype's range, or none (see :func:`activecontour.image.normalize_image`).
         ``result.c_in``/``c_out`` are in these normalised units; ``result.c_in_image`` and
         ``result.c_out_image`` in the input's own.
+    n_regions : int
+        The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
+        the sum of each region's fit term plus mu times the length of the interfaces between
+        regions, each counted once (:meth:`ChanVeseParameters.class_forms`).  ``result.classes``
+        holds the region of every pixel (0 = the background, the region covering most of the
+        image border; the others by increasing mean intensity), ``result.constants`` their
+        constants; the inside (``mask``, ``contours``) is every region but the background.
+        K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
+        :mod:`activecontour.backends.labelfield`), started from the global K-means of the
+        intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+    separate : bool
+        Objects that touch get their own ids in ``result.labels`` (split along the necks of the
+        inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
+        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
     options : dict, optional
         Backend-specific settings, documented by the backend function
-        (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
+        (:func:`activecontour.flow.segment_polygon`,
+        :func:`activecontour.backends.levelset.segment_levelset`).
 
     Returns
     -------
     SegmentationResult
+        With the objects: ``labels``, ``objects`` (measurements), ``object_contours``, ``classes``
+        (:func:`activecontour.objects.find_objects`).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {backend!r}")
@@ -88,22 +106,38 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
+    if not isinstance(separate, (bool, np.bool_)):
+        raise TypeError(f"separate must be True or False, got {separate!r}")
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+    _check_regions(n_regions, backend, c_in, c_out, options)
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     model = ImageModel(normalize_image(image, color=color, normalize=normalize))
     params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
-    module_name, function_name = BACKENDS[backend].split(":")
-    solver = getattr(importlib.import_module(module_name), function_name)
-    _check_options(solver, backend, options or {})
-    result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
-                    callback=callback, **(options or {}))
+    if n_regions > 2:
+        from activecontour.backends.labelfield import segment_labels
+
+        result = segment_labels(model, init, params, n_regions=int(n_regions),
+                                max_num_iter=int(max_num_iter), tol=float(tol), callback=callback)
+    else:
+        module_name, function_name = BACKENDS[backend].split(":")
+        solver = getattr(importlib.import_module(module_name), function_name)
+        _check_options(solver, backend, options or {})
+        result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
+                        callback=callback, **(options or {}))
+        result.classes = result.mask.astype(np.int32)
+        result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
     offset, scale = intensity_scale(image, normalize)
     result.mu = params.mu
     result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
     result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
+    pixels = np.asarray(image)
+    if pixels.shape[:2] != model.shape:  # a channel-first stack, read as channel-last
+        pixels = np.moveaxis(pixels, 0, -1)
+    result.object_contours, result.labels, result.objects = find_objects(
+        result.contours, model.shape, pixels, separate=bool(separate))
     return result
 
 
@@ -118,3 +152,21 @@ def _check_options(solver, backend, options):
     if unknown:
         raise TypeError(f"unknown option(s) {', '.join(map(repr, unknown))} for backend {backend!r}; "
                         f"the valid options are {', '.join(valid)}")
+
+
+def _check_regions(n_regions, backend, c_in, c_out, options):
+    if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
+        raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
+    if n_regions < 2:
+        raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
+    if n_regions == 2:
+        return
+    if backend != "levelset":
+        raise ValueError(f"n_regions={n_regions} needs backend='levelset' (backend={backend!r} "
+                         f"segments two regions)")
+    if c_in is not None or c_out is not None:
+        raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
+                         f"n_regions={n_regions}")
+    if options:
+        raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
+                        "takes none")
