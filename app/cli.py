@@ -420,7 +420,11 @@ def _load_image(image_path, max_pixels):
 
 
 def _over_limit(exc):
-    return f"{_one_line(exc)}; raise the limit with --max-pixels"
+    """The library's SizeLimitError with the option that raises the limit."""
+    text = _one_line(exc)
+    for name in ("(max_pixels)", "(max_points)"):
+        text = text.replace(name, "(raise it with --max-pixels)")
+    return text
 
 
 @contextlib.contextmanager

@@ -886,3 +886,15 @@ def test_the_shown_start_follows_mu_as_the_librarys_does(coins_image, make_viewe
     after = ac.segment(image, max_num_iter=0, mu=viewer.parameters()["mu"]).contours
     assert len(after) != len(before)  # on this image the start depends on mu
     assert_same_contours(viewer.init_curves, after)
+
+
+def test_the_mu_slider_is_logarithmic_and_the_default_sits_inside_it(disk_image, make_viewer):
+    viewer = make_viewer(disk_image[0])
+    mu = viewer.sliders["mu"]
+    assert mu.ax.get_xscale() == "log"
+    # the automatic mu (~0.01-0.5) sits well inside, not at the far left of a linear 0..5 scale
+    position = (np.log(mu.val) - np.log(mu.valmin)) / (np.log(mu.valmax) - np.log(mu.valmin))
+    assert 0.2 < position < 0.9
+    for value in (0.003, 0.05, 2.0):  # a click anywhere gives the value under the pointer
+        set_slider(viewer, mu, value)
+        assert viewer.parameters()["mu"] == pytest.approx(value, rel=1e-6)
