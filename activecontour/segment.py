@@ -33,10 +33,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     image : ndarray of shape (M, N) or (M, N, C), or a path
         Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
         or the path of an image file (read by :func:`activecontour.image.load_image`).
-    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), or SegmentationResult
+    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), SegmentationResult or str
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
-        starts from a centred circle of radius 3/8 of the smaller side.  The level-set backend also
-        accepts ``"checkerboard"``.
+        (default) starts from the outlines of the two-means threshold of the lightly blurred image
+        (the minimiser of (6.38) without its length term), so objects anywhere in the image are in
+        the start (:func:`activecontour.initial.default_init`).  ``"grid"``: small circles all
+        over the image; the level-set backend also accepts ``"checkerboard"``.
     backend : {"polygon", "levelset"}
         ``"polygon"``: the book's gradient flow (6.30)-(6.31) of a polygon with the H^1 velocity
         (6.39)-(6.40), sub-pixel.  ``"levelset"``: the same functional on the pixel grid.
