@@ -254,6 +254,7 @@ class _Flow:
         self.smoothing = smoothing
         self.max_step = max_step
         self.min_area = min_area
+        self.bounds = bounds
         self.low, self.high = bounds
         self.dt = np.inf
         self.memory = _Memory(accelerate)
@@ -322,6 +323,8 @@ class _Flow:
             if not repaired:
                 return None
             geometry = stack_curves(repaired)
+        if topology.border_overlap(*geometry[:2], self.bounds):
+            return None
         new = evaluate(self.model, *geometry[:2], self.params, gradient=True)
         return (geometry, new) if np.isfinite(new.energy) else None
 
@@ -331,7 +334,9 @@ class _Flow:
         A trial whose edges cross is replaced by the boundary of {w > 0}
         (:func:`activecontour.topology.repair`) before the energy test, so a step that splits,
         merges or opens a hole is accepted only if the repaired curves satisfy the same descent
-        condition as any other step.
+        condition as any other step.  A trial that runs two edges along the same stretch of the
+        image border (:func:`activecontour.topology.border_overlap`) is no region: it is
+        rejected as a step too long.
         """
         points, next_index, offsets = geometry
         # Vertices on the image border that the force pushes out of the image cannot follow it:
@@ -360,7 +365,9 @@ class _Flow:
             repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
             if repaired is not None:
                 candidate = stack_curves(repaired) if repaired else None
-            if candidate is not None and predicted < 0:
+            # clipping can run two pieces of curve along the same stretch of the border
+            if candidate is not None and predicted < 0 and not topology.border_overlap(
+                    candidate[0], candidate[1], self.bounds):
                 new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
                 if new.energy <= current.energy + _ARMIJO * predicted:
                     if accelerated is None:
@@ -373,7 +380,8 @@ class _Flow:
     def drop_small(self, geometry, current):
         """Remove curves enclosing less than ``min_area`` when that does not raise the energy.
 
-        Returns the geometry and its evaluation, or (geometry, None) when nothing is left inside.
+        Returns the geometry and its evaluation, or (geometry, None) when nothing worth a curve
+        is left inside and the empty set's energy is not above the curves' (the collapse).
         """
         points, _, offsets = geometry
         areas = topology.curve_areas(*geometry)
@@ -381,7 +389,12 @@ class _Flow:
         if keep.all():
             return geometry, current
         if not keep.any() or areas[keep].sum() <= 0:
-            return geometry, (None if current.area < self.min_area else current)
+            if current.area >= self.min_area:
+                return geometry, current
+            # nothing left worth a curve: collapse to the empty set, unless that costs energy
+            empty = evaluate(self.model, np.zeros((0, 2)), np.zeros(0, dtype=np.intp), self.params,
+                             empty_ok=True)
+            return geometry, (None if empty.energy <= current.energy else current)
         reduced = stack_curves([c for c, k in zip(_split(points, offsets), keep, strict=True) if k])
         candidate = evaluate(self.model, *reduced[:2], self.params, gradient=True)
         if candidate.energy <= current.energy:

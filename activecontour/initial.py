@@ -346,19 +346,19 @@ def region_boundary(curves):
     A curve inside an even number of the others is an outer boundary (made positive), inside an
     odd number a hole (made negative), whatever orientation it was given in: a lone curve is an
     outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate.
-    Where curves overlap or cross themselves, the region is the union, {w > 0}, rebuilt as its
-    exact boundary (:func:`activecontour.topology.repair`): winding-number weights of 2 are not a
-    region (6.38) is defined on.
+    Where curves overlap, repeat or cross themselves, the region is their union (a self-crossing
+    curve's loops all count), rebuilt exactly by :func:`activecontour.topology.region_union`:
+    winding-number weights of 2 are not a region (6.38) is defined on.
     """
     from activecontour import topology
-    from activecontour.energy import stack_curves
 
     oriented = []
     for i, curve in enumerate(curves):
         depth = sum(_contains(other, curve[0]) for j, other in enumerate(curves) if j != i)
         oriented.append(orient(curve, hole=depth % 2 == 1))
-    repaired = topology.repair(*stack_curves(oriented))
-    return oriented if repaired is None else repaired or oriented
+    if topology.region_problem(oriented) is None:
+        return oriented
+    return topology.region_union(curves) or oriented
 
 
 def _contains(curve, point):
