@@ -65,6 +65,9 @@ class SegmentationResult:
         lines; ``contours`` stays the boundary of the inside region, which the energy is of.
     classes : int ndarray (M, N) or None
         The region of each pixel, 0 = background (two regions: ``mask.astype(int)``).
+    roi : bool ndarray (M, N) or None
+        With ``segment(roi=...)``: the domain D the functional was solved on
+        (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
     """
 
     mask: np.ndarray
@@ -84,6 +87,7 @@ class SegmentationResult:
     objects: dict | None = None
     object_contours: list | None = None
     classes: np.ndarray | None = None
+    roi: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 

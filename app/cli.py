@@ -75,6 +75,7 @@ _PARAMETER_OPTIONS = {
     "c_in": "--c-in",
     "c_out": "--c-out",
     "color": "--color",
+    "inside": "--inside",
 }
 
 
@@ -163,6 +164,12 @@ def build_parser():
         "(default: json)",
     )
     segment.add_argument(
+        "--objects", dest="objects", type=_object_formats, default=[], metavar="FMT[,FMT...]",
+        help="object files, one id per object: labels (16-bit PNG label image), labels-tif, "
+        "geojson (a Feature per object with its measurements), roi (ImageJ/Fiji ROI set .zip), "
+        "csv (the measurements) (default: none)",
+    )
+    segment.add_argument(
         "--overlay-color", default="red", metavar="COLOR",
         help="colour of the contour in the overlay: a name (red, green, blue, yellow, cyan, "
         "magenta, white, black) or R,G,B in 0..255 (default: red)",
@@ -222,6 +229,9 @@ def _add_parameter_options(parser):
     group.add_argument("--color", choices=("gray", "vector"), default=defaults["color"],
                        help="colour images: convert to gray or use every channel "
                        "(default: %(default)s)")
+    group.add_argument("--inside", choices=_inside_choices(), default=defaults["inside"],
+                       help="which region is the objects: auto (the class covering less of the "
+                       "image border), bright or dark (default: %(default)s)")
     init = parser.add_argument_group(
         "initial curve (default: a centred circle of radius 3/8 of the smaller side)"
     ).add_mutually_exclusive_group()
@@ -250,11 +260,12 @@ def _run_segment(args):
     settings = _settings(args)
     init, init_description = _load_init(args)
     images = find_images(*args.images)  # folders and patterns expanded; a missing file stops here
-    plans = _plan_outputs(images, args.output, args.formats)
+    plans = _plan_outputs(images, args.output, args.formats, args.objects)
     color = _overlay_color(args.overlay_color)
     _check_can_create(args.output)
     batch = _Batch(init, init_description, settings, args.formats, color,
-                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet)
+                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet,
+                   objects=args.objects)
     jobs = min(args.jobs or default_jobs(), len(plans))
     show_progress = not args.quiet and _is_terminal(sys.stderr)
     try:
@@ -313,11 +324,14 @@ def _report_failure(progress, image_path, exc):
 class _Batch:
     """What every image of a ``segment`` run shares: the init, the settings and the outputs."""
 
-    def __init__(self, init, init_description, settings, formats, color, *, protect, output, quiet):
+    def __init__(self, init, init_description, settings, formats, color, *, protect, output, quiet,
+                 objects=()):
         self.init = init
         self.init_description = init_description
         self.settings = settings
         self.formats = formats
+        #: object file formats (:data:`activecontour.object_formats.OBJECT_FORMATS`)
+        self.objects = objects
         self.color = color
         self.protect = protect
         self.output = output
@@ -351,7 +365,7 @@ def _segment_one(image_path, stem, batch, progress=None):
     }
     _make_directory(Path(stem).parent, batch.created)
     written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
-                             color=batch.color, protect=batch.protect)
+                             color=batch.color, protect=batch.protect, objects=batch.objects)
     return _summary(Path(image_path).name, result, elapsed, written)
 
 
@@ -532,7 +546,7 @@ class _ContourInit(list):
         self.image_shape = tuple(shape) if shape is not None else None
 
 
-def _plan_outputs(images, output, formats):
+def _plan_outputs(images, output, formats, objects=()):
     """[(image path, output stem)], after checking no output overwrites an input or another one."""
     from activecontour.io import output_paths
 
@@ -547,7 +561,7 @@ def _plan_outputs(images, output, formats):
         if directory.is_dir() and not os.access(directory, os.W_OK | os.X_OK):
             raise UsageError(f"the output directory {os.fspath(directory)!r} is not writable")
         stem = directory / Path(image_path).stem
-        for path in output_paths(stem, formats):
+        for path in output_paths(stem, formats, objects):
             key = os.path.realpath(path)
             if key in inputs:
                 raise UsageError(
@@ -830,6 +844,23 @@ def _formats(text):
             f"unknown format {unknown[0]!r}; choose from {', '.join(CONTOUR_FORMATS)}"
         )
     return list(dict.fromkeys(formats))
+
+
+def _object_formats(text):
+    from activecontour.object_formats import OBJECT_FORMATS
+
+    formats = [f.strip().lower() for f in text.split(",") if f.strip()]
+    unknown = [f for f in formats if f not in OBJECT_FORMATS]
+    if not formats or unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown object format {(unknown or [text])[0]!r}; choose from {', '.join(OBJECT_FORMATS)}")
+    return list(dict.fromkeys(formats))
+
+
+def _inside_choices():
+    from activecontour.segment import INSIDE
+
+    return INSIDE
 
 
 def _int_at_least(low):
