@@ -72,6 +72,9 @@ class SegmentationResult:
         :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
         ``c_in`` the area-weighted mean of the others (the inside is every region but the
         background).
+    roi : bool ndarray (M, N) or None
+        With ``segment(roi=...)``: the domain D the functional was solved on
+        (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
     """
 
     mask: np.ndarray
@@ -92,6 +95,7 @@ class SegmentationResult:
     object_contours: list | None = None
     classes: np.ndarray | None = None
     constants: np.ndarray | None = None
+    roi: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
