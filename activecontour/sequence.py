@@ -213,9 +213,8 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
 def _warm_kwargs(segment_kwargs):
     """The keywords of a warm frame: the polygon flow starts at its finest smoothing length (the
     contours already lie on the boundaries: nothing to move as a whole) and does not search for
-    new components by nucleation (the default start's new pieces are in the start already).
-    Measured on ``benchmarks/bench_sequence.py``: the same Dice, in ~0.7x the time.  Options the
-    caller gives win."""
+    new components by nucleation (the threshold split's new pieces are in the start already).
+    Both only save iterations; options the caller gives win."""
     if segment_kwargs.get("backend", "polygon") != "polygon" or segment_kwargs.get("n_regions", 2) != 2:
         return segment_kwargs
     import inspect

@@ -306,7 +306,9 @@ def _run_segment(args):
     plans = _plan_outputs(images, args.output, args.formats, args.objects)
     overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
-    stack_failures = sequence_cli.run(stacks, args, settings, overlay, _print_line) if stacks else 0
+    first_init = list(init) if isinstance(init, _ContourInit) else init  # the first frame's start
+    stack_failures = (sequence_cli.run(stacks, args, settings, overlay, _print_line, first_init)
+                      if stacks else 0)
     if not plans:
         return EXIT_USAGE if stack_failures else 0
     if left_out and not args.quiet:

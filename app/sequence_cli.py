@@ -79,8 +79,9 @@ def output_paths(stem):
     return [Path(f"{stem}{suffix}") for suffix in OUTPUT_SUFFIXES]
 
 
-def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, quiet=False):
-    """Segment one stack and write its files (all or none); return its summary line."""
+def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, init=None):
+    """Segment one stack and write its files (all or none); return its summary line.  ``init``
+    starts the first frame (the others start from their predecessor)."""
     import numpy as np
 
     import activecontour as ac
@@ -116,8 +117,8 @@ def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, qu
         raise
     started = time.perf_counter()
     try:
-        seq = ac.segment_sequence(path, axis=axis, select=frames, callback=collect, keep_results=False,
-                                  labels_file=temporary, **settings)
+        seq = ac.segment_sequence(path, init, axis=axis, select=frames, callback=collect,
+                                  keep_results=False, labels_file=temporary, **settings)
         tracks = {"track_id": seq.tracks[:, 0].astype(int), "t": seq.tracks[:, 1].astype(int),
                   "row": seq.tracks[:, 2], "col": seq.tracks[:, 3]}
         files = [
@@ -182,10 +183,11 @@ def _encode_png(rgb):
     return data.tobytes()
 
 
-def run(stacks, args, settings, overlay, report):
+def run(stacks, args, settings, overlay, report, init=None):
     """Segment the stacks named on the command line, one after another; return the failures.
 
-    ``report(line, failed)`` prints a summary or an error line (the command line's own printer).
+    ``report(line, failed)`` prints a summary or an error line (the command line's own printer);
+    ``init`` (the ``--init-*`` options) is the first frame's start.
     """
     from activecontour.io import output_stem
 
@@ -194,7 +196,8 @@ def run(stacks, args, settings, overlay, report):
         directory = Path(args.output) if args.output is not None else Path(path).parent
         stem = output_stem(directory, path)
         try:
-            line = segment_stack(path, stem, settings, frames=args.frames, axis=args.axis, overlay=overlay)
+            line = segment_stack(path, stem, settings, frames=args.frames, axis=args.axis, overlay=overlay,
+                                 init=init)
         except (ValueError, TypeError, OSError) as exc:
             failures += 1
             report(f"{path}: {str(exc).strip().splitlines()[0]}", True)

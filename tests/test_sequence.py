@@ -53,7 +53,9 @@ def test_every_frame_is_segmented_and_identities_hold(drift_and_breathing):
         assert dice(seq.labels[t] > 0, truth[t] > 0) >= 0.99, f"frame {t}"
     ids = assert_identities(seq, truth)
     assert sorted(ids.values()) == [1, 2] and seq.graph == {}
-    assert [r.labels is seq.results[t].labels for t, r in enumerate(seq.results)]
+    for t, result in enumerate(seq.results):  # each frame's result carries the track ids too
+        np.testing.assert_array_equal(result.labels, seq.labels[t])
+        assert sorted(result.objects["label"]) == sorted(np.unique(seq.labels[t])[1:])
 
 
 def test_tracks_and_objects_table(drift_and_breathing):

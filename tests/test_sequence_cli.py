@@ -110,3 +110,16 @@ def test_frames_on_a_single_image_is_refused(tmp_path, capsys):
 def test_view_refuses_a_stack_in_one_line(movie, capsys):
     status, _, err = run(capsys, "view", movie[0])
     assert_one_line_error(status, err, "stack of 4 frames", "segment_sequence")
+
+
+def test_init_options_start_the_first_frame(movie, tmp_path, capsys):
+    """--init-circle on a stack is not ignored: with no iteration, frame 0 is that circle."""
+    path, _, _ = movie
+    status, _, err = run(capsys, "segment", path, "-o", tmp_path / "out", "--init-circle", "60", "64", "30",
+                         "--max-iter", "0")
+    assert status == 0, err
+    first = tifffile.imread(tmp_path / "out" / "movie_labels.tif")[0]
+    assert np.unique(first).tolist() == [0, 1]
+    assert abs((first > 0).sum() - np.pi * 30**2) < 0.02 * np.pi * 30**2
+    rows, cols = np.nonzero(first)
+    assert abs(rows.mean() - 60) < 0.5 and abs(cols.mean() - 64) < 0.5
