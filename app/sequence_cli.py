@@ -79,9 +79,14 @@ def output_paths(stem):
     return [Path(f"{stem}{suffix}") for suffix in OUTPUT_SUFFIXES]
 
 
-def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, init=None):
+def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, init=None, status=None):
     """Segment one stack and write its files (all or none); return its summary line.  ``init``
-    starts the first frame (the others start from their predecessor)."""
+    starts the first frame (the others start from their predecessor); ``status`` (a
+    :class:`~app.status_line.StatusLine`) shows the frame being done and the time left.
+
+    The label stack and the contours are streamed to temporary files frame by frame (constant
+    memory, however long the movie); everything is renamed into place at the end.
+    """
     import numpy as np
 
     import activecontour as ac
@@ -90,62 +95,74 @@ def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, in
     from activecontour.object_formats import encode_table
     from activecontour.sequence import read_frames
 
+    from .status_line import duration
+
     overlay = overlay or {}
     _, count = read_frames(path, axis=axis, select=frames)  # checks --frames before any work
     if count:  # evenly spaced over the sequence; a video that does not say its length: the first
         shown = set(np.linspace(0, count - 1, min(count, SHEET_FRAMES)).round().astype(int))
     else:
         shown = set(range(SHEET_FRAMES))
-    tiles, contours = [], []
-
-    def collect(frame):
-        result = frame.result
-        contours.append({"frame": frame.position, "index": frame.index, "objects": [
-            {"label": int(label), "contours": [np.round(c, 4).tolist() for c in curves]}
-            for label, curves in zip(result.objects["label"], result.object_contours, strict=True)]})
-        if frame.position in shown:
-            tiles.append(render_overlay(frame.image, result.contours, overlay.get("color", "auto"),
-                                        overlay.get("thickness", "auto"), max_side=SHEET_TILE))
-
-    labels_path = Path(f"{stem}_labels.tif")
+    tiles = []
+    labels_path, contours_path = Path(f"{stem}_labels.tif"), Path(f"{stem}_contours.json")
     created = not labels_path.parent.exists()
     labels_path.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        temporary = temporary_file(labels_path)
-    except BaseException:
-        _remove_if_empty(labels_path.parent, created)
-        raise
+    temporaries = []
     started = time.perf_counter()
     try:
-        seq = ac.segment_sequence(path, init, axis=axis, select=frames, callback=collect,
-                                  keep_results=False, labels_file=temporary, **settings)
+        temporaries = [temporary_file(labels_path), temporary_file(contours_path)]
+        with open(temporaries[1], "w") as contours:
+            contours.write(f'{{"source": {json.dumps(os.fspath(path))}, "frames": [')
+
+            def collect(frame):
+                result = frame.result
+                if status is not None:
+                    elapsed = time.perf_counter() - started
+                    done = frame.position + 1
+                    left = f" left ~{duration(elapsed / done * (count - done))}" if count else ""
+                    status.write(f"{Path(path).name}: frame {done}/{count or '?'}, "
+                                 f"{len(result.objects['label'])} objects, elapsed {duration(elapsed)}{left}")
+                entry = {"frame": frame.position, "index": frame.index, "objects": [
+                    {"label": int(label), "contours": [np.round(c, 4).tolist() for c in curves]}
+                    for label, curves in zip(result.objects["label"], result.object_contours, strict=True)]}
+                contours.write(("," if frame.position else "") + json.dumps(entry))
+                if frame.position in shown:
+                    tiles.append(render_overlay(frame.image, result.contours, overlay.get("color", "auto"),
+                                                overlay.get("thickness", "auto"), max_side=SHEET_TILE))
+
+            seq = ac.segment_sequence(path, init, axis=axis, select=frames, callback=collect,
+                                      keep_results=False, labels_file=temporaries[0], **settings)
+            contours.write("]}")
         tracks = {"track_id": seq.tracks[:, 0].astype(int), "t": seq.tracks[:, 1].astype(int),
                   "row": seq.tracks[:, 2], "col": seq.tracks[:, 3]}
+        graph = {str(child): parents for child, parents in seq.graph.items()}
         files = [
             (Path(f"{stem}_tracks.csv"), encode_table(tracks)),
-            (Path(f"{stem}_tracks.json"), json.dumps({"graph": {str(k): v for k, v in seq.graph.items()}},
-                                                     indent=1).encode()),
+            (Path(f"{stem}_tracks.json"), json.dumps({"graph": graph}, indent=1).encode()),
             (Path(f"{stem}_objects.csv"), encode_table(seq.objects)),
-            (Path(f"{stem}_contours.json"), json.dumps({"source": os.fspath(path), "frames": contours})
-             .encode()),
             (Path(f"{stem}_overlay.png"), _encode_png(_contact_sheet(tiles))),
         ]
         write_group(files)
         try:
-            os.replace(temporary, labels_path)
+            for temporary, final in zip(temporaries, (labels_path, contours_path), strict=True):
+                os.replace(temporary, final)
         except BaseException:
-            for written, _ in files:
+            for written in [p for p, _ in files] + [labels_path, contours_path]:
                 written.unlink(missing_ok=True)
             raise
     except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        for temporary in temporaries:
+            Path(temporary).unlink(missing_ok=True)
         _remove_if_empty(labels_path.parent, created)
         raise
+    finally:
+        if status is not None:
+            status.clear()
     elapsed = time.perf_counter() - started
     n_tracks = len(np.unique(seq.tracks[:, 0]))
-    divisions = len(set(p for parents in seq.graph.values() for p in parents))
+    divisions = len({parent for parents in seq.graph.values() for parent in parents})
     return (f"{Path(path).name}: {seq.n_frames} frames, {n_tracks} tracks, {divisions} divisions, "
-            f"{elapsed:.1f}s -> {labels_path.name} and {len(files)} more")
+            f"{elapsed:.1f}s -> {labels_path.name} and {len(files) + 1} more")
 
 
 def _remove_if_empty(directory, created):
@@ -189,15 +206,20 @@ def run(stacks, args, settings, overlay, report, init=None):
     ``report(line, failed)`` prints a summary or an error line (the command line's own printer);
     ``init`` (the ``--init-*`` options) is the first frame's start.
     """
+    import sys
+
     from activecontour.io import output_stem
 
+    from .status_line import StatusLine
+
+    status = StatusLine() if not args.quiet and sys.stderr.isatty() else None
     failures = 0
     for path in stacks:
         directory = Path(args.output) if args.output is not None else Path(path).parent
         stem = output_stem(directory, path)
         try:
             line = segment_stack(path, stem, settings, frames=args.frames, axis=args.axis, overlay=overlay,
-                                 init=init)
+                                 init=init, status=status)
         except (ValueError, TypeError, OSError) as exc:
             failures += 1
             report(f"{path}: {str(exc).strip().splitlines()[0]}", True)
