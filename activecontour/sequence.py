@@ -1,10 +1,11 @@
 """Sequences and stacks: every frame segmented from the previous frame's result, objects tracked.
 
 A time-lapse, a z-stack, a multi-page TIFF, a folder of numbered frames or a video is segmented
-frame by frame with :func:`activecontour.segment`.  Frame t starts from frame t-1's contours (a warm
-start: the flow only has to follow the motion), plus the pieces of the default start
-(:func:`activecontour.initial.default_init`) that the previous result does not touch, so that
-objects entering the field or appearing are found too.  Frame 0 starts from ``init``.
+frame by frame with :func:`activecontour.segment`.  Frame 0 starts from ``init``.  Frame t starts
+from frame t-1's contours plus the pieces of its threshold split (the default start's, with frame
+t-1's constants) that frame t-1's inside does not touch, so that objects entering the field or
+appearing are found too; or, where that is lower in (6.38), from the threshold split alone (objects
+that moved further than the flow travels in a few iterations): see :func:`_warm_start`.
 
 Objects keep their identity: each frame's objects (``result.labels``, touching objects apart) are
 matched to the previous frame's by overlap (intersection over union, Hungarian assignment by
