@@ -170,7 +170,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
         for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
-            trial = problem.redistance(problem.step(state, force, tau, smooth_force))
+            trial = problem.redistance(problem.step(state, force, tau, smooth_force), previous=state)
             evaluation = problem.evaluate(trial)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
             # does it has flattened phi rather than followed the force.

@@ -25,7 +25,14 @@ def _force(values, c_in, c_out, params):
     density: the region terms of (6.38) are written here once.
     """
     lambda_in, lambda_out = params.weights(values.shape[-1])
-    return params.omega + ((values - c_in) ** 2) @ lambda_in - ((values - c_out) ** 2) @ lambda_out
+    pixels = values.reshape(-1, values.shape[-1])  # (K, C): one matrix-vector product per term
+    inside, outside = pixels - c_in, pixels - c_out
+    inside *= inside
+    outside *= outside
+    f = inside @ lambda_in
+    f -= outside @ lambda_out
+    f += params.omega
+    return f.reshape(values.shape[:-1])
 
 
 class _Problem:
@@ -48,14 +55,17 @@ class _Problem:
         stride = max(1, int(np.sqrt(m * n / 2.0**16)))
         rows = np.arange(stride // 2, m, stride)
         cols = np.arange(stride // 2, n, stride)
-        self.sample = (rows[:, None] * n + cols[None, :]).ravel()
+        sample = (rows[:, None] * n + cols[None, :]).ravel()
+        self.sample_values = self.values.reshape(m * n, -1)[sample]  # gathered once
+        self.sample_wall = self._wall(sample)
         # eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis, along each axis
         self.wave_r = (4.0 * np.sin(np.pi * np.arange(m) / (2.0 * m)) ** 2).astype(np.float32)
         self.wave_c = (4.0 * np.sin(np.pi * np.arange(n) / (2.0 * n)) ** 2).astype(np.float32)
         self.scratch = _Scratch(self.shape)
 
-    def redistance(self, phi):
-        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch)
+    def redistance(self, phi, previous=None):
+        """The reinitialised state of phi (float32); ``previous``: the state phi was stepped from."""
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, previous=previous)
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
@@ -81,17 +91,22 @@ class _Problem:
         """
         constants = (np.nan_to_num(np.asarray(c_in, dtype=np.float64)),
                      np.nan_to_num(np.asarray(c_out, dtype=np.float64)))
-        scale = float(np.mean(np.abs(self.force_at(self.sample, constants))))
-        return constants, max(scale, 1e-12)
+        f = _force(self.sample_values, *constants, self.params) + self.params.mu * self.sample_wall
+        return constants, max(float(np.mean(np.abs(f))), 1e-12)
 
     def force_at(self, flat, constants):
         """f (with the wall term) at the pixels of flat indices ``flat``."""
         m, n = self.shape
         f = _force(self.values.reshape(m * n, -1)[flat], *constants, self.params)
         if self.params.mu > 0:
-            row, col = np.divmod(flat, n)
-            f += self.params.mu * ((row == 0) + (row == m - 1) + (col == 0) + (col == n - 1))
+            f += self.params.mu * self._wall(flat)
         return f
+
+    def _wall(self, flat):
+        """How many sides of the image each pixel ``flat`` lies on (0, 1 or 2)."""
+        m, n = self.shape
+        row, col = np.divmod(flat, n)
+        return (row == 0).astype(np.float64) + (row == m - 1) + (col == 0) + (col == n - 1)
 
     def force_rows(self, start, stop, constants):
         """f (with the wall term) on the rows ``start:stop``, (stop - start, N)."""
@@ -182,5 +197,7 @@ def _swept_area(old, new):
     """
     if old.near_flat.size == 0 or new.near_flat.size == 0:
         return float(np.count_nonzero(old.positive != new.positive))
-    flat = np.union1d(old.near_flat, new.near_flat)
+    flat = np.concatenate([old.near_flat, new.near_flat])
+    flat.sort()
+    flat = flat[np.concatenate([[True], flat[1:] != flat[:-1]])]  # each pixel once
     return float(np.sum(np.abs(heaviside(new.phi.ravel()[flat]) - heaviside(old.phi.ravel()[flat]))))
