@@ -167,7 +167,12 @@ def _domain_edge_distance(shape, band, dtype=np.float64):
 
 def _clipped(positive, band, dtype=np.float64):
     """``+band`` inside, ``-band`` outside (inf for an infinite band)."""
-    return np.where(positive, dtype(band), dtype(-band))
+    if not np.isfinite(band):
+        return np.where(positive, dtype(band), dtype(-band))
+    phi = positive.astype(dtype)  # 0 or 1, then scaled in place: far faster than np.where
+    phi *= dtype(2.0 * band)
+    phi -= dtype(band)
+    return phi
 
 
 def _front_pixels(positive):

@@ -138,7 +138,8 @@ def _edge_soup(phi, positive, cells):
     base = np.column_stack([cell_r, cell_c]).astype(np.float64)
     # a point on the inside of each segment: the mean of the inside corners of a simple cell;
     # in a saddle each segment cuts off one inside corner (a and c, or b and d)
-    reference = np.repeat((base + inside @ offsets / inside.sum(axis=1)[:, None])[:, None], 2, axis=1)
+    mean_corner = np.einsum("ki,ij->kj", inside.astype(np.float64), offsets) / inside.sum(axis=1)[:, None]
+    reference = np.repeat((base + mean_corner)[:, None], 2, axis=1)
     saddle = inside.sum(axis=1) == 2
     saddle &= inside[:, 0] == inside[:, 2]
     a_in = inside[saddle, 0][:, None]
