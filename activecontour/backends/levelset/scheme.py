@@ -137,10 +137,11 @@ class _Problem:
 
         ``S = (1 - tau mu Laplace)^{-1}`` by DCT-II in float32 (phi is a distance of a few pixels:
         its rounding, ~1e-6 px, is far below what matters).  In step (b) the force acts within the
-        band only, so that no pixel far from Gamma (at +-band) flips on its own; and when
+        band only, so that no pixel far from Gamma (at +-band) flips on its own; when
         ``tau mu <= 1/4`` the explicit step ``phi + tau mu Laplace(phi) - tau f`` is stable and has
         the same fixed point, so it is taken on the band's pixels alone (O(band) instead of a DCT
-        pair over the image).  ``force``: the constants from :meth:`force`.
+        pair over the image), and otherwise S is solved on the band (:meth:`_band_smooth`) when
+        that is cheaper than the DCT pair.  ``force``: the constants from :meth:`force`.
         """
         if not smooth_force and tau * self.params.mu <= 0.25:
             return self._explicit_step(state, force, tau)
