@@ -333,15 +333,13 @@ def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
     if positive.all():  # the whole image inside: the flow starts from the domain's edge
         return _domain_edge_distance(shape, band, dtype).phi
     rows, cols = np.divmod(np.flatnonzero(_front_pixels(positive)), shape[1])
-    pieces = [_densify(np.asarray(c, dtype=np.float64), 0.5) for c in curves]
-    starts = np.concatenate(pieces)
-    ends = np.concatenate([np.roll(piece, -1, axis=0) for piece in pieces])
+    vertices = [np.asarray(c, dtype=np.float64) for c in curves]
+    starts, first, size = _densify(np.concatenate(vertices), np.array([len(c) for c in vertices]), 0.5)
     # the neighbours of piece i along its curve are i - 1 and i + 1, cyclically
-    offsets = np.cumsum([0] + [len(piece) for piece in pieces])
     index = np.arange(len(starts))
-    first = np.repeat(offsets[:-1], np.diff(offsets))
-    size = np.repeat(np.diff(offsets), np.diff(offsets))
-    links = np.column_stack([first + (index - first - 1) % size, first + (index - first + 1) % size])
+    after = first + (index - first + 1) % size
+    links = np.column_stack([first + (index - first - 1) % size, after])
+    ends = starts[after]
     points = np.column_stack([rows, cols]).astype(np.float64)
     count = min(8, len(starts))
     _, near = scipy.spatial.cKDTree(0.5 * (starts + ends)).query(points, k=count)
@@ -352,10 +350,19 @@ def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
     return _propagate(positive, rows, cols, segments, nearest, band, sweeps=2, dtype=dtype).phi
 
 
-def _densify(curve, spacing):
-    end = np.roll(curve, -1, axis=0)
-    length = np.hypot(*(end - curve).T)
+def _densify(points, lengths, spacing):
+    """Closed curves (stacked ``points``, ``lengths`` vertices each) with every edge split into
+    pieces of at most ``spacing``: the new stacked points, and for each its curve's first index and
+    size in the new stack (all curves at once, no loop over them)."""
+    curve_first = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    curve_size = np.repeat(lengths, lengths)
+    index = np.arange(len(points))
+    end = points[curve_first + (index - curve_first + 1) % curve_size]
+    length = np.hypot(*(end - points).T)
     count = np.maximum(np.ceil(length / spacing).astype(np.intp), 1)
-    edge = np.repeat(np.arange(len(curve)), count)
+    edge = np.repeat(index, count)
     t = (np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)) / count[edge]
-    return curve[edge] + t[:, None] * (end - curve)[edge]
+    dense = points[edge] + t[:, None] * (end - points)[edge]
+    new_lengths = np.add.reduceat(count, np.cumsum(lengths) - lengths)
+    return (dense, np.repeat(np.cumsum(new_lengths) - new_lengths, new_lengths),
+            np.repeat(new_lengths, new_lengths))
