@@ -140,7 +140,6 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     """
     settings = _parse_options(options)
     shape = tuple(model.shape)
-    problem = _Problem(model, params, settings)
     if isinstance(init, str) and init == "checkerboard":
         # squares of at most a quarter of the smaller side: a small image gets several of them
         period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
@@ -148,7 +147,10 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     else:
         phi = initial_level_set(init, shape, band=settings["band"], values=model.values,
                                 dtype=np.float32)
+    # after the start: its temporaries (the default start's) are gone before the work arrays come
+    problem = _Problem(model, params, settings)
     state = problem.redistance(phi)
+    del phi  # the start's array: the state holds its own
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
     # step: pixels of travel at the typical force; ceiling: the largest step of this stage.  The

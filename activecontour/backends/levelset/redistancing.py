@@ -9,6 +9,7 @@ from activecontour.backends.levelset.zeroset import _cell_segments, _change_cell
 from activecontour.raster import rasterize
 
 _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in float32
+_MIN_DISTANCE = 1e-6  # pixels: the smallest |phi| a reinitialisation writes (see _propagate)
 _ONE_SWEEP_BAND = 8.0  # bands up to this half-width (pixels) need one sweep per ring
 _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 
@@ -303,9 +304,12 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     scratch.clear(framed)
     flat = (r - 1) * n + (c - 1)
     inside = positive.ravel()[flat]
-    # an inside pixel keeps a positive value (a distance that rounds to 0 would move it out): the
-    # sign pattern, and so the cells Gamma crosses, are those of the input
-    signed = np.where(inside, np.maximum(distance, np.finfo(np.float32).tiny), -distance)
+    # every pixel keeps its side, at least _MIN_DISTANCE from Gamma: the sign pattern, and so the
+    # cells Gamma crosses, are those of the input (a distance that rounds to 0 would move an
+    # inside pixel out), and no crossing lies closer to a pixel centre than the coordinates
+    # resolve (marching squares on values ~1e-20 orients its segments by rounding errors)
+    distance = np.maximum(distance, _MIN_DISTANCE)
+    signed = np.where(inside, distance, -distance)
     phi = _clipped(positive, band, dtype)
     phi.ravel()[flat] = np.clip(signed, -band, band)
     return _Redistanced(phi, positive, flat, signed, None, None)
