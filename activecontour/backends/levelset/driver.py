@@ -178,13 +178,16 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
         for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
-            trial = problem.redistance(problem.step(state, force, tau, smooth_force), previous=state)
+            stepped = problem.step(state, force, tau, smooth_force)
+            trial = problem.redistance(stepped, previous=state)
+            problem.recycle(stepped)
             evaluation = problem.evaluate(trial)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
             # does it has flattened phi rather than followed the force.
             degenerate = smooth_force and (not trial.positive.any() or trial.positive.all())
             if evaluation.energy <= current.energy and not degenerate:
                 break
+            problem.recycle(trial.phi)
             step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
             if not smooth_force:
@@ -203,6 +206,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             n_iter += 1
             # mean normal displacement of Gamma in this iteration, pixels: swept area over length
             moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+            problem.recycle(state.phi)
             state, current = trial, evaluation
             energies.append(current.energy)
             streak = streak + 1 if attempt == 0 else 0
@@ -210,7 +214,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
                 flow_state = FlowState(
                     iteration=n_iter, contours=level_set_contours(state.phi), energy=current.energy,
                     c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
-                    phi=state.phi,
+                    phi=state.phi.copy(),  # the backend reuses its arrays
                 )
                 if callback(flow_state):
                     status = 2

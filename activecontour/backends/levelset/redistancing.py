@@ -77,14 +77,16 @@ def signed_distance(phi, band=np.inf):
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
 
-def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None):
+def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=None):
     """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``.
 
     ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  ``previous``: a
     :class:`_Redistanced` that phi was stepped from; the front is then searched only next to the
     previous front and the pixels that changed side (a front pixel whose side and whose
     neighbours' sides are unchanged was a front pixel before), which gives the same front and
-    cells as a search over the image at the cost of two passes instead of a dozen.
+    cells as a search over the image at the cost of two passes instead of a dozen.  ``out``: with
+    ``previous``, an array of phi's shape and ``dtype`` to write the result into (a copy of the
+    previous state with its band and the switched pixels reset, rather than a new array).
     """
     positive = phi > 0
     if previous is None:
@@ -103,8 +105,15 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None):
     # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
     # of a narrow band, one sweep and the walk along Gamma are
     sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
+    base = None
+    if previous is not None and out is not None:
+        # beyond the previous band and the switched pixels phi is +-band on the same side as before
+        base = out
+        np.copyto(base, previous.phi)
+        reset = np.concatenate([previous.near_flat, switched])
+        base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
     state = _propagate(positive, rows, cols, segments, nearest, band, sweeps,
-                       dtype=dtype, scratch=scratch)
+                       dtype=dtype, scratch=scratch, base=base)
     state.cells, state.front = cells, front
     return state
 
@@ -278,7 +287,7 @@ class _Segments:
 
 
 def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np.float64,
-               scratch=None):
+               scratch=None, base=None):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
     eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
     :func:`activecontour._kernels.grow_band`, O(pixels in the band))."""
@@ -310,7 +319,7 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     # resolve (marching squares on values ~1e-20 orients its segments by rounding errors)
     distance = np.maximum(distance, _MIN_DISTANCE)
     signed = np.where(inside, distance, -distance)
-    phi = _clipped(positive, band, dtype)
+    phi = _clipped(positive, band, dtype) if base is None else base  # base: +-band beyond the band
     phi.ravel()[flat] = np.clip(signed, -band, band)
     return _Redistanced(phi, positive, flat, signed, None, None)
 

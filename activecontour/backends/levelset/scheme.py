@@ -62,10 +62,22 @@ class _Problem:
         self.wave_r = (4.0 * np.sin(np.pi * np.arange(m) / (2.0 * m)) ** 2).astype(np.float32)
         self.wave_c = (4.0 * np.sin(np.pi * np.arange(n) / (2.0 * n)) ** 2).astype(np.float32)
         self.scratch = _Scratch(self.shape)
+        self._spare = []  # image-sized float32 arrays to reuse (a new one faults in every page)
+
+    def take(self):
+        """An image-sized float32 array to write into (contents undefined)."""
+        return self._spare.pop() if self._spare else np.empty(self.shape, dtype=np.float32)
+
+    def recycle(self, array):
+        """Hand back an image-sized float32 array that nothing refers to any more."""
+        if array is not None and array.shape == self.shape and array.dtype == np.float32 \
+                and len(self._spare) < 3:
+            self._spare.append(array)
 
     def redistance(self, phi, previous=None):
         """The reinitialised state of phi (float32); ``previous``: the state phi was stepped from."""
-        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, previous=previous)
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, previous=previous,
+                           out=None if previous is None else self.take())
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
@@ -159,7 +171,7 @@ class _Problem:
             near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
             rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
             return rhs
-        rhs = np.empty(self.shape, dtype=np.float32)
+        rhs = self.take()
         for start in range(0, m, self._BLOCK_ROWS):
             stop = min(start + self._BLOCK_ROWS, m)
             rhs[start:stop] = state.phi[start:stop] - tau * self.force_rows(start, stop, force)
@@ -223,7 +235,8 @@ class _Problem:
             z = residual / diagonal
             rz, previous = dot(residual, z), rz
             direction = z + (rz / previous) * direction
-        out = state.phi.copy()
+        out = self.take()
+        np.copyto(out, state.phi)
         out.ravel()[flat] = x
         return out
 
@@ -250,7 +263,8 @@ class _Problem:
         moved = centre + (tau * self.params.mu) * laplace
         near = np.abs(centre) < self.band
         moved[near] -= tau * self.force_at(flat[near], force)
-        out = state.phi.copy()
+        out = self.take()
+        np.copyto(out, state.phi)
         out.ravel()[flat] = moved
         return out
 
