@@ -86,12 +86,15 @@ def _map_in_pool(function, items, jobs, start_method):
     pool, pending = None, {}
     try:
         while True:
-            if pool is None:
-                pool = _new_pool(jobs, start_method, stop)
-            # one item per worker and none queued: an interrupt then stops every item in flight,
-            # and a generator is not read ahead of the workers
-            for index, item in itertools.islice(numbered, jobs - len(pending)):
-                pending[_submit(pool, function, item)] = index
+            # the workers start (on a submit, for "spawn" and "forkserver") with Ctrl-C held back,
+            # not in the middle of their imports; one held meanwhile is raised here afterwards
+            with _interrupts_held():
+                if pool is None:
+                    pool = _new_pool(jobs, start_method, stop)
+                # one item per worker and none queued: an interrupt then stops every item in
+                # flight, and a generator is not read ahead of the workers
+                for index, item in itertools.islice(numbered, jobs - len(pending)):
+                    pending[_submit(pool, function, item)] = index
             if not pending:
                 break
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -121,9 +124,8 @@ def _map_in_pool(function, items, jobs, start_method):
 def _new_pool(jobs, start_method, stop):
     from concurrent.futures import ProcessPoolExecutor
 
-    with _interrupts_held():  # the workers start with Ctrl-C held back, not in the middle of it
-        return ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_start_worker,
-                                   initargs=(stop, os.getpid()))
+    return ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_start_worker,
+                               initargs=(stop, os.getpid()))
 
 
 def _stop_workers(pool):
