@@ -78,6 +78,7 @@ _PARAMETER_OPTIONS = {
     "c_in": "--c-in",
     "c_out": "--c-out",
     "color": "--color",
+    "inside": "--inside",
 }
 
 
@@ -199,6 +200,11 @@ def _output_options():
             "dest": "formats", "type": _formats, "default": ["json"], "metavar": "FMT[,FMT...]",
             "help": f"contour file formats, a comma-separated list of {', '.join(CONTOUR_FORMATS)} "
                     "(default: json)"}),
+        (("--objects",), {
+            "dest": "objects", "type": _object_formats, "default": [], "metavar": "FMT[,FMT...]",
+            "help": "object files, one id per object: labels (16-bit PNG label image), labels-tif, "
+                    "geojson (a Feature per object with its measurements), roi (ImageJ/Fiji ROI "
+                    "set .zip), csv (the measurements) (default: none)"}),
         (("--line-color", "--overlay-color"), {
             "dest": "line_color", "default": "auto", "metavar": "COLOR",
             "help": "colour of the contour in the overlay: auto (one that stands out from the "
@@ -257,6 +263,9 @@ def _add_parameter_options(parser):
     group.add_argument("--color", choices=("gray", "vector"), default=defaults["color"],
                        help="colour images: convert to gray or use every channel "
                        "(default: %(default)s)")
+    group.add_argument("--inside", choices=_inside_choices(), default=defaults["inside"],
+                       help="which region is the objects: auto (the class covering less of the "
+                       "image border), bright or dark (default: %(default)s)")
     init = parser.add_argument_group(
         "initial curve",
         "default: the outlines of the two-means (6.38 without its length term) threshold of the "
@@ -290,7 +299,7 @@ def _run_segment(args):
     left_out = []
     # folders and patterns expanded; a missing file stops here
     images = find_images(*args.images, left_out=left_out)
-    plans = _plan_outputs(images, args.output, args.formats)
+    plans = _plan_outputs(images, args.output, args.formats, args.objects)
     overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
     if left_out and not args.quiet:
@@ -300,7 +309,7 @@ def _run_segment(args):
     _sweep_temporaries(plans)
     batch = _Batch(init, init_description, settings, args.formats, overlay,
                    protect=[p for p, _ in plans], output=args.output, quiet=args.quiet,
-                   max_pixels=args.max_pixels)
+                   max_pixels=args.max_pixels, objects=args.objects)
     jobs = min(args.jobs or default_jobs(), len(plans))
     show_progress = not args.quiet and _is_terminal(sys.stderr)
     try:
@@ -368,12 +377,14 @@ class _Batch:
     """What every image of a ``segment`` run shares: the init, the settings and the outputs."""
 
     def __init__(self, init, init_description, settings, formats, overlay, *, protect, output, quiet,
-                 max_pixels):
+                 max_pixels, objects=()):
         self.init = init
         self.init_description = init_description
         self.settings = settings
         self.formats = formats
         self.overlay = overlay  # keyword arguments of io.save_result: color, thickness
+        #: object file formats (:data:`activecontour.object_formats.OBJECT_FORMATS`)
+        self.objects = objects
         self.protect = protect
         self.output = output
         self.quiet = quiet
@@ -407,7 +418,8 @@ def _segment_one(image_path, stem, batch, progress=None):
     }
     _make_directory(Path(stem).parent, batch.created)
     written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
-                             protect=batch.protect, **batch.overlay)
+                             protect=batch.protect, objects=batch.objects,
+                             **batch.overlay)
     return _summary(Path(image_path).name, result, elapsed, written)
 
 
@@ -612,7 +624,7 @@ class _ContourInit(list):
         self.image_shape = tuple(shape) if shape is not None else None
 
 
-def _plan_outputs(images, output, formats):
+def _plan_outputs(images, output, formats, objects=()):
     """[(image path, output stem)], after checking no output overwrites an input or another one.
 
     The stems come from :func:`activecontour.io.output_stem`: inside the output directory,
@@ -631,7 +643,7 @@ def _plan_outputs(images, output, formats):
         if directory.is_dir() and not os.access(directory, os.W_OK | os.X_OK):
             raise UsageError(f"the output directory {os.fspath(directory)!r} is not writable")
         stem = output_stem(directory, image_path)
-        for path in output_paths(stem, formats):
+        for path in output_paths(stem, formats, objects):
             key = os.path.realpath(path)
             if key in inputs:
                 raise UsageError(
@@ -926,6 +938,23 @@ def _formats(text):
             f"unknown format {unknown[0]!r}; choose from {', '.join(CONTOUR_FORMATS)}"
         )
     return list(dict.fromkeys(formats))
+
+
+def _object_formats(text):
+    from activecontour.object_formats import OBJECT_FORMATS
+
+    formats = [f.strip().lower() for f in text.split(",") if f.strip()]
+    unknown = [f for f in formats if f not in OBJECT_FORMATS]
+    if not formats or unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown object format {(unknown or [text])[0]!r}; choose from {', '.join(OBJECT_FORMATS)}")
+    return list(dict.fromkeys(formats))
+
+
+def _inside_choices():
+    from activecontour.segment import INSIDE
+
+    return INSIDE
 
 
 def _int_at_least(low):
