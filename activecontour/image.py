@@ -106,7 +106,7 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
     if os.path.isdir(path):
         raise ValueError(f"image path is a directory, not a file: {path!r}")
     if max_pixels is not None:
-        _check_size(path, _declared_size(path), max_pixels)
+        _check_size(path, _declared_pixels(path), max_pixels)
     image = _read_opencv(path)
     if image is None:  # a format or variant OpenCV does not read
         import skimage.io
@@ -121,27 +121,27 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
     if image.ndim not in (2, 3) or image.size == 0:
         raise ValueError(f"image {path!r} is not a 2-D image (shape {image.shape})")
     if max_pixels is not None:
-        _check_size(path, image.shape[:2], max_pixels)
+        rows, cols = image.shape[:2]
+        _check_size(path, (rows * cols, f"{rows} x {cols} = {rows * cols:,}"), max_pixels)
     return image
 
 
-def _check_size(path, size, max_pixels):
-    if size is None:
-        return
-    rows, cols = size
-    if rows * cols > max_pixels:
-        raise SizeLimitError(f"image {path!r} has {rows} x {cols} = {rows * cols:,} pixels, more than "
-                             f"the limit of {max_pixels:,} (max_pixels)")
+def _check_size(path, declared, max_pixels):
+    """Refuse ``declared = (pixels, how to say it)`` over ``max_pixels``; None passes."""
+    if declared is not None and declared[0] > max_pixels:
+        raise SizeLimitError(f"image {path!r} has {declared[1]} pixels, more than the limit of "
+                             f"{max_pixels:,} (max_pixels)")
 
 
-def _declared_size(path):
-    """(rows, cols) as the file's header declares them, without decoding the pixels; None when the
-    header cannot be read this way (the size is then checked after decoding)."""
+def _declared_pixels(path):
+    """``(pixels, how to say it)`` as the file's header declares them, without decoding the
+    pixels; None when the header cannot be read this way (the size is then checked after
+    decoding)."""
     with open(path, "rb") as handle:
         head = handle.read(24)
     if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
-        width, height = struct.unpack(">II", head[16:24])
-        return height, width
+        cols, rows = struct.unpack(">II", head[16:24])
+        return rows * cols, f"{rows} x {cols} = {rows * cols:,}"
     try:
         from PIL import Image
     except ModuleNotFoundError:  # pragma: no cover - Pillow comes with scikit-image
@@ -150,13 +150,12 @@ def _declared_size(path):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # Pillow's own (lower) decompression-bomb warning
             with Image.open(path) as opened:
-                width, height = opened.size
-    except Image.DecompressionBombError:
-        # over twice Pillow's limit; Pillow does not say by how much
-        return 1, 2 * Image.MAX_IMAGE_PIXELS + 1
+                cols, rows = opened.size
+    except Image.DecompressionBombError:  # over twice Pillow's own limit, by how much it does not say
+        return 2 * Image.MAX_IMAGE_PIXELS + 1, f"more than {2 * Image.MAX_IMAGE_PIXELS:,}"
     except Exception:  # not a format Pillow knows, or damaged: the readers below say so
         return None
-    return height, width
+    return rows * cols, f"{rows} x {cols} = {rows * cols:,}"
 
 
 def _read_opencv(path):

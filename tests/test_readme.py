@@ -66,3 +66,13 @@ def test_readme_summary_line_is_what_the_first_command_prints(tmp_path, monkeypa
     timing = r"time=\d+\.\d\ds"
     assert re.sub(timing, "time=", printed) == re.sub(timing, "time=", line), (
         f"README's summary line should read:\n{printed}")
+
+
+def test_the_gallery_page_shows_figures_the_script_wrote():
+    docs = README.parent / "docs"
+    assert "docs/gallery.md" in README.read_text()
+    page = (docs / "gallery.md").read_text()
+    figures = re.findall(r"!\[[^\]]*\]\((gallery/[^)]+\.png)\)", page)
+    assert len(figures) >= 10 and all((docs / figure).is_file() for figure in figures)
+    assert sum((docs / figure).stat().st_size for figure in figures) < 3e6
+    assert "nuclei" in page and "make_gallery.py" in page
