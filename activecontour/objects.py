@@ -263,6 +263,10 @@ NECK_RATIO = 0.9
 #: Parts whose largest inscribed radius is below this (pixels) are never split off: at that size a
 #: neck is a pixel or two of the boundary's noise.
 MIN_SPLIT_RADIUS = 3.0
+#: A neck must also be this much (pixels) narrower than the thinner part's inscribed radius: the
+#: converged contour wiggles by a fraction of a pixel, which on a ring or a stroke of constant
+#: width makes necks of a few per cent.
+MIN_NECK_DEPTH = 1.0
 
 
 def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPLIT_RADIUS):
@@ -272,10 +276,13 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
     Euclidean distance to the background from every local maximum (an inscribed-circle centre).
     Neighbouring parts are then merged, the pair with the widest neck first, while the half-width
     of the neck between them (the largest distance value on their common border) is at least
-    ``neck_ratio`` times the smaller of their largest inscribed radii, or the smaller radius is
-    below ``min_radius``.  The parts left have a narrow neck between every two of them.  A shape
-    of one piece (a ring, a stroke, a limb on a body) has no neck narrower than the thinner side,
-    so it is never split.
+    ``neck_ratio`` times the smaller of their largest inscribed radii, or within
+    ``MIN_NECK_DEPTH`` pixels of it, or the smaller radius is below ``min_radius``.  The parts
+    left have a narrow neck between every two of them.  Last, a part that is not blob-like
+    (solidity below ``MIN_PART_SOLIDITY`` or aspect above ``MAX_PART_ASPECT``: a body with
+    legs, a bent stroke) takes its neighbours back, until every part is a blob or one is left.
+    A shape of one piece (a ring, a stroke, a limb on a body) has no neck much narrower than its
+    thinner side, or has parts that are no blobs, so it is not split.
 
     The split is applied to the sub-pixel polygon: the parts' pixels, grown over the object's
     bounding box, become cells whose shared borders are straightened (``shapely.coverage_simplify``
@@ -344,7 +351,8 @@ def _neck_parts(region, distance, neck_ratio, min_radius):
         merit = {(i, j): np.inf if min(graph.peak[i], graph.peak[j]) < min_radius
                  else v / min(graph.peak[i], graph.peak[j]) for (i, j), v in graph.saddle.items()}
         pair = max(merit, key=merit.get)
-        if merit[pair] < neck_ratio:
+        thinner = min(graph.peak[pair[0]], graph.peak[pair[1]])
+        if merit[pair] < neck_ratio and graph.saddle[pair] < thinner - MIN_NECK_DEPTH:
             break
         graph.merge(*pair)
     # a part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were a
