@@ -26,13 +26,14 @@ INSIDE = ("auto", "bright", "dark")
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
     "polygon": "activecontour.flow:segment_polygon",
-    "levelset": "activecontour.levelset:segment_levelset",
+    "levelset": "activecontour.backends.levelset:segment_levelset",
 }
 
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", inside="auto", roi=None, separate=True, options=None):
+            color="gray", normalize="range", n_regions=2, inside="auto", roi=None, separate=True,
+            options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -40,10 +41,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     image : ndarray of shape (M, N) or (M, N, C), or a path
         Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
         or the path of an image file (read by :func:`activecontour.image.load_image`).
-    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), or SegmentationResult
+    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), SegmentationResult or str
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
-        starts from a centred circle of radius 3/8 of the smaller side.  The level-set backend also
-        accepts ``"checkerboard"``.
+        (default) starts from the outlines of the two-means threshold of the lightly blurred image
+        (the minimiser of (6.38) without its length term), so objects anywhere in the image are in
+        the start (:func:`activecontour.initial.default_init`).  ``"grid"``: small circles all
+        over the image; the level-set backend also accepts ``"checkerboard"``.
     backend : {"polygon", "levelset"}
         ``"polygon"``: the book's gradient flow (6.30)-(6.31) of a polygon with the H^1 velocity
         (6.39)-(6.40), sub-pixel.  ``"levelset"``: the same functional on the pixel grid.
@@ -76,6 +79,16 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         (default), the dtype's range, or none (see :func:`activecontour.image.normalize_image`).
         ``result.c_in``/``c_out`` are in these normalised units; ``result.c_in_image`` and
         ``result.c_out_image`` in the input's own.
+    n_regions : int
+        The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
+        the sum of each region's fit term plus mu times the length of the interfaces between
+        regions, each counted once (:meth:`ChanVeseParameters.class_forms`).  ``result.classes``
+        holds the region of every pixel (0 = the background, the region covering most of the
+        image border; the others by increasing mean intensity), ``result.constants`` their
+        constants; the inside (``mask``, ``contours``) is every region but the background.
+        K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
+        :mod:`activecontour.backends.labelfield`), started from the global K-means of the
+        intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
     inside : {"auto", "bright", "dark"}
         Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
         the class that covers less of the image border, and given curves are the inside as drawn.
@@ -95,7 +108,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
     options : dict, optional
         Backend-specific settings, documented by the backend function
-        (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
+        (:func:`activecontour.flow.segment_polygon`,
+        :func:`activecontour.backends.levelset.segment_levelset`).
 
     Returns
     -------
@@ -119,13 +133,19 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise TypeError(f"separate must be True or False, got {separate!r}")
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+    _check_regions(n_regions, backend, c_in, c_out, options, roi)
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
-    module_name, function_name = BACKENDS[backend].split(":")
-    solver = getattr(importlib.import_module(module_name), function_name)
-    _check_options(solver, backend, options or {})
+    if n_regions > 2:
+        from activecontour.backends.labelfield import segment_labels
+
+        solver = functools.partial(segment_labels, n_regions=int(n_regions))
+    else:
+        module_name, function_name = BACKENDS[backend].split(":")
+        solver = getattr(importlib.import_module(module_name), function_name)
+        _check_options(solver, backend, options or {})
     solve = functools.partial(
         _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
         inside=inside, normalize=normalize, callback=callback,
@@ -151,7 +171,9 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         pixels = np.moveaxis(pixels, 0, -1)
     result.object_contours, result.labels, result.objects = find_objects(
         result.contours, shape, pixels, separate=bool(separate))
-    result.classes = result.mask.astype(np.int32)
+    if result.classes is None:  # two regions: the inside is region 1
+        result.classes = result.mask.astype(np.int32)
+        result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
     return result
 
 
@@ -203,7 +225,7 @@ def _input_units(image, normalize, low, span):
 
 def _make_inside(result, inside, model, params):
     """The result, or its complement when the inside is not the class ``inside`` asks for."""
-    if inside == "auto" or not result.contours:
+    if inside == "auto" or not result.contours or result.classes is not None:  # N regions: as found
         return result
     brighter = np.mean(np.asarray(result.c_in)) > np.mean(np.asarray(result.c_out))
     if brighter == (inside == "bright"):
@@ -261,3 +283,24 @@ def _check_options(solver, backend, options):
     if unknown:
         raise TypeError(f"unknown option(s) {', '.join(map(repr, unknown))} for backend {backend!r}; "
                         f"the valid options are {', '.join(valid)}")
+
+
+def _check_regions(n_regions, backend, c_in, c_out, options, roi):
+    if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
+        raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
+    if n_regions < 2:
+        raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
+    if n_regions == 2:
+        return
+    if backend != "levelset":
+        raise ValueError(f"n_regions={n_regions} needs backend='levelset' (backend={backend!r} "
+                         f"segments two regions)")
+    if c_in is not None or c_out is not None:
+        raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
+                         f"n_regions={n_regions}")
+    if roi is not None:
+        raise ValueError(f"roi restricts the two-region model; it is not available with "
+                         f"n_regions={n_regions}")
+    if options:
+        raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
+                        "takes none")

@@ -57,6 +57,7 @@ import numpy as np
 
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
+from activecontour.image_files import display_rgb
 from activecontour.initial import initial_curves
 from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
@@ -186,7 +187,7 @@ class Viewer:
         self.color = color
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         self.inside = inside  # checked by the library on the first run
-        display = normalize_image(self.image, color="vector")  # validates the image, too
+        display = display_rgb(self.image)  # validates the image, too
         self.shape = display.shape[:2]
         # mu="auto": the slider shows the value segment(mu="auto") would use, until it is moved
         self._mu_auto = is_auto(settings["mu"])
@@ -391,7 +392,7 @@ class Viewer:
             return False
         try:
             image = load_image(Path(path).expanduser())
-            display = normalize_image(image, color="vector")
+            display = display_rgb(image)
         except (OSError, ValueError, TypeError) as exc:
             self._set_message(f"image not opened: {_one_line(exc)}")
             return False
