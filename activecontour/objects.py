@@ -106,7 +106,7 @@ def find_objects(contours, shape, image=None, *, separate=True):
     table : dict of str to ndarray
         :func:`measure`, with a ``class`` column.
     """
-    by_class = [contours] if not contours or np.ndim(contours[0]) == 2 else list(contours)
+    by_class = [contours] if not contours or isinstance(contours[0], np.ndarray) else list(contours)
     objects, classes = [], []
     for k, curves in enumerate(by_class):
         found = group_curves(curves)

@@ -250,3 +250,21 @@ def test_touching_clumps_f1(backend):
     f1 = 2 * counts[0] / (2 * counts[0] + counts[1] + counts[2])
     assert f1 >= 0.9
     assert 2 * components[0] / (2 * components[0] + components[1] + components[2]) < 0.5
+
+
+def test_n_regions_objects_are_pieces_of_each_class():
+    bright, dim = synthetic.disk((40, 40), 14), synthetic.disk((40, 66), 13)  # touching, d = 26 < 27
+
+    def values(r, c):
+        return np.where(bright(r, c), 1.0, np.where(dim(r, c), 0.5, 0.0))
+
+    # no anti-aliasing: an edge pixel between 1 and 0 would read as the middle class
+    image, _ = synthetic.render(synthetic.union(bright, dim), (80, 110), values=values, supersample=1)
+    image = synthetic.add_noise(image, 0.05, seed=6)
+    res = ac.segment(image, n_regions=3, backend="levelset", separate=False)
+    assert res.labels.max() == 2
+    np.testing.assert_array_equal(res.labels > 0, res.classes > 0)
+    by_class = dict(zip(res.objects["class"], res.objects["area"], strict=True))
+    assert by_class[2] == pytest.approx(np.pi * 14**2, rel=0.05)  # class 2: the brighter one
+    assert by_class[1] == pytest.approx(np.pi * 13**2, rel=0.05)
+    assert res.labels[40, 40] != res.labels[40, 66]
