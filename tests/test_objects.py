@@ -213,7 +213,15 @@ def _strokes():
     return image
 
 
+def _slit_disk():
+    """A disk with a slit from the left to 3/10 of its diameter from the right: a one-sided notch
+    whose tip makes a neck, but no waist (the right side is convex)."""
+    disk, slit = synthetic.disk((50, 50), 25), synthetic.rectangle((47, 20), (53, 65))
+    return synthetic.render(lambda r, c: disk(r, c) & ~slit(r, c), (100, 100))[0]
+
+
 SINGLE_OBJECTS = {
+    "slit disk": _slit_disk,
     "horse": lambda: (~__import__("skimage.data").data.horse()).astype(float),
     "strokes": _strokes,
     "ring": lambda: synthetic.render(synthetic.annulus((60, 60), 25, 35), (120, 120))[0],
