@@ -190,6 +190,16 @@ def test_touching_pair_is_two_objects_at_every_contact_width(distance):
     assert ac.segment(image, separate=False).labels.max() == 1
 
 
+@pytest.mark.parametrize("distance", [24.0, 16.0])
+def test_touching_pair_is_two_objects_from_the_level_set_too(distance):
+    image, truth = _pair(distance)
+    res = ac.segment(image, backend="levelset")
+    from activecontour.metrics import match_instances
+
+    assert match_instances(res.labels, truth)["tp"] == 2 and res.labels.max() == 2
+    _no_overlap_and_union_is_region(res)
+
+
 def _lens(radius, distance):
     """Area of the overlap of two disks of ``radius`` with centres ``distance`` apart."""
     if distance >= 2 * radius:
