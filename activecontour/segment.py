@@ -105,7 +105,9 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     separate : bool
         Objects that touch get their own ids in ``result.labels`` (split along the necks of the
         inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
-        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
+        piece.  With ``n_regions > 2`` an object is a piece of one class (touching pieces of two
+        classes are two objects; ``result.objects["class"]`` says which).  ``result.mask``,
+        ``result.contours`` and the energy do not depend on it.
     options : dict, optional
         Backend-specific settings, documented by the backend function
         (:func:`activecontour.flow.segment_polygon`,
@@ -169,8 +171,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     pixels = np.asarray(image)
     if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
+    # objects are the connected pieces of each non-background region (N regions: of each class,
+    # traced on the label field's own pixel grid)
+    by_class = result.contours if result.classes is None else [
+        mask_to_curves(result.classes == k) for k in range(1, int(n_regions))]
     result.object_contours, result.labels, result.objects = find_objects(
-        result.contours, shape, pixels, separate=bool(separate))
+        by_class, shape, pixels, separate=bool(separate))
     if result.classes is None:  # two regions: the inside is region 1
         result.classes = result.mask.astype(np.int32)
         result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
