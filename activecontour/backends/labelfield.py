@@ -122,36 +122,102 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     values = model.values
     shape = tuple(model.shape)
     classes = order_classes(_initial(init, values, n_regions, shape), values, n_regions)
-    wall = np.zeros(shape, dtype=np.float32)
-    if params.mu > 0:  # a region other than the background pays for the image border it covers
-        for edge in (wall[0], wall[-1], wall[:, 0], wall[:, -1]):
-            edge += np.float32(params.mu)
-    current = evaluate_partition(model, class_boundary(classes), params, n_regions)
-    energies, status = [current.energy], 1
-    for n_iter in range(1, max_num_iter + 1):
-        cost = np.empty((n_regions,) + shape, dtype=np.float32)
-        for k, form in enumerate(params.class_forms(_pixel_constants(classes, values, n_regions))):
-            cost[k] = form.density(values)
-            if k > 0:
-                cost[k] += wall
-        new, changed = _sweep(classes, cost, params.mu)
-        if changed == 0:
-            n_iter -= 1
-            status = 0
+    run = _Descent(model, params, n_regions, max_num_iter, tol, callback)
+    classes, status = run.descend(classes)
+    # A region the descent emptied (its start sat on edges, or K-means spent it on a large noisy
+    # region) gets a second chance: split each region at its own 2-means threshold in turn, descend,
+    # and keep the split of lowest J if it is lower than before (else the region stays empty).
+    for _ in range(n_regions):
+        empty = np.flatnonzero(np.bincount(classes.ravel(), minlength=n_regions) == 0)
+        if status != 0 or empty.size == 0:
             break
-        classes = new
-        current = evaluate_partition(model, class_boundary(classes), params, n_regions)
-        energies.append(current.energy)
-        if callback is not None and callback(FlowState(n_iter, [], current.energy, None, None, shape,
-                                                       max_num_iter, phi=np.where(classes > 0, 1.0, -1.0))):
-            status = 2
+        splits = [_split(classes, values, region, empty[0])
+                  for region in np.flatnonzero(np.bincount(classes.ravel(), minlength=n_regions) > 1)]
+        splits = sorted((split for split in splits if split is not None), key=lambda split: -split[0])
+        for _, start in splits:  # the most significant first; the first that lowers J stays
+            trial, trial_status = run.descend(start, record=False)
+            energy = evaluate_partition(model, class_boundary(trial), params, n_regions).energy
+            if energy < run.energies[-1]:
+                classes, status = trial, trial_status
+                run.energies.append(energy)
+                break
+        else:
             break
-        if changed <= tol * max(current.length, 1.0):
-            status = 0
-            break
-    else:
-        n_iter = max_num_iter
-    return _result(model, params, classes, n_regions, energies, n_iter, status)
+    return _result(model, params, classes, n_regions, run.energies, run.n_iter, status)
+
+
+class _Descent:
+    """Alternating constants (6.42) and sweeps (:func:`_sweep`) until no pixel changes."""
+
+    def __init__(self, model, params, n_regions, max_num_iter, tol, callback):
+        self.model, self.params, self.n_regions = model, params, n_regions
+        self.max_num_iter, self.tol, self.callback = max_num_iter, tol, callback
+        shape = tuple(model.shape)
+        self.wall = np.zeros(shape, dtype=np.float32)
+        if params.mu > 0:  # a region other than the background pays for the image border it covers
+            for edge in (self.wall[0], self.wall[-1], self.wall[:, 0], self.wall[:, -1]):
+                edge += np.float32(params.mu)
+        self.energies, self.n_iter = [], 0
+
+    def descend(self, classes, record=True):
+        """Returns the labels and the status (0 converged, 1 out of iterations, 2 callback)."""
+        model, params, n_regions = self.model, self.params, self.n_regions
+        values = model.values
+        if record:
+            self.energies.append(evaluate_partition(model, class_boundary(classes), params, n_regions).energy)
+        while self.n_iter < self.max_num_iter:
+            cost = np.empty((n_regions,) + tuple(model.shape), dtype=np.float32)
+            for k, form in enumerate(params.class_forms(_pixel_constants(classes, values, n_regions))):
+                cost[k] = form.density(values)
+                if k > 0:
+                    cost[k] += self.wall
+            new, changed = _sweep(classes, cost, params.mu)
+            if changed == 0:
+                return classes, 0
+            classes = new
+            self.n_iter += 1
+            if record:
+                current = evaluate_partition(model, class_boundary(classes), params, n_regions)
+                self.energies.append(current.energy)
+                if self.callback is not None and self.callback(FlowState(
+                        self.n_iter, [], current.energy, None, None, tuple(model.shape), self.max_num_iter,
+                        phi=np.where(classes > 0, 1.0, -1.0))):
+                    return classes, 2
+                if changed <= self.tol * max(current.length, 1.0):
+                    return classes, 0
+        return classes, 1
+
+
+def _split(classes, values, region, label):
+    """Give ``label`` to the pixels of ``region`` that stand out from it: (weight, labels) with
+    the sum of their squared deviations, or None.
+
+    The intensities are smoothed within the region (normalised convolution: no neighbouring
+    region's edge leaks in); a pixel stands out when it lies more than 3 robust standard deviations
+    (1.4826 MAD) from the region's median, on the side (above or below) whose deviations weigh
+    more.  Not a 2-means split: on a large noisy region 2-means halves the noise, whatever small
+    structure the region hides.
+    """
+    import cv2
+
+    member = classes == region
+    weight = member.astype(np.float32)
+    gray = values.mean(axis=2).astype(np.float32) * weight
+    blur = {"ksize": (0, 0), "sigmaX": _INIT_SMOOTHING, "borderType": cv2.BORDER_REPLICATE}
+    smooth = cv2.GaussianBlur(gray, **blur) / np.maximum(cv2.GaussianBlur(weight, **blur), 1e-6)
+    inside = smooth[member]
+    centre = np.median(inside)
+    spread = 1.4826 * np.median(np.abs(inside - centre))
+    deviation = smooth - centre
+    upper = member & (deviation > 3.0 * spread) & (deviation > 0)
+    lower = member & (deviation < -3.0 * spread) & (deviation < 0)
+    weight = max(np.sum(deviation[upper] ** 2), np.sum(deviation[lower] ** 2))
+    side = upper if np.sum(deviation[upper] ** 2) >= np.sum(deviation[lower] ** 2) else lower
+    if not side.any():
+        return None
+    out = classes.copy()
+    out[side] = label
+    return weight, out
 
 
 def _initial(init, values, n_regions, shape):
@@ -217,7 +283,9 @@ def _sweep(classes, cost, mu):
     """
     m, n = classes.shape
     classes = classes.copy()
-    prefers_other = np.argmin(cost, axis=0) != classes
+    # an interior pixel pays at least 4 corner cuts (half of them at the image border) to change
+    own = np.take_along_axis(cost, classes[None].astype(np.intp), axis=0)[0]
+    prefers_other = own - cost.min(axis=0) > np.float32(2.0 * _HALF * mu)
     changed = 0
     for pi in range(2):
         for pj in range(2):
