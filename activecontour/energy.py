@@ -42,6 +42,7 @@ __all__ = [
     "chan_vese_energy",
     "evaluate",
     "evaluate_partition",
+    "partition_load",
     "partition_moments",
     "region_moments",
     "stack_curves",
@@ -193,11 +194,41 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None):
         filled = areas > 1e-9
         constants = np.where(filled[:, None], first / np.where(filled, areas, 1.0)[:, None], mean)
     lengths = boundary.length
-    length = float(lengths[boundary.outer >= 0].sum() + lengths[(boundary.outer < 0) & (boundary.inner > 0)].sum())
+    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
+    length = float(lengths[counted].sum())
     forms = params.class_forms(constants)
     energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
                                       in zip(forms, areas, first, second, strict=True))
     return PartitionEvaluation(float(energy), constants, areas, length)
+
+
+def partition_load(model, boundary, params, constants):
+    """The derivative of the N-region functional (:func:`evaluate_partition`, constants fixed) with
+    respect to both ends of every boundary segment, shape (S, 2, 2): ``[s, 0]`` the start's.
+
+    On a segment between regions i (inner) and o (outer) the integrand of (6.41) is ``g_i - g_o``
+    (``g_i`` alone on the image border); the length term is mu's on interfaces and on the border
+    of regions other than the background.  A point shared by several segments (a junction) moves
+    with the sum of their loads.
+    """
+    forms = params.class_forms(constants)
+    zero = forms[0] - forms[0]
+    load = np.zeros((len(boundary.start), 2, 2))
+    pairs = np.unique(np.column_stack([boundary.inner, boundary.outer]), axis=0)
+    for inner, outer in pairs:
+        chosen = np.flatnonzero((boundary.inner == inner) & (boundary.outer == outer))
+        form = forms[inner] - (forms[outer] if outer >= 0 else zero)
+        mu = params.mu if (outer >= 0 or inner > 0) else 0.0
+        points = np.empty((2 * chosen.size, 2))
+        points[0::2], points[1::2] = boundary.start[chosen], boundary.end[chosen]
+        next_index = np.repeat(np.arange(1, len(points), 2), 2)
+        out = np.zeros_like(points)
+        _kernels.edge_integrals(points, next_index, model.values, model.table, 1,
+                                np.ascontiguousarray(form.linear), np.ascontiguousarray(form.square),
+                                form.constant, float(mu), np.zeros(model.n_channels),
+                                np.zeros(model.n_channels), np.zeros(2), out)
+        load[chosen, 0], load[chosen, 1] = out[0::2], out[1::2]
+    return load
 
 
 def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,

@@ -124,26 +124,45 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     classes = order_classes(_initial(init, values, n_regions, shape), values, n_regions)
     run = _Descent(model, params, n_regions, max_num_iter, tol, callback)
     classes, status = run.descend(classes)
-    # A region the descent emptied (its start sat on edges, or K-means spent it on a large noisy
-    # region) gets a second chance: split each region at its own 2-means threshold in turn, descend,
-    # and keep the split of lowest J if it is lower than before (else the region stays empty).
-    for _ in range(n_regions):
-        empty = np.flatnonzero(np.bincount(classes.ravel(), minlength=n_regions) == 0)
-        if status != 0 or empty.size == 0:
+    # Local moves cannot bring back a region the descent emptied (its start sat on edges), nor
+    # free one that duplicates another's level, nor find a small region that K-means missed (it
+    # halves large noisy regions instead).  So at convergence: free a label (an empty region, or
+    # the cheapest merge of two regions by Ward's cost), give it to the pixels that stand out
+    # most significantly in some region (:func:`_split`), descend, and keep the result if J is
+    # lower; most significant split first, until none lowers J.
+    for _ in range(2 * n_regions):
+        if status != 0:
             break
-        splits = [_split(classes, values, region, empty[0])
-                  for region in np.flatnonzero(np.bincount(classes.ravel(), minlength=n_regions) > 1)]
-        splits = sorted((split for split in splits if split is not None), key=lambda split: -split[0])
-        for _, start in splits:  # the most significant first; the first that lowers J stays
-            trial, trial_status = run.descend(start, record=False)
-            energy = evaluate_partition(model, class_boundary(trial), params, n_regions).energy
-            if energy < run.energies[-1]:
-                classes, status = trial, trial_status
-                run.energies.append(energy)
-                break
-        else:
+        trial = _reseed(classes, values, n_regions, run, model, params)
+        if trial is None:
             break
+        classes, status = trial
     return _result(model, params, classes, n_regions, run.energies, run.n_iter, status)
+
+
+def _reseed(classes, values, n_regions, run, model, params, tries=3):
+    """One merge-and-split move (see :func:`segment_labels`): (labels, status) or None."""
+    count = np.bincount(classes.ravel(), minlength=n_regions)
+    empty = np.flatnonzero(count == 0)
+    if empty.size:
+        base, label = classes, int(empty[0])
+    else:
+        gray = values.mean(axis=2).ravel()
+        mean = np.bincount(classes.ravel(), weights=gray, minlength=n_regions) / count
+        pairs = [(count[a] * count[b] / (count[a] + count[b]) * (mean[a] - mean[b]) ** 2, a, b)
+                 for a in range(n_regions) for b in range(a + 1, n_regions)]
+        _, keep, label = min(pairs)
+        base = np.where(classes == label, keep, classes).astype(classes.dtype)
+    splits = [_split(base, values, region, label)
+              for region in np.flatnonzero(np.bincount(base.ravel(), minlength=n_regions) > 1)]
+    splits = sorted((split for split in splits if split is not None), key=lambda split: -split[0])
+    for _, start in splits[:tries]:
+        trial, status = run.descend(start, record=False)
+        energy = evaluate_partition(model, class_boundary(trial), params, n_regions).energy
+        if energy < run.energies[-1] * (1.0 - 1e-9):
+            run.energies.append(energy)
+            return trial, status
+    return None
 
 
 class _Descent:
