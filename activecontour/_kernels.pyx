@@ -456,7 +456,7 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
               int sweeps, const double[::1] start_r, const double[::1] start_c,
               const double[::1] dir_r, const double[::1] dir_c, const double[::1] inverse,
               const Py_ssize_t[:, ::1] links):
-    """The rings of the level set's narrow band (:func:`activecontour.levelset._propagate`).
+    """The rings of the level set's narrow band (:func:`activecontour.backends.levelset.redistancing._propagate`).
 
     ``out[:n_ring]`` holds the front pixels (flat indices of the framed grid, their ``owner`` set);
     each further ring's pixels take the nearest of their neighbours' segments as of the previous

@@ -7,6 +7,7 @@ The parts live in modules named after what they hold; this module gathers their 
 :mod:`~activecontour.image_files`  masks (0/255 PNG) and overlays (the contours drawn on the image)
 :mod:`~activecontour.contour_files`  contour files: JSON, CSV, NPZ and the formats' dispatch
 :mod:`~activecontour.vector_formats`  the (x, y) formats, GeoJSON and SVG
+:mod:`~activecontour.object_formats`  one id per object: label image, GeoJSON, ImageJ ROIs, CSV
 =============================  ================================================================
 
 Every writer renders its whole output in memory first and then moves it into place with
@@ -39,11 +40,13 @@ from activecontour.image_files import (
     write_mask,
     write_overlay,
 )
+from activecontour.object_formats import OBJECT_FORMATS, encode_objects, object_paths
 
 __all__ = [
     "COLORS",
     "CONTOUR_FORMATS",
     "CONVENTION",
+    "OBJECT_FORMATS",
     "output_paths",
     "read_contours",
     "read_mask",
@@ -56,7 +59,7 @@ __all__ = [
 
 
 def save_result(result, image, output_stem, formats=("json",), *, metadata=None, color="red",
-                thickness=1, protect=()):
+                thickness=1, protect=(), objects=()):
     """Write a result's mask, overlay and contours as a group: all of them, or none.
 
     Parameters
@@ -76,11 +79,15 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
         at most :data:`~activecontour.image_files.OVERLAY_MAX_SIDE` (4096) pixels.
     protect : sequence of path
         Files that must not be overwritten (e.g. the input image): ValueError if an output is one.
+    objects : sequence of str
+        Object files, from :data:`~activecontour.object_formats.OBJECT_FORMATS` (``labels``,
+        ``labels-tif``, ``geojson``, ``roi``, ``csv``): the label image, one GeoJSON Feature
+        or ImageJ ROI per object, the measurement table (:mod:`activecontour.object_formats`).
 
     Returns
     -------
     list of pathlib.Path
-        The paths written: mask, overlay, then one per format.
+        The paths written: mask, overlay, then one per format, then one per object format.
 
     Raises
     ------
@@ -94,6 +101,7 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
     if isinstance(formats, str):
         formats = [formats]
     formats = list(dict.fromkeys(formats))
+    objects = list(dict.fromkeys([objects] if isinstance(objects, str) else objects))
     for fmt in formats:
         if fmt not in CONTOUR_FORMATS:
             raise ValueError(f"formats must be chosen from {CONTOUR_FORMATS}, got {fmt!r}")
@@ -102,7 +110,7 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
         raise ValueError(
             f"image has shape {np.shape(image)}, but the result's mask has shape {mask.shape}"
         )
-    paths = output_paths(output_stem, formats)
+    paths = output_paths(output_stem, formats, objects)
     protected = [Path(p) for p in protect]
     for path in paths:
         if any(_same_file(path, other) for other in protected):
@@ -113,19 +121,21 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
     ]
     contents += [
         encode_contours(path, result, metadata, None, fmt)
-        for path, fmt in zip(paths[2:], formats, strict=True)
+        for path, fmt in zip(paths[2:], formats, strict=False)
     ]
+    contents += [encode_objects(result, fmt) for fmt in objects]
     write_group(list(zip(paths, contents, strict=True)))
     return paths
 
 
-def output_paths(output_stem, formats=("json",)):
-    """The files :func:`save_result` writes for a stem: mask, overlay, then one per format."""
+def output_paths(output_stem, formats=("json",), objects=()):
+    """The files :func:`save_result` writes for a stem: mask, overlay, one per format, then one
+    per object format."""
     stem = os.fspath(output_stem)
     formats = list(dict.fromkeys([formats] if isinstance(formats, str) else formats))
     return [Path(f"{stem}_mask.png"), Path(f"{stem}_overlay.png")] + [
         Path(f"{stem}_contours.{fmt}") for fmt in formats
-    ]
+    ] + object_paths(stem, objects)
 
 
 def _same_file(a, b):

@@ -11,6 +11,7 @@ import numpy as np
 from activecontour.energy import ChanVeseParameters
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
 from activecontour.noise import auto_mu, is_auto
+from activecontour.objects import find_objects
 from activecontour.result import scalar_if_gray
 
 __all__ = ["BACKENDS", "segment"]
@@ -18,13 +19,13 @@ __all__ = ["BACKENDS", "segment"]
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
     "polygon": "activecontour.flow:segment_polygon",
-    "levelset": "activecontour.levelset:segment_levelset",
+    "levelset": "activecontour.backends.levelset:segment_levelset",
 }
 
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, options=None):
+            color="gray", normalize="range", n_regions=2, separate=True, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -78,13 +79,20 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
         :mod:`activecontour.backends.labelfield`), started from the global K-means of the
         intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+    separate : bool
+        Objects that touch get their own ids in ``result.labels`` (split along the necks of the
+        inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
+        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
     options : dict, optional
         Backend-specific settings, documented by the backend function
-        (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
+        (:func:`activecontour.flow.segment_polygon`,
+        :func:`activecontour.backends.levelset.segment_levelset`).
 
     Returns
     -------
     SegmentationResult
+        With the objects: ``labels``, ``objects`` (measurements), ``object_contours``, ``classes``
+        (:func:`activecontour.objects.find_objects`).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {backend!r}")
@@ -96,6 +104,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
+    if not isinstance(separate, (bool, np.bool_)):
+        raise TypeError(f"separate must be True or False, got {separate!r}")
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
     _check_regions(n_regions, backend, c_in, c_out, options)
@@ -121,6 +131,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     result.mu = params.mu
     result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
     result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
+    pixels = np.asarray(image)
+    if pixels.shape[:2] != model.shape:  # a channel-first stack, read as channel-last
+        pixels = np.moveaxis(pixels, 0, -1)
+    result.object_contours, result.labels, result.objects = find_objects(
+        result.contours, model.shape, pixels, separate=bool(separate))
     return result
 
 

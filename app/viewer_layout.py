@@ -50,7 +50,7 @@ SLIDERS = (
 
 #: backend -> (option, label, lowest, highest) of the "step" slider: the polygon flow's largest
 #: first trial displacement in pixels (:func:`activecontour.flow.segment_polygon`), the level set's
-#: initial time step (:func:`activecontour.levelset.segment_levelset`).  Its starting value is the
+#: initial time step (:func:`activecontour.backends.levelset.segment_levelset`).  Its starting value is the
 #: backend's own default.
 STEP_OPTIONS = {
     "polygon": ("max_step", "step (px)", 0.25, 10.0),

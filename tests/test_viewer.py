@@ -447,7 +447,7 @@ def test_backend_radio_selects_the_backend(disk_image, make_viewer):
     assert viewer.parameters()["backend"] == "levelset"
     key(viewer, " ")
     try:
-        from activecontour.levelset import DEFAULT_OPTIONS
+        from activecontour.backends.levelset import DEFAULT_OPTIONS
     except ImportError:
         assert viewer.result is None and "run failed" in viewer.message
         return

@@ -1,0 +1,74 @@
+"""The default start: the global minimiser of (6.38) over threshold sets, checked by brute force,
+and the small objects a local 2-means split lost to the background's noise."""
+
+import numpy as np
+import pytest
+
+import activecontour as ac
+from activecontour import synthetic
+from activecontour.initial import SPLIT_BINS, threshold_split
+
+
+def brute_force_cost(smooth, values, mu, region):
+    """(6.38) of a pixel region by its definition: the class means' squared deviations (mean over
+    channels) plus mu times pi/4 per 4-neighbour pair the region separates (Cauchy-Crofton)."""
+    fit = 0.0
+    for part in (region, ~region):
+        if part.any():
+            fit += np.sum((values[part] - values[part].mean(axis=0)) ** 2) / values.shape[2]
+    pairs = np.count_nonzero(region[1:] != region[:-1]) + np.count_nonzero(region[:, 1:] != region[:, :-1])
+    return fit + mu * np.pi / 4 * pairs
+
+
+def quantised_scene(seed, levels=256):
+    """A blurred noisy two-disk scene whose values are multiples of 1 / levels: every distinct value
+    has its own bin of the scan (1 / levels > 1 / SPLIT_BINS), so the scan is exact."""
+    image, _ = synthetic.disk_image(48, (15, 30), 7, inside=0.7, outside=0.3)
+    image = synthetic.add_noise(image, 0.2, seed, blur=1.0)
+    image = (image - image.min()) / (image.max() - image.min())
+    return np.round(image * levels)[:, :, None] / levels
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.02, 0.3])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_scan_finds_the_brute_force_minimiser_over_all_thresholds(mu, seed):
+    assert 256 < SPLIT_BINS
+    smooth = quantised_scene(seed)
+    values = synthetic.add_noise(smooth[:, :, 0], 0.05, seed + 10)[:, :, None]  # the fit reads other values
+    thresholds = np.unique(smooth)[1:]  # every split into two non-empty classes
+    costs = [brute_force_cost(smooth, values, mu, smooth[:, :, 0] >= t) for t in thresholds]
+    best = thresholds[int(np.argmin(costs))]
+    direction, threshold, cost = threshold_split(smooth, values, mu)
+    assert direction == pytest.approx([1.0])
+    region = smooth[:, :, 0] >= threshold
+    assert np.array_equal(region, smooth[:, :, 0] >= best)
+    assert cost == pytest.approx(min(costs), rel=1e-9)
+
+
+def test_a_vector_image_splits_along_the_object_colour():
+    # red disk on a green background of the same luminance: gray has no contrast, colour does
+    image, truth = synthetic.equal_gray_colour(seed=3)
+    smooth = image.astype(np.float64)
+    direction, threshold, cost = threshold_split(smooth, smooth, 0.01)
+    region = smooth @ direction >= threshold
+    assert synthetic.dice(region, truth) >= 0.9 or synthetic.dice(~region, truth) >= 0.9
+    # no threshold along another direction of the principal ones does better
+    for axis in np.linalg.svd(smooth.reshape(-1, 3) - smooth.reshape(-1, 3).mean(0), full_matrices=False)[2]:
+        projected = smooth @ axis
+        for t in np.quantile(projected, np.linspace(0.02, 0.98, 25)):
+            assert cost <= brute_force_cost(smooth, smooth, 0.01, projected >= t) * (1 + 1e-9)
+
+
+# (fraction of a 512^2 image, noise sigma, centre): one bright disk at contrast 0.4, SNR 0.4 / sigma
+SMALL_OBJECTS = [(0.001, 0.08, (262.0, 474.0)), (0.003, 0.15, (120.0, 90.0)),
+                 (0.01, 0.2, (400.0, 300.0)), (0.015, 0.15, (150.0, 330.0))]
+
+
+@pytest.mark.parametrize("fraction, sigma, centre", SMALL_OBJECTS)
+def test_a_small_object_at_low_snr_is_found_by_the_default_start(fraction, sigma, centre):
+    radius = np.sqrt(fraction * 512**2 / np.pi)
+    image, truth = synthetic.disk_image(512, centre, radius, inside=0.7, outside=0.3)
+    image = synthetic.add_noise(image, sigma, seed=0)
+    result = ac.segment(image)
+    assert result.success, result.message
+    assert synthetic.dice(result.mask, truth) >= 0.95
