@@ -26,9 +26,6 @@ class _Problem:
         self.n_channels = model.n_channels
         self.values = model.values
         self.params = params
-        self.lambda_in, self.lambda_out = params.weights(self.n_channels)
-        if np.any(self.lambda_in != self.lambda_out):
-            self.intensity_sq = self.values * self.values @ (self.lambda_in - self.lambda_out)
         self.band = settings["band"]
         m, n = self.shape
         stride = max(1, int(np.sqrt(m * n / 2.0**16)))
@@ -54,7 +51,8 @@ class _Problem:
     def force(self, c_in, c_out):
         """f of (6.41) per pixel and its contrast scale.
 
-        ``f = omega + lambda_in mean (I - c_in)^2 - lambda_out mean (I - c_out)^2``, plus ``mu`` per
+        ``f = g_i - g_o`` (the model's :meth:`~ChanVeseParameters.load_form`; for (6.38)
+        ``omega + lambda_in mean (I - c_in)^2 - lambda_out mean (I - c_out)^2``), plus ``mu`` per
         side of the image that a pixel lies on: a region that covers a border pixel closes along
         the domain edge there, and the evaluator counts that length (the wall term).  The scale
         is the mean ``|f|`` over the pixels (a regular sample of about 2^16 of them): about
@@ -65,11 +63,7 @@ class _Problem:
         p = self.params
         c_in = np.nan_to_num(np.asarray(c_in, dtype=np.float64))
         c_out = np.nan_to_num(np.asarray(c_out, dtype=np.float64))
-        linear = -2.0 * (self.lambda_in * c_in - self.lambda_out * c_out)
-        constant = p.omega + self.lambda_in @ (c_in * c_in) - self.lambda_out @ (c_out * c_out)
-        f = self.values @ linear + constant
-        if hasattr(self, "intensity_sq"):
-            f += self.intensity_sq
+        f = p.load_form(c_in, c_out).density(self.values)
         if p.mu > 0:
             for edge in (f[0], f[-1], f[:, 0], f[:, -1]):
                 edge += p.mu
