@@ -121,7 +121,7 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     """
     area, length, s1, s2 = _moments(model, points, next_index)
     total_area, total1, total2 = model.totals
-    constants = params.fit_constants(area, s1, model.totals, empty_ok=empty_ok)
+    constants = params.fit_constants(area, s1, s2, model.totals, empty_ok=empty_ok)
     if constants is None:
         nan = np.full(model.n_channels, np.nan)
         return Evaluation(np.inf, nan, nan, area, length, None)
@@ -190,9 +190,9 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None):
     """
     areas, first, second = partition_moments(model, boundary, n_classes)
     if constants is None:
-        mean = model.totals[1] / model.totals[0]
-        filled = areas > 1e-9
-        constants = np.where(filled[:, None], first / np.where(filled, areas, 1.0)[:, None], mean)
+        whole = params.region_constant(*model.totals)
+        constants = np.array([params.region_constant(a, f, q) if a > 1e-9 else whole
+                              for a, f, q in zip(areas, first, second, strict=True)])
     lengths = boundary.length
     counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
     length = float(lengths[counted].sum())

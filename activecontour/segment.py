@@ -14,7 +14,14 @@ from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import find_objects
 from activecontour.result import scalar_if_gray
 
-__all__ = ["BACKENDS", "segment"]
+__all__ = ["BACKENDS", "FITS", "segment"]
+
+#: The models of the regions' intensities (``fit``).
+FITS = ("constant", "smooth")
+#: Rounds of the smooth fit's alternation (light field, then contour) at most ...
+_LIGHT_ROUNDS = 4
+#: ... ending when the light field changes by less than this (it has mean 1).
+_LIGHT_TOL = 0.01
 
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
@@ -25,7 +32,8 @@ BACKENDS = {
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, separate=True, options=None):
+            color="gray", normalize="range", n_regions=2, fit="constant", separate=True,
+            options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -83,6 +91,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         Objects that touch get their own ids in ``result.labels`` (split along the necks of the
         inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
         piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
+    fit : {"constant", "smooth"}
+        ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
+        is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
+        mean 1), estimated with the contour by alternating minimisation
+        (:mod:`activecontour.models.smooth`): for uneven illumination, vignetting, shading.
+        ``result.light`` is b; ``constants``, ``c_in``, ``c_out`` are the c_k.
     options : dict, optional
         Backend-specific settings, documented by the backend function
         (:func:`activecontour.flow.segment_polygon`,
@@ -109,33 +123,43 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
     _check_regions(n_regions, backend, c_in, c_out, options)
+    if fit not in FITS:
+        raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
-    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
-    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
+    values = normalize_image(image, color=color, normalize=normalize)
+    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
     if n_regions > 2:
         from activecontour.backends.labelfield import segment_labels
 
-        result = segment_labels(model, init, params, n_regions=int(n_regions),
-                                max_num_iter=int(max_num_iter), tol=float(tol), callback=callback)
+        def run(model, init, params):
+            return segment_labels(model, init, params, n_regions=int(n_regions),
+                                  max_num_iter=int(max_num_iter), tol=float(tol), callback=callback)
     else:
         module_name, function_name = BACKENDS[backend].split(":")
         solver = getattr(importlib.import_module(module_name), function_name)
         _check_options(solver, backend, options or {})
-        result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
-                        callback=callback, **(options or {}))
-        result.classes = result.mask.astype(np.int32)
-        result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
+
+        def run(model, init, params):
+            result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
+                            callback=callback, **(options or {}))
+            result.classes = result.mask.astype(np.int32)
+            result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
+            return result
+    if fit == "smooth":
+        result = _smooth_light(values, init, params, run)
+    else:
+        result = run(ImageModel(values), init, params)
     offset, scale = intensity_scale(image, normalize)
     result.mu = params.mu
     result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
     result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
     pixels = np.asarray(image)
-    if pixels.shape[:2] != model.shape:  # a channel-first stack, read as channel-last
+    if pixels.shape[:2] != values.shape[:2]:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
     result.object_contours, result.labels, result.objects = find_objects(
-        result.contours, model.shape, pixels, separate=bool(separate))
+        result.contours, values.shape[:2], pixels, separate=bool(separate))
     return result
 
 
@@ -168,3 +192,26 @@ def _check_regions(n_regions, backend, c_in, c_out, options):
     if options:
         raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
                         "takes none")
+
+
+def _smooth_light(values, init, params, run):
+    """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
+    update (partition and constants fixed), from the light of the whole image as one region."""
+    import dataclasses
+
+    from activecontour.models.smooth import SmoothLightParameters, fit_light, light_basis, light_features
+
+    fields = {field.name: getattr(params, field.name) for field in dataclasses.fields(params)}
+    model_params = SmoothLightParameters(**fields, n_channels=values.shape[2])
+    basis = light_basis(values.shape[:2])
+    one_region = np.zeros(values.shape[:2], dtype=np.intp)
+    light = fit_light(values, one_region, np.ones((1, values.shape[2])), model_params, basis)
+    for _ in range(_LIGHT_ROUNDS):
+        model = ImageModel(light_features(values, light), image=values / light[..., None])
+        result = run(model, init, model_params)
+        new = fit_light(values, result.classes, result.constants, model_params, basis)
+        if np.max(np.abs(new - light)) < _LIGHT_TOL:
+            break
+        light, init = new, result
+    result.light = light
+    return result

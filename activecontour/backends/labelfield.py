@@ -83,15 +83,20 @@ def order_classes(classes, values, n_classes):
     return mapping[classes]
 
 
-def _pixel_constants(classes, values, n_classes):
-    count = np.bincount(classes.ravel(), minlength=n_classes).astype(np.float64)
-    flat = values.reshape(-1, values.shape[2])
-    mean = flat.mean(axis=0)
-    out = np.empty((n_classes, values.shape[2]))
+def _pixel_constants(classes, values, n_classes, params):
+    """The model's constants (6.42) of every region from its pixel sums (the image mean for an
+    empty region)."""
+    flat = classes.ravel()
+    count = np.bincount(flat, minlength=n_classes).astype(np.float64)
+    first = np.empty((n_classes, values.shape[2]))
+    second = np.empty((n_classes, values.shape[2]))
     for ch in range(values.shape[2]):
-        sums = np.bincount(classes.ravel(), weights=flat[:, ch], minlength=n_classes)
-        out[:, ch] = np.where(count > 0, sums / np.maximum(count, 1), mean[ch])
-    return out
+        channel = values[..., ch].ravel()
+        first[:, ch] = np.bincount(flat, weights=channel, minlength=n_classes)
+        second[:, ch] = np.bincount(flat, weights=channel * channel, minlength=n_classes)
+    whole = params.region_constant(float(flat.size), first.sum(axis=0), second.sum(axis=0))
+    return np.array([params.region_constant(a, f, q) if a > 0 else whole
+                     for a, f, q in zip(count, first, second, strict=True)])
 
 
 def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callback):
@@ -119,9 +124,9 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     SegmentationResult
         With ``classes`` (0 = background, the others by mean intensity) and ``constants``.
     """
-    values = model.values
+    image = model.image
     shape = tuple(model.shape)
-    classes = order_classes(_initial(init, values, n_regions, shape), values, n_regions)
+    classes = order_classes(_initial(init, image, n_regions, shape), image, n_regions)
     run = _Descent(model, params, n_regions, max_num_iter, tol, callback)
     classes, status = run.descend(classes)
     # Local moves cannot bring back a region the descent emptied (its start sat on edges), nor
@@ -133,27 +138,27 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     for _ in range(2 * n_regions):
         if status != 0:
             break
-        trial = _reseed(classes, values, n_regions, run, model, params)
+        trial = _reseed(classes, image, n_regions, run, model, params)
         if trial is None:
             break
         classes, status = trial
     return _result(model, params, classes, n_regions, run.energies, run.n_iter, status)
 
 
-def _reseed(classes, values, n_regions, run, model, params, tries=3):
+def _reseed(classes, image, n_regions, run, model, params, tries=3):
     """One merge-and-split move (see :func:`segment_labels`): (labels, status) or None."""
     count = np.bincount(classes.ravel(), minlength=n_regions)
     empty = np.flatnonzero(count == 0)
     if empty.size:
         base, label = classes, int(empty[0])
     else:
-        gray = values.mean(axis=2).ravel()
+        gray = image.mean(axis=2).ravel()
         mean = np.bincount(classes.ravel(), weights=gray, minlength=n_regions) / count
         pairs = [(count[a] * count[b] / (count[a] + count[b]) * (mean[a] - mean[b]) ** 2, a, b)
                  for a in range(n_regions) for b in range(a + 1, n_regions)]
         _, keep, label = min(pairs)
         base = np.where(classes == label, keep, classes).astype(classes.dtype)
-    splits = [_split(base, values, region, label)
+    splits = [_split(base, image, region, label)
               for region in np.flatnonzero(np.bincount(base.ravel(), minlength=n_regions) > 1)]
     splits = sorted((split for split in splits if split is not None), key=lambda split: -split[0])
     for _, start in splits[:tries]:
@@ -186,7 +191,8 @@ class _Descent:
             self.energies.append(evaluate_partition(model, class_boundary(classes), params, n_regions).energy)
         while self.n_iter < self.max_num_iter:
             cost = np.empty((n_regions,) + tuple(model.shape), dtype=np.float32)
-            for k, form in enumerate(params.class_forms(_pixel_constants(classes, values, n_regions))):
+            constants = _pixel_constants(classes, values, n_regions, params)
+            for k, form in enumerate(params.class_forms(constants)):
                 cost[k] = form.density(values)
                 if k > 0:
                     cost[k] += self.wall
@@ -253,7 +259,7 @@ def _initial(init, values, n_regions, shape):
 
 
 def _result(model, params, classes, n_regions, energies, n_iter, status):
-    classes = order_classes(classes, model.values, n_regions)
+    classes = order_classes(classes, model.image, n_regions)
     boundary = class_boundary(classes)
     final = evaluate_partition(model, boundary, params, n_regions)
     energies = list(energies)

@@ -146,7 +146,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
         phi = checkerboard_level_set(shape, period)  # redistanced below
     else:
-        phi = initial_level_set(init, shape, band=settings["band"], values=model.values)
+        phi = initial_level_set(init, shape, band=settings["band"], values=model.image)
     state = problem.redistance(phi)
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
