@@ -232,7 +232,8 @@ def partition_load(model, boundary, params, constants):
 
 
 def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,
-                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range"):
+                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
+                     light=None):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
@@ -259,6 +260,9 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     color : {"gray", "vector"}
     normalize : {"range", "dtype", None}
         As in :func:`activecontour.segment`: pass the same choices to score a result.
+    light : ndarray (M, N), optional
+        The light field b of the smooth fit (``result.light`` of ``fit="smooth"``): region k's
+        intensity is ``c_k b`` (:mod:`activecontour.models.smooth`).  None: the constant fit.
 
     Returns
     -------
@@ -274,9 +278,15 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     from activecontour.image import ImageModel, normalize_image
     from activecontour.noise import auto_mu, is_auto
 
-    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
-    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
+    values = normalize_image(image, color=color, normalize=normalize)
+    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
+    if light is None:
+        model = ImageModel(values)
+    else:
+        from activecontour.models.smooth import smooth_light_model
+
+        model, params = smooth_light_model(values, np.asarray(light, dtype=np.float64), params)
     if (contours is None) == (classes is None):
         raise TypeError("chan_vese_energy takes either contours or classes")
     if classes is not None:
@@ -321,9 +331,9 @@ def _classes_energy(model, classes, params):
             raise ValueError("c_in and c_out fix the constants of two regions; leave them None "
                              "for classes with more than two regions")
         fit = evaluate_partition(model, class_boundary(classes), params, 2)
-        constants = np.array([fit.constants[0] if params.c_out is None else
-                              params.constant("c_out", model.n_channels),
-                              fit.constants[1] if params.c_in is None else
-                              params.constant("c_in", model.n_channels)])
+        channels = params.image_channels(model.n_channels)
+        fixed = {name: params.constant(name, channels) for name in ("c_out", "c_in")}
+        constants = np.array([fit.constants[k] if fixed[name] is None else fixed[name]
+                              for k, name in enumerate(("c_out", "c_in"))])
     return evaluate_partition(model, class_boundary(classes), params, max(n_classes, 2),
                               constants).energy

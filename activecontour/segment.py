@@ -197,17 +197,13 @@ def _check_regions(n_regions, backend, c_in, c_out, options):
 def _smooth_light(values, init, params, run):
     """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
     update (partition and constants fixed), from the light of the whole image as one region."""
-    import dataclasses
+    from activecontour.models.smooth import fit_light, light_basis, smooth_light_model
 
-    from activecontour.models.smooth import SmoothLightParameters, fit_light, light_basis, light_features
-
-    fields = {field.name: getattr(params, field.name) for field in dataclasses.fields(params)}
-    model_params = SmoothLightParameters(**fields, n_channels=values.shape[2])
     basis = light_basis(values.shape[:2])
     one_region = np.zeros(values.shape[:2], dtype=np.intp)
-    light = fit_light(values, one_region, np.ones((1, values.shape[2])), model_params, basis)
+    light = fit_light(values, one_region, np.ones((1, values.shape[2])), params, basis)
     for _ in range(_LIGHT_ROUNDS):
-        model = ImageModel(light_features(values, light), image=values / light[..., None])
+        model, model_params = smooth_light_model(values, light, params)
         result = run(model, init, model_params)
         new = fit_light(values, result.classes, result.constants, model_params, basis)
         if np.max(np.abs(new - light)) < _LIGHT_TOL:

@@ -42,7 +42,8 @@ from numpy.polynomial import legendre
 from activecontour.models.base import QuadraticForm
 from activecontour.models.two_region import ChanVeseParameters
 
-__all__ = ["LIGHT_DEGREE", "SmoothLightParameters", "fit_light", "light_basis", "light_features"]
+__all__ = ["LIGHT_DEGREE", "SmoothLightParameters", "fit_light", "light_basis", "light_features",
+           "smooth_light_model"]
 
 #: Largest total degree of the light field's polynomials.
 LIGHT_DEGREE = 3
@@ -86,6 +87,33 @@ def light_basis(shape, degree=LIGHT_DEGREE):
     x = legendre.legvander(np.linspace(-1.0, 1.0, n), degree)
     return np.array([np.outer(y[:, i], x[:, j]) for i in range(degree + 1)
                      for j in range(degree + 1 - i)])
+
+
+def smooth_light_model(image, light, params):
+    """The image model (feature tables) and the model parameters of the smooth fit for a light
+    field: what the backends and the common evaluator read.
+
+    Parameters
+    ----------
+    image : ndarray (M, N, C)
+        Normalised intensities.
+    light : ndarray (M, N)
+        b, positive.
+    params : ChanVeseParameters
+
+    Returns
+    -------
+    ImageModel, SmoothLightParameters
+    """
+    import dataclasses
+
+    from activecontour.image import ImageModel
+
+    if light.shape != image.shape[:2] or not np.all(np.isfinite(light)) or np.any(light <= 0):
+        raise ValueError(f"light must be a positive finite array of the image's shape {image.shape[:2]}")
+    fields = {field.name: getattr(params, field.name) for field in dataclasses.fields(params)}
+    return (ImageModel(light_features(image, light), image=image / light[..., None]),
+            SmoothLightParameters(**fields, n_channels=image.shape[2]))
 
 
 def light_features(image, light):
