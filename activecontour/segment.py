@@ -133,16 +133,16 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if n_regions > 2:
         from activecontour.backends.labelfield import segment_labels
 
-        def run(model, init, params):
+        def run(model, init, params, max_num_iter=int(max_num_iter)):
             return segment_labels(model, init, params, n_regions=int(n_regions),
-                                  max_num_iter=int(max_num_iter), tol=float(tol), callback=callback)
+                                  max_num_iter=max_num_iter, tol=float(tol), callback=callback)
     else:
         module_name, function_name = BACKENDS[backend].split(":")
         solver = getattr(importlib.import_module(module_name), function_name)
         _check_options(solver, backend, options or {})
 
-        def run(model, init, params):
-            result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
+        def run(model, init, params, max_num_iter=int(max_num_iter)):
+            result = solver(model, init, params, max_num_iter=max_num_iter, tol=float(tol),
                             callback=callback, **(options or {}))
             result.classes = result.mask.astype(np.int32)
             result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
@@ -196,18 +196,33 @@ def _check_regions(n_regions, backend, c_in, c_out, options):
 
 def _smooth_light(values, init, params, run):
     """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
-    update (partition and constants fixed), from the light of the whole image as one region."""
+    update (partition and constants fixed).
+
+    Two starts for the light: uniform (the first run is the constant fit, and every later step
+    lowers J below it) and the least-squares light of the whole image as one region (right when
+    the objects are a small part of the image, as faint objects under a vignette, where the
+    constant fit splits the image along the light instead; wrong when large objects make the
+    light).  The backend's start (its default start on the image corrected by each light, or
+    ``init``) is scored under both; the alternation runs from the one of lower energy.
+    """
     from activecontour.models.smooth import fit_light, light_basis, smooth_light_model
 
     basis = light_basis(values.shape[:2])
     one_region = np.zeros(values.shape[:2], dtype=np.intp)
     light = fit_light(values, one_region, np.ones((1, values.shape[2])), params, basis)
+    model, model_params = smooth_light_model(values, light, params)
+    # with b = 1 the smooth model is the constant one (c_k b = c_k): that start runs on the image
+    # alone; the other on the features.  The start of lower energy (before any iteration) runs.
+    starts = [(ImageModel(values), params, np.ones(values.shape[:2])), (model, model_params, light)]
+    model, model_params, light = min(
+        starts, key=lambda start: run(start[0], init, start[1], max_num_iter=0).energy)
+    result = run(model, init, model_params)
     for _ in range(_LIGHT_ROUNDS):
-        model, model_params = smooth_light_model(values, light, params)
-        result = run(model, init, model_params)
         new = fit_light(values, result.classes, result.constants, model_params, basis)
         if np.max(np.abs(new - light)) < _LIGHT_TOL:
             break
-        light, init = new, result
+        light = new
+        model, model_params = smooth_light_model(values, light, params)
+        result = run(model, result, model_params)
     result.light = light
     return result

@@ -134,8 +134,9 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     # halves large noisy regions instead).  So at convergence: free a label (an empty region, or
     # the cheapest merge of two regions by Ward's cost), give it to the pixels that stand out
     # most significantly in some region (:func:`_split`), descend, and keep the result if J is
-    # lower; most significant split first, until none lowers J.
-    for _ in range(2 * n_regions):
+    # lower; most significant split first, until none lowers J.  A start from a previous result
+    # (a smooth fit's next round, a sequence's next frame) keeps its regions: no reseeding.
+    for _ in range(0 if hasattr(init, "classes") else 2 * n_regions):
         if status != 0:
             break
         trial = _reseed(classes, image, n_regions, run, model, params)
