@@ -22,6 +22,7 @@ _kernels           the compiled loops (Cython, built at install)
 io, raster         writers/readers of masks, overlays and contours (atomic, image_files,
                    contour_files, vector_formats); curves <-> masks
 synthetic          anti-aliased test images with exact ground truth
+compat             scikit-image's signatures: ``from activecontour.compat import chan_vese``
 batch              many images: worker processes, folders and globs, a Dask cluster
 
 Conventions: points are (row, col) with pixel centres at integer coordinates; outer boundaries are

@@ -272,8 +272,11 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     ------
     ValueError
         For a contour that is not a closed curve (see :func:`activecontour.curve.as_curve`) or has
-        a vertex outside the image domain ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``, where (6.38) is
-        not defined.
+        a vertex outside the image domain ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``, and for contours
+        that cross themselves or each other, overlap, repeat a curve, or are oriented against
+        their nesting (:func:`activecontour.topology.region_problem`): they bound no region, and
+        (6.38) is not defined.  :func:`activecontour.topology.region_union` turns such curves
+        into the boundary of the region they outline.
     """
     from activecontour.image import ImageModel, normalize_image
     from activecontour.noise import auto_mu, is_auto
@@ -296,6 +299,11 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
     for i, curve in enumerate(curves):
         _check_in_domain(curve, model.bounds, f"contours[{i}]")
+    from activecontour.topology import region_problem  # shapely: imported when scoring
+
+    problem = region_problem(curves)
+    if problem is not None:
+        raise ValueError(f"contours do not bound a region, (6.38) is not defined: {problem}")
     points, next_index, _ = stack_curves(curves)
     return evaluate(model, points, next_index, params, empty_ok=True).energy
 

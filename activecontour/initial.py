@@ -7,7 +7,8 @@ import numpy as np
 from activecontour.curve import as_curve, orient, signed_area
 from activecontour.raster import mask_to_curves
 
-__all__ = ["circle", "default_init", "grid", "initial_curves", "rectangle"]
+__all__ = ["circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_split",
+           "threshold_starts"]
 
 #: Radius of the default initial circle, as a fraction of the image's smaller side (the same as
 #: ``skimage.segmentation.morphological_chan_vese``'s default circle).
@@ -246,6 +247,21 @@ def default_init(shape, values=None, mu=0.0):
     fallback = [circle(((m - 1) / 2.0, (n - 1) / 2.0), DEFAULT_RADIUS_FRACTION * min(m, n))]
     if values is None:
         return fallback
+    return threshold_starts(values, mu)[0] or fallback
+
+
+def threshold_starts(values, mu=0.0, *, background=False):
+    """The curves of the default start's object class, and with ``background`` of the other one.
+
+    The threshold set of :func:`default_init` (and its complement), without the pieces the
+    length term would remove at once; empty lists for an image with one class.  The polygon flow
+    moves a user's curves first to whichever of these has a lower (6.38), if any.
+
+    Returns
+    -------
+    list of (list of ndarray (K, 2))
+        One or two curve lists.
+    """
     import cv2  # not scipy.ndimage: it costs ~0.2 s to import on every cold start
 
     # scipy.ndimage.gaussian_filter(values, (b, b, 0)): the same sampled kernel (4 sigma), reflected
@@ -255,10 +271,9 @@ def default_init(shape, values=None, mu=0.0):
     inside, contrast = _object_class(smooth, values, mu)
     del planes, smooth  # image-sized: free before tracing the mask's outlines
     if contrast <= 0:
-        return fallback
+        return [[]] * (1 + background)
     speck = max(DEFAULT_INIT_MIN_AREA, np.pi * (2.0 * mu / contrast) ** 2)
-    curves = mask_to_curves(inside, min_area=speck)
-    return curves if curves else fallback
+    return [mask_to_curves(part, min_area=speck) for part in ((inside, ~inside) if background else (inside,))]
 
 
 def initial_curves(init, shape, values=None, mu=0.0):
@@ -331,19 +346,19 @@ def region_boundary(curves):
     A curve inside an even number of the others is an outer boundary (made positive), inside an
     odd number a hole (made negative), whatever orientation it was given in: a lone curve is an
     outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate.
-    Where curves overlap or cross themselves, the region is the union, {w > 0}, rebuilt as its
-    exact boundary (:func:`activecontour.topology.repair`): winding-number weights of 2 are not a
-    region (6.38) is defined on.
+    Where curves overlap, repeat or cross themselves, the region is their union (a self-crossing
+    curve's loops all count), rebuilt exactly by :func:`activecontour.topology.region_union`:
+    winding-number weights of 2 are not a region (6.38) is defined on.
     """
     from activecontour import topology
-    from activecontour.energy import stack_curves
 
     oriented = []
     for i, curve in enumerate(curves):
         depth = sum(_contains(other, curve[0]) for j, other in enumerate(curves) if j != i)
         oriented.append(orient(curve, hole=depth % 2 == 1))
-    repaired = topology.repair(*stack_curves(oriented))
-    return oriented if repaired is None else repaired or oriented
+    if topology.region_problem(oriented) is None:
+        return oriented
+    return topology.region_union(curves) or oriented
 
 
 def _contains(curve, point):

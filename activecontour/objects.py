@@ -31,8 +31,8 @@ import numpy as np
 from activecontour.curve import clean, signed_area
 from activecontour.raster import rasterize
 
-__all__ = ["find_objects", "group_curves", "label_image", "measure", "polygon_moments",
-           "split_touching"]
+__all__ = ["clip_region", "complement_region", "find_objects", "group_curves", "label_image", "measure",
+           "polygon_moments", "split_touching"]
 
 
 def group_curves(contours):
@@ -259,10 +259,10 @@ def _hull_area(points):
 #: this fraction of the smaller part's largest inscribed radius.  Two disks overlapping by a third
 #: of their diameter have a neck of sqrt(5)/3 = 0.745 of their radius; a protrusion (a leg, a
 #: stroke's arm, a ring's arc) has no neck narrower than itself, ratio ~1.
-NECK_RATIO = 0.8
+NECK_RATIO = 0.9
 #: Parts whose largest inscribed radius is below this (pixels) are never split off: at that size a
 #: neck is a pixel or two of the boundary's noise.
-MIN_SPLIT_RADIUS = 2.5
+MIN_SPLIT_RADIUS = 3.0
 
 
 def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPLIT_RADIUS):
@@ -304,7 +304,7 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
             continue
         low = np.array([box[0].start - 1, box[1].start - 1])
         window = np.pad(labels[box] == k + 1, 1)
-        parts = _neck_parts(window, neck_ratio, min_radius)
+        parts = _neck_parts(window, _boundary_distance(curves, window, low), neck_ratio, min_radius)
         if parts.max() <= 1:
             result.append(curves)
             continue
@@ -312,49 +312,103 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
     return result
 
 
-def _neck_parts(region, neck_ratio, min_radius):
-    """Label the pixels of a bool region by parts separated by narrow necks (0 outside)."""
+def _boundary_distance(curves, region, low):
+    """The exact distance from each pixel centre of ``region`` to the object's sub-pixel boundary
+    (0 outside): a pixel distance transform would add half-pixel steps, 8 % of the radius of a
+    12 px object, enough to make necks out of nothing."""
+    import shapely
+
+    rows, cols = np.nonzero(region)
+    boundary = shapely.MultiLineString([np.vstack([c, c[:1]]) for c in curves])
+    distance = np.zeros(region.shape)
+    distance[rows, cols] = shapely.distance(shapely.points(rows + low[0], cols + low[1]), boundary)
+    return distance
+
+
+def _neck_parts(region, distance, neck_ratio, min_radius):
+    """Label the pixels of a bool region by parts separated by narrow necks (0 outside), given
+    each pixel's distance to the boundary."""
     import scipy.ndimage
+    import skimage.measure
     import skimage.morphology
     import skimage.segmentation
 
-    # distance from a pixel centre to the boundary, which runs half a pixel beyond the last pixel
-    distance = scipy.ndimage.distance_transform_edt(region) - 0.5
-    distance[~region] = 0.0
     markers, count = scipy.ndimage.label(skimage.morphology.local_maxima(distance) & region)
     if count <= 1:
         return region.astype(np.int32)
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
-    # the neck between two adjacent parts: the largest distance over their 4-neighbour pixel pairs
-    saddle = {}
-    for a, b, da, db in ((parts[:, :-1], parts[:, 1:], distance[:, :-1], distance[:, 1:]),
-                         (parts[:-1], parts[1:], distance[:-1], distance[1:])):
-        border = (a != b) & (a > 0) & (b > 0)
-        pa, pb, value = a[border], b[border], np.minimum(da[border], db[border])
-        for i, j, v in zip(np.minimum(pa, pb), np.maximum(pa, pb), value, strict=True):
-            if v > saddle.get((i, j), -1.0):
-                saddle[(i, j)] = v
-    parent = np.arange(count + 1)
-    while saddle:
+    graph = _PartGraph(parts, distance, count)
+    while graph.saddle:
         # the widest neck relative to the thinner side first; a side too small to be an object
         # is merged whatever its neck
-        merit = {(i, j): np.inf if min(peak[i], peak[j]) < min_radius else v / min(peak[i], peak[j])
-                 for (i, j), v in saddle.items()}
-        keep, gone = max(merit, key=merit.get)
-        if merit[(keep, gone)] < neck_ratio:
+        merit = {(i, j): np.inf if min(graph.peak[i], graph.peak[j]) < min_radius
+                 else v / min(graph.peak[i], graph.peak[j]) for (i, j), v in graph.saddle.items()}
+        pair = max(merit, key=merit.get)
+        if merit[pair] < neck_ratio:
             break
-        parent[parent == gone] = keep
-        peak[keep] = max(peak[keep], peak[gone])
+        graph.merge(*pair)
+    # a part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were a
+    # shape's own: it takes its neighbours back, until every part is a blob or one is left
+    while True:
+        merged, roots = graph.labels()
+        props = {p.label: p for p in skimage.measure.regionprops(merged)}
+        blob = {label: _is_blob(p) for label, p in props.items()}
+        if all(blob.values()) or len(blob) == 1:
+            return merged
+        worst = min((label for label in blob if not blob[label]), key=lambda k: props[k].solidity)
+        root = int(roots[worst])
+        for neighbour in graph.neighbours(root):
+            graph.merge(root, neighbour)
+
+
+#: A part of a split object must be blob-like: at least this solid (area / convex hull area) ...
+MIN_PART_SOLIDITY = 0.8
+#: ... and at most this elongated (major / minor axis of its moments).
+MAX_PART_ASPECT = 4.0
+
+
+def _is_blob(props):
+    return (props.solidity >= MIN_PART_SOLIDITY
+            and props.axis_major_length <= MAX_PART_ASPECT * max(props.axis_minor_length, 1e-9))
+
+
+class _PartGraph:
+    """Parts of a watershed as a graph: each part's peak distance, each border's neck (saddle)."""
+
+    def __init__(self, parts, distance, count):
+        import scipy.ndimage
+
+        self.parts = parts
+        self.peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+        self.parent = np.arange(count + 1)
+        # the neck between two adjacent parts: the largest distance over their 4-neighbour pairs
+        self.saddle = {}
+        for a, b, da, db in ((parts[:, :-1], parts[:, 1:], distance[:, :-1], distance[:, 1:]),
+                             (parts[:-1], parts[1:], distance[:-1], distance[1:])):
+            border = (a != b) & (a > 0) & (b > 0)
+            pa, pb, value = a[border], b[border], np.minimum(da[border], db[border])
+            for i, j, v in zip(np.minimum(pa, pb), np.maximum(pa, pb), value, strict=True):
+                if v > self.saddle.get((i, j), -1.0):
+                    self.saddle[(i, j)] = v
+
+    def merge(self, keep, gone):
+        self.parent[self.parent == gone] = keep
+        self.peak[keep] = max(self.peak[keep], self.peak[gone])
         merged = {}
-        for (i, j), v in saddle.items():
+        for (i, j), v in self.saddle.items():
             i, j = (keep if i == gone else i), (keep if j == gone else j)
             if i != j:
                 key = (min(i, j), max(i, j))
                 merged[key] = max(v, merged.get(key, -1.0))
-        saddle = merged
-    _, relabel = np.unique(parent, return_inverse=True)
-    return relabel[parts].astype(np.int32)
+        self.saddle = merged
+
+    def neighbours(self, root):
+        return [j if i == root else i for (i, j) in self.saddle if root in (i, j)]
+
+    def labels(self):
+        """The merged parts numbered 1..k (0 outside), and the root of each number."""
+        roots, relabel = np.unique(self.parent, return_inverse=True)
+        return relabel[self.parts].astype(np.int32), roots
 
 
 #: Tolerance (pixels) of the straightening of split lines (``shapely.coverage_simplify``).
@@ -409,3 +463,30 @@ def _from_shapely(polygon):
         return []
     holes = [clean(np.asarray(ring.coords)[:-1]) for ring in polygon.interiors]
     return [outer] + [h for h in holes if h is not None]
+
+
+def complement_region(contours, shape):
+    """The boundary of the image domain minus the region the contours bound (oriented curves).
+
+    The domain is the rectangle [-0.5, M - 0.5] x [-0.5, N - 0.5] of :func:`activecontour.raster`
+    (every pixel square), so the complement's mask is the region's mask inverted.
+    """
+    import shapely
+
+    m, n = shape
+    domain = shapely.box(-0.5, -0.5, m - 0.5, n - 0.5)
+    rest = shapely.difference(domain, _to_shapely(contours)) if contours else domain
+    return [curve for polygon in getattr(rest, "geoms", [rest]) if isinstance(polygon, shapely.Polygon)
+            and polygon.area > 0 for curve in _from_shapely(polygon)]
+
+
+def clip_region(contours, domain):
+    """The boundary of the region the contours bound, intersected with the region of ``domain``
+    (oriented curves too)."""
+    import shapely
+
+    if not contours:
+        return []
+    kept = shapely.intersection(_to_shapely(contours), _to_shapely(domain))
+    return [curve for polygon in getattr(kept, "geoms", [kept]) if isinstance(polygon, shapely.Polygon)
+            and polygon.area > 0 for curve in _from_shapely(polygon)]

@@ -9,6 +9,7 @@ import numpy as np
 from activecontour.curve import clean
 from activecontour.energy import evaluate, stack_curves
 from activecontour.raster import rasterize
+from activecontour.topology import region_problem, region_union
 
 __all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
@@ -67,12 +68,16 @@ class SegmentationResult:
         The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
         by increasing mean intensity; set by :func:`activecontour.segment`.
     light : ndarray (M, N) or None
-        The light field b of ``fit="smooth"`` (mean 1): region k's intensity is ``c_k b``.
+        The light field b of ``fit="smooth"`` (mean 1): region k's intensity is ``c_k b``; None
+        for ``fit="constant"`` and when the smooth fit found the light uniform.
     constants : ndarray (K, C) or None
         The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
         :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
         ``c_in`` the area-weighted mean of the others (the inside is every region but the
         background).
+    roi : bool ndarray (M, N) or None
+        With ``segment(roi=...)``: the domain D the functional was solved on
+        (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
     """
 
     mask: np.ndarray
@@ -94,6 +99,7 @@ class SegmentationResult:
     classes: np.ndarray | None = None
     constants: np.ndarray | None = None
     light: np.ndarray | None = None
+    roi: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
@@ -149,11 +155,16 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     """The one way a backend makes its result, so that every result obeys the same invariants.
 
     * contours are cleaned (:func:`activecontour.curve.clean`): no repeated vertices, zero-width
-      spikes, fewer than 3 vertices or zero area;
+      spikes, fewer than 3 vertices or zero area; curves that do not bound a region (a ring that
+      touches itself, overlaps: :func:`activecontour.topology.region_problem`) are replaced by
+      the boundary of the region they outline, so every contour is a simple polygon and no two
+      cross;
     * ``energy`` is (6.38) of exactly these contours by the common evaluator
       (:func:`activecontour.energy.chan_vese_energy`), and ``energies`` ends with it;
     * when a converged flow ends above the energy of the empty set (a local minimum worse than
-      no object at all), or the backend reports a collapse, the result is the empty set, status 3;
+      no object at all), or the backend reports a collapse, the result is the empty set, status
+      3, but only if that does not raise the energy: a collapse with curves left that beat the
+      empty set keeps them (status 1);
     * ``mask`` is the inside of the contours (:func:`activecontour.raster.rasterize`);
     * ``c_in``, ``c_out`` are finite: the constant of an empty region is reported equal to the
       other one (its fitting term is 0 whatever it is).
@@ -168,13 +179,17 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     n_iter, status, backend, phi
         As in :class:`SegmentationResult`.
     """
-    cleaned = [] if status == 3 else [c for c in map(clean, contours) if c is not None]
+    cleaned = [c for c in map(clean, contours) if c is not None]
+    if cleaned and region_problem(cleaned) is not None:  # e.g. a ring that touches itself
+        cleaned = [c for c in map(clean, region_union(cleaned)) if c is not None]
     final = _evaluate(model, params, cleaned)
     empty = _evaluate(model, params, [])
-    if cleaned and status in (0, 4) and empty.energy < final.energy:
+    if cleaned and (status == 3 or status in (0, 4)) and empty.energy <= final.energy:
         cleaned, final = [], empty
     if not cleaned:
         status = 3
+    elif status == 3:  # the backend gave up on curves that are still better than nothing
+        status = 1
     energies = list(energies)
     if energies and _same_energy(energies[-1], final.energy):
         # the backend's last energy is this one computed another way (the level set scores an

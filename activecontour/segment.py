@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import importlib
 import inspect
 import os
@@ -11,10 +13,12 @@ import numpy as np
 from activecontour.energy import ChanVeseParameters
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
 from activecontour.noise import auto_mu, is_auto
-from activecontour.objects import find_objects
-from activecontour.result import scalar_if_gray
+from activecontour.objects import clip_region, complement_region, find_objects
+from activecontour.raster import mask_to_curves
+from activecontour.result import build_result, scalar_if_gray
+from activecontour.roi import ROI_INIT_MARGIN, crop_init, init_neighbourhood, resolve_roi, restrict_values
 
-__all__ = ["BACKENDS", "FITS", "segment"]
+__all__ = ["BACKENDS", "FITS", "INSIDE", "segment"]
 
 #: The models of the regions' intensities (``fit``).
 FITS = ("constant", "smooth")
@@ -22,6 +26,9 @@ FITS = ("constant", "smooth")
 _LIGHT_ROUNDS = 4
 #: ... ending when the light field changes by less than this (it has mean 1).
 _LIGHT_TOL = 0.01
+
+#: The choices of ``inside``: which region holds the objects.
+INSIDE = ("auto", "bright", "dark")
 
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
@@ -32,8 +39,8 @@ BACKENDS = {
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, fit="constant", separate=True,
-            options=None):
+            color="gray", normalize="range", n_regions=2, fit="constant", inside="auto", roi=None,
+            separate=True, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -41,10 +48,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     image : ndarray of shape (M, N) or (M, N, C), or a path
         Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
         or the path of an image file (read by :func:`activecontour.image.load_image`).
-    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), or SegmentationResult
+    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), SegmentationResult or str
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
-        starts from a centred circle of radius 3/8 of the smaller side.  The level-set backend also
-        accepts ``"checkerboard"``.
+        (default) starts from the outlines of the two-means threshold of the lightly blurred image
+        (the minimiser of (6.38) without its length term), so objects anywhere in the image are in
+        the start (:func:`activecontour.initial.default_init`).  ``"grid"``: small circles all
+        over the image; the level-set backend also accepts ``"checkerboard"``.
     backend : {"polygon", "levelset"}
         ``"polygon"``: the book's gradient flow (6.30)-(6.31) of a polygon with the H^1 velocity
         (6.39)-(6.40), sub-pixel.  ``"levelset"``: the same functional on the pixel grid.
@@ -87,16 +96,29 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
         :mod:`activecontour.backends.labelfield`), started from the global K-means of the
         intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
-    separate : bool
-        Objects that touch get their own ids in ``result.labels`` (split along the necks of the
-        inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
-        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
     fit : {"constant", "smooth"}
         ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
         is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
         mean 1), estimated with the contour by alternating minimisation
         (:mod:`activecontour.models.smooth`): for uneven illumination, vignetting, shading.
         ``result.light`` is b; ``constants``, ``c_in``, ``c_out`` are the c_k.
+    inside : {"auto", "bright", "dark"}
+        Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
+        the class that covers less of the image border, and given curves are the inside as drawn.
+        ``"bright"``/``"dark"``: the region with the larger/smaller mean; a run that ends the
+        other way round returns the complement (the rest of the image domain), its energy
+        evaluated again.
+    roi : None, "init", bool ndarray (M, N), or (r0, c0, r1, c1)
+        Restrict the image domain D of (6.38) to a region of interest (:mod:`activecontour.roi`):
+        a box (exact, by cropping), a mask, or ``"init"``: a neighbourhood of the given curves, so
+        that drawing around one object gives that object (grown while the object reaches its
+        edge, so a curve drawn inside the object works too).  The result is in the whole image's
+        frame; ``result.roi`` is the domain used (a bool mask) and ``result.energy`` is (6.38) on
+        its bounding box.
+    separate : bool
+        Objects that touch get their own ids in ``result.labels`` (split along the necks of the
+        inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
+        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
     options : dict, optional
         Backend-specific settings, documented by the backend function
         (:func:`activecontour.flow.segment_polygon`,
@@ -118,49 +140,158 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
+    if inside not in INSIDE:
+        raise ValueError(f"inside must be one of {INSIDE}, got {inside!r}")
     if not isinstance(separate, (bool, np.bool_)):
         raise TypeError(f"separate must be True or False, got {separate!r}")
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
-    _check_regions(n_regions, backend, c_in, c_out, options)
+    _check_regions(n_regions, backend, c_in, c_out, options, roi)
     if fit not in FITS:
         raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     values = normalize_image(image, color=color, normalize=normalize)
-    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, omega, lambda_in,
-                                lambda_out, c_in, c_out)
+    shape = values.shape[:2]
     if n_regions > 2:
         from activecontour.backends.labelfield import segment_labels
 
-        def run(model, init, params, max_num_iter=int(max_num_iter)):
-            return segment_labels(model, init, params, n_regions=int(n_regions),
-                                  max_num_iter=max_num_iter, tol=float(tol), callback=callback)
+        solver = functools.partial(segment_labels, n_regions=int(n_regions))
     else:
         module_name, function_name = BACKENDS[backend].split(":")
         solver = getattr(importlib.import_module(module_name), function_name)
         _check_options(solver, backend, options or {})
-
-        def run(model, init, params, max_num_iter=int(max_num_iter)):
-            result = solver(model, init, params, max_num_iter=max_num_iter, tol=float(tol),
-                            callback=callback, **(options or {}))
-            result.classes = result.mask.astype(np.int32)
-            result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
-            return result
-    if fit == "smooth":
-        result = _smooth_light(values, init, params, run)
+    solve = functools.partial(
+        _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
+        inside=inside, normalize=normalize, callback=callback, fit=fit,
+        settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
+    if isinstance(roi, str) and roi == "init":
+        # the smallest neighbourhood of the init that holds the object: grown while the result
+        # reaches the domain's edge (or is empty), e.g. when the curve was drawn inside the object
+        margin = ROI_INIT_MARGIN
+        while True:
+            neighbourhood = init_neighbourhood(init, shape, margin)
+            result, params, (offset, scale) = solve(neighbourhood)
+            if neighbourhood.all() or not _reaches_edge(result, neighbourhood):
+                break
+            margin *= 2
     else:
-        result = run(ImageModel(values), init, params)
-    offset, scale = intensity_scale(image, normalize)
+        result, params, (offset, scale) = solve(roi)
+    offset, scale = _input_units(image, normalize, offset, scale)
     result.mu = params.mu
     result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
     result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
     pixels = np.asarray(image)
-    if pixels.shape[:2] != values.shape[:2]:  # a channel-first stack, read as channel-last
+    if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
     result.object_contours, result.labels, result.objects = find_objects(
-        result.contours, values.shape[:2], pixels, separate=bool(separate))
+        result.contours, shape, pixels, separate=bool(separate))
+    if result.classes is None:  # two regions: the inside is region 1
+        result.classes = result.mask.astype(np.int32)
+        result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
     return result
+
+
+def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, settings):
+    """Run the backend on the image, or on the crop of a region of interest.
+
+    Returns the result in the whole image's frame, the parameters used, and the affine map
+    ``(low, span)`` of the crop's renormalisation (``(0, 1)`` without one).
+    """
+    shape = values.shape[:2]
+    box, domain = (None, None) if roi is None else resolve_roi(roi, shape, init)
+    rescale = (0.0, 1.0)
+    if box is not None:
+        values = restrict_values(values, box, domain)
+        if normalize == "range":  # the crop by its own range, as segment(image[box]) would
+            low, high = float(values.min()), float(values.max())
+            rescale = (low, high - low if high > low else 1.0)
+            values = (values - rescale[0]) / rescale[1]
+        init = crop_init(init, box, shape)
+        if callback is not None:
+            callback = _whole_image_callback(callback, box, shape)
+    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, *constants)
+
+    def run(model, init, params, max_num_iter=settings["max_num_iter"]):
+        return solver(model, init, params, callback=callback, **{**settings, "max_num_iter": max_num_iter})
+
+    if fit == "smooth":
+        result, model, params = _smooth_light(values, init, params, run)
+    else:
+        model = ImageModel(values)
+        result = run(model, init, params)
+    result = _make_inside(result, inside, model, params)
+    if domain is not None:
+        domain_curves = mask_to_curves(domain)
+        result = _rebuilt(result, clip_region(result.contours, domain_curves), model, params,
+                          phi=None if result.phi is None else np.where(domain, result.phi, -1.0))
+    if box is not None:
+        result = _in_whole_image(result, box, domain, shape)
+    return result, params, rescale
+
+
+def _reaches_edge(result, domain):
+    """Whether a result is empty or has pixels on the edge of its domain (not the image's)."""
+    import scipy.ndimage
+
+    edge = domain & ~scipy.ndimage.binary_erosion(domain, border_value=1)
+    return result.status == 3 or bool((result.mask & edge).any())
+
+
+def _input_units(image, normalize, low, span):
+    """``(offset, scale)`` from the functional's units to the input's, after a crop's renormalisation
+    ``(values - low) / span``."""
+    offset, scale = intensity_scale(image, normalize)
+    return offset + scale * low, scale * span
+
+
+def _make_inside(result, inside, model, params):
+    """The result, or its complement when the inside is not the class ``inside`` asks for."""
+    if inside == "auto" or not result.contours or result.classes is not None:  # N regions: as found
+        return result
+    brighter = np.mean(np.asarray(result.c_in)) > np.mean(np.asarray(result.c_out))
+    if brighter == (inside == "bright"):
+        return result
+    return _rebuilt(result, complement_region(result.contours, model.shape), model, params,
+                    phi=None if result.phi is None else -result.phi)
+
+
+def _rebuilt(result, contours, model, params, phi):
+    """A result with other contours, made by :func:`build_result` (so the invariants hold)."""
+    return build_result(model, params, contours, energies=result.energies, n_iter=result.n_iter,
+                        status=result.status, backend=result.backend, phi=phi)
+
+
+def _in_whole_image(result, box, domain, shape):
+    """A result on a crop, moved into the whole image's frame (the energy stays the crop's)."""
+    r0, c0, r1, c1 = box
+    offset = np.array([r0, c0], dtype=np.float64)
+    result.contours = [c + offset for c in result.contours]
+    mask = np.zeros(shape, dtype=bool)
+    mask[r0:r1, c0:c1] = result.mask
+    result.mask = mask
+    if result.phi is not None:
+        phi = np.full(shape, min(float(result.phi.min()), -1.0))
+        phi[r0:r1, c0:c1] = result.phi
+        result.phi = phi
+    result.roi = np.zeros(shape, dtype=bool)
+    result.roi[r0:r1, c0:c1] = True if domain is None else domain
+    return result
+
+
+def _whole_image_callback(callback, box, shape):
+    """The callback, shown states in the whole image's frame (a viewer draws them on the image)."""
+    offset = np.array(box[:2], dtype=np.float64)
+
+    def shifted(state):
+        phi = state.phi
+        if phi is not None:
+            phi = np.full(shape, min(float(phi.min()), -1.0))
+            phi[box[0]:box[2], box[1]:box[3]] = state.phi
+        return callback(dataclasses.replace(state, contours=[c + offset for c in state.contours],
+                                            shape=tuple(shape), phi=phi))
+
+    return shifted
 
 
 def _check_options(solver, backend, options):
@@ -176,7 +307,7 @@ def _check_options(solver, backend, options):
                         f"the valid options are {', '.join(valid)}")
 
 
-def _check_regions(n_regions, backend, c_in, c_out, options):
+def _check_regions(n_regions, backend, c_in, c_out, options, roi):
     if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
         raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
     if n_regions < 2:
@@ -189,6 +320,9 @@ def _check_regions(n_regions, backend, c_in, c_out, options):
     if c_in is not None or c_out is not None:
         raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
                          f"n_regions={n_regions}")
+    if roi is not None:
+        raise ValueError(f"roi restricts the two-region model; it is not available with "
+                         f"n_regions={n_regions}")
     if options:
         raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
                         "takes none")
@@ -196,14 +330,15 @@ def _check_regions(n_regions, backend, c_in, c_out, options):
 
 def _smooth_light(values, init, params, run):
     """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
-    update (partition and constants fixed).
+    update (partition and constants fixed).  Returns the result, its image model and parameters.
 
     Two starts for the light: uniform (the first run is the constant fit, and every later step
     lowers J below it) and the least-squares light of the whole image as one region (right when
     the objects are a small part of the image, as faint objects under a vignette, where the
     constant fit splits the image along the light instead; wrong when large objects make the
     light).  The backend's start (its default start on the image corrected by each light, or
-    ``init``) is scored under both; the alternation runs from the one of lower energy.
+    ``init``) is scored under both; the alternation runs from the one of lower energy.  When
+    the light stays uniform the result is the constant fit's, and ``result.light`` is None.
     """
     from activecontour.models.smooth import fit_light, light_basis, smooth_light_model
 
@@ -213,16 +348,23 @@ def _smooth_light(values, init, params, run):
     model, model_params = smooth_light_model(values, light, params)
     # with b = 1 the smooth model is the constant one (c_k b = c_k): that start runs on the image
     # alone; the other on the features.  The start of lower energy (before any iteration) runs.
-    starts = [(ImageModel(values), params, np.ones(values.shape[:2])), (model, model_params, light)]
+    starts = [(ImageModel(values), params, None), (model, model_params, light)]
     model, model_params, light = min(
         starts, key=lambda start: run(start[0], init, start[1], max_num_iter=0).energy)
     result = run(model, init, model_params)
     for _ in range(_LIGHT_ROUNDS):
-        new = fit_light(values, result.classes, result.constants, model_params, basis)
-        if np.max(np.abs(new - light)) < _LIGHT_TOL:
+        new = fit_light(values, *_classes_and_constants(result), model_params, basis)
+        if np.max(np.abs(new - (1.0 if light is None else light))) < _LIGHT_TOL:
             break
         light = new
         model, model_params = smooth_light_model(values, light, params)
         result = run(model, result, model_params)
     result.light = light
-    return result
+    return result, model, model_params
+
+
+def _classes_and_constants(result):
+    """A result's regions and their constants (two regions: the inside is region 1)."""
+    if result.classes is not None:
+        return result.classes, result.constants
+    return result.mask.astype(np.intp), np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])

@@ -24,7 +24,8 @@ import numpy as np
 from activecontour import _kernels
 from activecontour.curve import signed_area
 
-__all__ = ["crossings", "curve_areas", "nucleation_sites", "repair", "winding_number"]
+__all__ = ["border_overlap", "crossings", "curve_areas", "nucleation_sites", "region_problem",
+           "region_union", "repair", "winding_number"]
 
 #: pixels per band of rows in :func:`nucleation_sites` (a few float32 arrays of 16 MB)
 _BAND_PIXELS = 1 << 22
@@ -132,6 +133,114 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     kept = [chain for chain, w in zip(chains, windings, strict=True) if w == 0]
     curves = _link(kept, nodes, n_points)
     return [c for c in curves if len(c) >= 3 and abs(signed_area(c)) > min_area]
+
+
+def border_overlap(points, next_index, bounds):
+    """Whether two edges lying on the same side of the image domain overlap (positive length).
+
+    Vertices clipped to the domain's border can run along it twice, forwards and back, or in the
+    same direction: collinear overlaps, which :func:`crossings` (proper crossings only) does not
+    see, and which make a winding number of 2 (a double-counted strip) or a zero-width slit.  A
+    region's boundary covers every point of the border at most once.
+    """
+    start, end = points, points[next_index]
+    for axis in (0, 1):
+        along = 1 - axis
+        for side in bounds[:, axis]:
+            on = (start[:, axis] == side) & (end[:, axis] == side)
+            if np.count_nonzero(on) < 2:
+                continue
+            low = np.minimum(start[on, along], end[on, along])
+            high = np.maximum(start[on, along], end[on, along])
+            order = np.argsort(low, kind="stable")
+            low, high = low[order], high[order]
+            reach = np.maximum.accumulate(high)[:-1]  # the farthest any earlier edge gets
+            if np.any(low[1:] < reach - 1e-12 * max(1.0, abs(float(side)))):
+                return True
+    return False
+
+
+def region_problem(curves):
+    """Why oriented closed curves do not bound a region, or None when they do.
+
+    They bound one when every curve is a simple polygon (no self-crossing, no self-touching), no
+    two curves cross or overlap (touching at isolated points is allowed), and the orientation
+    follows the nesting: a curve inside an even number of the others is an outer boundary
+    (positive signed area), inside an odd number a hole (negative).  Then the winding number is
+    0 or 1 everywhere and (6.38) is defined: shapely's ``is_valid`` holds for the polygons with
+    their holes.  Crossing or overlapping input (winding numbers 2 or -1) gives an energy of no
+    region, such as -1e12 for a curve run twice along the image border.
+
+    Returns
+    -------
+    str or None
+        One short line naming the first curve at fault.
+    """
+    import shapely
+
+    if not curves:
+        return None
+    polygons = np.array([shapely.Polygon(np.asarray(c, dtype=np.float64)) for c in curves], dtype=object)
+    for i, polygon in enumerate(polygons):
+        if not shapely.is_valid(polygon):
+            return f"contours[{i}] crosses or touches itself ({shapely.is_valid_reason(polygon)})"
+    inner, outer = shapely.STRtree(polygons).query(polygons, predicate="within")
+    distinct = inner != outer
+    inner, outer = inner[distinct], outer[distinct]
+    pairs = set(zip(inner.tolist(), outer.tolist(), strict=True))
+    for i, j in pairs:
+        if (j, i) in pairs:
+            return f"contours[{min(i, j)}] and contours[{max(i, j)}] are the same curve"
+    depth = np.bincount(inner, minlength=len(curves))
+    areas = np.array([signed_area(np.asarray(c, dtype=np.float64)) for c in curves])
+    wrong = np.flatnonzero((areas > 0) != (depth % 2 == 0))
+    if wrong.size:
+        i = int(wrong[0])
+        return (f"contours[{i}] is {'positively' if areas[i] > 0 else 'negatively'} oriented inside "
+                f"{depth[i]} other contours: outer boundaries must be positive and holes negative, "
+                "and no contour may cross another")
+    holes = {i: [] for i in np.flatnonzero(depth % 2 == 0).tolist()}
+    for i, j in pairs:
+        if depth[i] % 2 == 1 and depth[j] == depth[i] - 1:
+            holes[j].append(shapely.get_exterior_ring(polygons[i]))
+    shells = [shapely.Polygon(shapely.get_exterior_ring(polygons[i]), holes[i]) for i in holes]
+    region = shapely.MultiPolygon(shells)
+    if not shapely.is_valid(region):
+        return f"the contours cross or overlap each other ({shapely.is_valid_reason(region)})"
+    return None
+
+
+def region_union(curves):
+    """The boundary of the region that nested, overlapping or duplicated curves outline.
+
+    Each curve's polygon (made valid: a self-crossing curve is the union of its loops) is added
+    to the region when it lies inside an even number of the others and cut out of it when inside
+    an odd number, in order of nesting depth: overlapping outlines merge, a curve given twice
+    counts once, nested curves alternate between object and hole.  The result obeys
+    :func:`region_problem`: outer boundaries positive, holes negative, each vertex once.
+
+    Returns
+    -------
+    list of ndarray (K, 2)
+    """
+    import shapely
+    from shapely.geometry.polygon import orient
+
+    polygons = [shapely.make_valid(shapely.Polygon(np.asarray(c, dtype=np.float64))) for c in curves]
+    tree = shapely.STRtree(polygons)
+    inner, outer = tree.query(polygons, predicate="within")
+    strictly = (inner != outer) & ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
+    depth = np.bincount(inner[strictly], minlength=len(polygons))
+    region = shapely.Polygon()
+    for i in np.argsort(depth, kind="stable"):
+        region = region.union(polygons[i]) if depth[i] % 2 == 0 else region.difference(polygons[i])
+    out = []
+    for polygon in shapely.get_parts(region):
+        if isinstance(polygon, shapely.Polygon) and polygon.area > 0:
+            polygon = orient(polygon, sign=1.0)  # x = row, y = col: counterclockwise is positive
+            out.append(np.asarray(polygon.exterior.coords)[:-1])
+            out.extend(np.asarray(ring.coords)[:-1] for ring in polygon.interiors)
+    return out
 
 
 def _chains(sequence, n_points):

@@ -97,8 +97,8 @@ def smooth_light_model(image, light, params):
     ----------
     image : ndarray (M, N, C)
         Normalised intensities.
-    light : ndarray (M, N)
-        b, positive.
+    light : ndarray (M, N) or None
+        b, positive; None is uniform light, the constant fit.
     params : ChanVeseParameters
 
     Returns
@@ -109,6 +109,8 @@ def smooth_light_model(image, light, params):
 
     from activecontour.image import ImageModel
 
+    if light is None:  # uniform: the constant fit
+        return ImageModel(image), params
     if light.shape != image.shape[:2] or not np.all(np.isfinite(light)) or np.any(light <= 0):
         raise ValueError(f"light must be a positive finite array of the image's shape {image.shape[:2]}")
     fields = {field.name: getattr(params, field.name) for field in dataclasses.fields(params)}

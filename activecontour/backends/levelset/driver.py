@@ -146,7 +146,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
         phi = checkerboard_level_set(shape, period)  # redistanced below
     else:
-        phi = initial_level_set(init, shape, band=settings["band"], values=model.image)
+        phi = initial_level_set(init, shape, band=settings["band"], values=model.image,
+                                dtype=np.float32)
     state = problem.redistance(phi)
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
@@ -246,7 +247,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
                           status=status, backend="levelset", phi=phi)
     if not result.mask.any():  # collapsed, or the empty set is lower: phi says the same
-        result.phi = np.full(shape, -settings["band"])
+        result.phi = np.full(shape, -settings["band"], dtype=np.float32)
     return result
 
 

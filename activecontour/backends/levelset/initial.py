@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.backends.levelset.redistancing import curves_level_set, signed_distance
+from activecontour.backends.levelset.redistancing import _redistance, curves_level_set, signed_distance
 from activecontour.initial import initial_curves
 
 #: The strings ``init`` may be, besides None, curves, masks and results.
@@ -26,11 +26,13 @@ def checkerboard_level_set(shape, period):
     return (period / np.pi) * np.sin(np.pi * r / period) * np.sin(np.pi * c / period)
 
 
-def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, values=None):
+def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, values=None,
+                      dtype=np.float64):
     """The signed-distance level set of any ``init`` that :func:`segment_levelset` accepts.
 
     ``values`` (M, N, C), the normalised image, is used by ``"grid"`` only (see
-    :func:`activecontour.initial.grid`).
+    :func:`activecontour.initial.grid`).  ``dtype``: of the returned array (the backend keeps
+    phi in float32).
 
     Raises
     ------
@@ -40,7 +42,7 @@ def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, val
     """
     if isinstance(init, str):
         if init == "checkerboard":
-            return signed_distance(checkerboard_level_set(shape, checkerboard_period), band)
+            return signed_distance(checkerboard_level_set(shape, checkerboard_period), band).astype(dtype)
         if init not in INIT_STRINGS:
             raise ValueError(
                 f"init {init!r} is not understood by the level-set backend; the valid strings are "
@@ -49,12 +51,12 @@ def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, val
             )
     phi = getattr(init, "phi", None)
     if phi is not None and hasattr(init, "mask"):
-        phi = np.asarray(phi, dtype=np.float64)
+        phi = np.asarray(phi)
         if phi.shape != tuple(shape):
             raise ValueError(
                 f"init result has phi of shape {phi.shape}, but the image has shape {tuple(shape)}"
             )
         if not np.any(phi > 0):
             raise ValueError("init result has an empty inside (phi <= 0 everywhere)")
-        return signed_distance(phi, band)
-    return curves_level_set(initial_curves(init, shape, values), shape, band)
+        return _redistance(phi, band, dtype=dtype).phi
+    return curves_level_set(initial_curves(init, shape, values), shape, band, dtype=dtype)

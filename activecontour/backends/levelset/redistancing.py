@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.backends.levelset.zeroset import _cell_segments
+from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _corners
 from activecontour.raster import rasterize
 
 _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in float32
@@ -14,13 +14,35 @@ _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1,
 
 
 class _Redistanced:
-    """A band-clipped signed distance and the pixels of its band (for the swept area)."""
+    """A band-clipped signed distance, the pixels of its band and the cells Gamma crosses."""
 
-    def __init__(self, phi, positive, near_flat, near_distance):
-        self.phi = phi  # (M, N) float64, exact within the band, +-band beyond
+    def __init__(self, phi, positive, near_flat, near_distance, cells):
+        self.phi = phi  # (M, N), exact within the band, +-band beyond
         self.positive = positive  # phi > 0
         self.near_flat = near_flat  # flat indices of the pixels whose distance was computed
-        self.near_distance = near_distance  # their signed distances
+        self.near_distance = near_distance  # their signed distances (float64)
+        self.cells = cells  # the cells with a sign change (zeroset._change_cells), the same after
+
+
+class _Scratch:
+    """Work arrays of the band growth kept between calls, cleared on the band's pixels only.
+
+    A framed (M + 2) x (N + 2) grid: ``visited`` (the frame marked, sparing every bounds check)
+    and ``owner`` (segment ids, -1: none).  Filling them anew for every reinitialisation would
+    touch every pixel; clearing what one band touched is O(band).
+    """
+
+    def __init__(self, shape):
+        m, n = shape
+        self.width = n + 2
+        visited = np.zeros((m + 2, self.width), dtype=bool)
+        visited[0], visited[-1], visited[:, 0], visited[:, -1] = True, True, True, True
+        self.visited = visited.ravel()
+        self.owner = np.full((m + 2) * self.width, -1, dtype=np.int32)
+
+    def clear(self, touched):
+        self.visited[touched] = False
+        self.owner[touched] = -1
 
 
 def signed_distance(phi, band=np.inf):
@@ -53,23 +75,28 @@ def signed_distance(phi, band=np.inf):
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
 
-def _redistance(phi, band):
+def _redistance(phi, band, dtype=np.float64, scratch=None):
+    """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``; ``scratch``: a
+    :class:`_Scratch` of phi's shape to reuse (else one is made)."""
     positive = phi > 0
     front = np.flatnonzero(_front_pixels(positive))
     if front.size == 0 and positive.all():
-        return _domain_edge_distance(phi.shape, band)
+        return _domain_edge_distance(phi.shape, band, dtype)
     if front.size == 0:
-        return _Redistanced(_clipped(positive, band), positive, np.zeros(0, dtype=np.intp),
-                            np.zeros(0))
+        return _Redistanced(_clipped(positive, band, dtype), positive, np.zeros(0, dtype=np.intp),
+                            np.zeros(0), np.zeros(0, dtype=np.intp))
     rows, cols = np.divmod(front, phi.shape[1])
-    segments, nearest = _front_segments(phi, positive, rows, cols)
+    segments, nearest, cells = _front_segments(phi, positive, rows, cols)
     # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
     # of a narrow band, one sweep and the walk along Gamma are
     sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
-    return _propagate(positive, rows, cols, segments, nearest, band, sweeps)
+    state = _propagate(positive, rows, cols, segments, nearest, band, sweeps,
+                       dtype=dtype, scratch=scratch)
+    state.cells = cells
+    return state
 
 
-def _domain_edge_distance(shape, band):
+def _domain_edge_distance(shape, band, dtype=np.float64):
     """The whole image inside: the distance to the domain's edge, Gamma of the closed padding.
 
     A region that fills the image is bounded by the edge of the domain, half a pixel beyond the
@@ -81,15 +108,13 @@ def _domain_edge_distance(shape, band):
     to_cols = np.minimum(np.arange(n), np.arange(n)[::-1]) + 0.5
     distance = np.minimum(to_rows[:, None], to_cols[None, :])
     near = np.flatnonzero(distance < band)
-    return _Redistanced(np.minimum(distance, band), np.ones(shape, dtype=bool), near,
-                        distance.ravel()[near])
+    return _Redistanced(np.minimum(distance, band).astype(dtype), np.ones(shape, dtype=bool), near,
+                        distance.ravel()[near], np.zeros(0, dtype=np.intp))
 
 
-def _clipped(positive, band):
+def _clipped(positive, band, dtype=np.float64):
     """``+band`` inside, ``-band`` outside (inf for an infinite band)."""
-    if np.isfinite(band):
-        return positive * (2.0 * band) - band
-    return np.where(positive, np.inf, -np.inf)
+    return np.where(positive, dtype(band), dtype(-band))
 
 
 def _front_pixels(positive):
@@ -118,30 +143,30 @@ def _segment_distance(points, starts, ends):
 def _front_segments(phi, positive, rows, cols):
     """The zero-set segments (every cell with a sign change) and the nearest one to each front pixel.
 
-    Returns a :class:`_Segments` (every segment of Gamma once, and empty saddle slots) and
-    ``nearest (F,)``, an index into it.
+    Returns a :class:`_Segments` (every segment of Gamma once, and empty saddle slots),
+    ``nearest (F,)``, an index into it, and the cells with a sign change.
     """
     m, n = phi.shape
-    corner = positive[:-1, :-1]
-    change = (corner != positive[:-1, 1:]) | (corner != positive[1:, 1:]) | (corner != positive[1:, :-1])
-    cells = np.flatnonzero(change)
-    segments, keys = _cell_segments(phi, positive, cells // (n - 1), cells % (n - 1))
+    cells = _change_cells(positive)
+    cell_r, cell_c = np.divmod(cells, n - 1)
+    segments, keys = _cell_segments(*_corners(phi, cell_r, cell_c), cell_r, cell_c, n)
     segments, keys = segments.reshape(-1, 2, 2), keys.reshape(-1, 2)
-    # the cells around every front pixel, as slots into ``cells`` (-1: none, or no sign change)
-    slot = np.full(m * n, -1, dtype=np.int32)  # indexed by cell row * n + cell col (int32: half the traffic)
-    slot[(cells // (n - 1)) * n + cells % (n - 1)] = np.arange(cells.size)
+    # the cells around every front pixel, as slots into ``cells`` (sorted; -1: none, or no sign
+    # change): a search in the list of cells, not a lookup table over the image
     around = []
     for dr, dc in ((-1, -1), (-1, 0), (0, -1), (0, 0)):
         r, c = rows + dr, cols + dc
         inside = (r >= 0) & (r < m - 1) & (c >= 0) & (c < n - 1)
-        around.append(np.where(inside, slot[np.clip(r, 0, m - 1) * n + np.clip(c, 0, n - 1)], -1))
+        key = np.where(inside, r * (n - 1) + c, -1)
+        slot = np.minimum(np.searchsorted(cells, key), cells.size - 1)
+        around.append(np.where(inside & (cells[slot] == key), slot, -1))
     around = np.column_stack(around)
     candidates = np.where(around[:, :, None] >= 0, 2 * around[:, :, None] + np.arange(2), -1)
     candidates = candidates.reshape(len(rows), 8)
     table = _Segments(segments, _links(keys))
     gap = table.squared_gap(rows.astype(np.float32)[:, None], cols.astype(np.float32)[:, None], candidates)
     nearest = candidates[np.arange(len(rows)), np.argmin(gap, axis=1)]
-    return table, nearest
+    return table, nearest, cells
 
 
 def _links(keys):
@@ -194,16 +219,14 @@ class _Segments:
         return off_r
 
 
-def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
+def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np.float64,
+               scratch=None):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
     eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
     :func:`activecontour._kernels.grow_band`, O(pixels in the band))."""
     m, n = positive.shape
-    width = n + 2  # a one-pixel frame, marked visited, spares every bounds check
-    visited = np.zeros((m + 2, width), dtype=bool)
-    visited[0], visited[-1], visited[:, 0], visited[:, -1] = True, True, True, True
-    visited = visited.ravel()
-    owner = np.full((m + 2) * width, -1, dtype=np.int32)  # segment ids; -1 is the far sentinel
+    scratch = _Scratch((m, n)) if scratch is None else scratch
+    width, visited, owner = scratch.width, scratch.visited, scratch.owner
     steps = np.array([dr * width + dc for dr, dc in _NEIGHBOURS], dtype=np.intp)
     ring = ((rows + 1) * width + cols + 1).astype(np.intp)
     owner[ring] = nearest
@@ -216,19 +239,23 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1):
     count = _kernels.grow_band(visited.view(np.uint8), owner, out, np.empty(visited.size, np.int32),
                                ring.size, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
                                dir_c, inverse, np.ascontiguousarray(segments.links, dtype=np.intp))
-    flat = out[:count]
-    r, c = np.divmod(flat, width)
+    framed = out[:count]
+    r, c = np.divmod(framed, width)
     distance = np.sqrt(segments.squared_gap((r - 1).astype(np.float64), (c - 1).astype(np.float64),
-                                            owner[flat], exact=True))
+                                            owner[framed], exact=True))
+    scratch.clear(framed)
     flat = (r - 1) * n + (c - 1)
-    signed = np.where(positive.ravel()[flat], distance, -distance)
-    phi = _clipped(positive, band)
+    inside = positive.ravel()[flat]
+    # an inside pixel keeps a positive value (a distance that rounds to 0 would move it out): the
+    # sign pattern, and so the cells Gamma crosses, are those of the input
+    signed = np.where(inside, np.maximum(distance, np.finfo(np.float32).tiny), -distance)
+    phi = _clipped(positive, band, dtype)
     phi.ravel()[flat] = np.clip(signed, -band, band)
-    return _Redistanced(phi, positive, flat, signed)
+    return _Redistanced(phi, positive, flat, signed, None)
 
 
-def curves_level_set(curves, shape, band=np.inf):
-    """Signed distance to closed curves (inside positive), exact in the band.
+def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
+    """Signed distance to closed curves (inside positive), exact in the band, as ``dtype``.
 
     The inside is the rasterised region (pixel centres with nonzero winding,
     :func:`activecontour.raster.rasterize`); the pixels next to its boundary get their exact
@@ -247,7 +274,7 @@ def curves_level_set(curves, shape, band=np.inf):
     if not positive.any():
         raise ValueError("init selects no pixel centre of the image: nothing would be inside")
     if positive.all():  # the whole image inside: the flow starts from the domain's edge
-        return _domain_edge_distance(shape, band).phi
+        return _domain_edge_distance(shape, band, dtype).phi
     rows, cols = np.divmod(np.flatnonzero(_front_pixels(positive)), shape[1])
     pieces = [_densify(np.asarray(c, dtype=np.float64), 0.5) for c in curves]
     starts = np.concatenate(pieces)
@@ -265,7 +292,7 @@ def curves_level_set(curves, shape, band=np.inf):
     gap = _segment_distance(points[:, None, :], starts[near], ends[near])
     nearest = near[np.arange(len(points)), np.argmin(gap, axis=1)]
     segments = _Segments(np.stack([starts, ends], axis=1), links)
-    return _propagate(positive, rows, cols, segments, nearest, band, sweeps=2).phi
+    return _propagate(positive, rows, cols, segments, nearest, band, sweeps=2, dtype=dtype).phi
 
 
 def _densify(curve, spacing):
