@@ -147,22 +147,33 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
 
 
 def _reseed(classes, image, n_regions, run, model, params, tries=3):
-    """One merge-and-split move (see :func:`segment_labels`): (labels, status) or None."""
+    """One merge-and-split move (see :func:`segment_labels`): (labels, status) or None.
+
+    A candidate is descended only if it can pay: the most its pixels' fit can gain (their squared
+    distance to their region's mean) must exceed the merge's cost (Ward's, 0 for an empty
+    region).  Well separated regions then cost no trial at all.
+    """
+    gray = image.mean(axis=2)
+    weight = float(np.mean(params.weights(image.shape[2])[0])) * image.shape[2]
     count = np.bincount(classes.ravel(), minlength=n_regions)
     empty = np.flatnonzero(count == 0)
     if empty.size:
-        base, label = classes, int(empty[0])
+        base, label, merge_cost = classes, int(empty[0]), 0.0
     else:
-        gray = image.mean(axis=2).ravel()
-        mean = np.bincount(classes.ravel(), weights=gray, minlength=n_regions) / count
+        mean = np.bincount(classes.ravel(), weights=gray.ravel(), minlength=n_regions) / count
         pairs = [(count[a] * count[b] / (count[a] + count[b]) * (mean[a] - mean[b]) ** 2, a, b)
                  for a in range(n_regions) for b in range(a + 1, n_regions)]
-        _, keep, label = min(pairs)
+        merge_cost, keep, label = min(pairs)
+        merge_cost *= weight
         base = np.where(classes == label, keep, classes).astype(classes.dtype)
     splits = [_split(base, image, region, label)
               for region in np.flatnonzero(np.bincount(base.ravel(), minlength=n_regions) > 1)]
     splits = sorted((split for split in splits if split is not None), key=lambda split: -split[0])
     for _, start in splits[:tries]:
+        moved = start == label
+        region = base[moved][0]
+        if weight * np.sum((gray[moved] - gray[base == region].mean()) ** 2) <= merge_cost:
+            continue
         trial, status = run.descend(start, record=False)
         energy = evaluate_partition(model, class_boundary(trial), params, n_regions).energy
         if energy < run.energies[-1] * (1.0 - 1e-9):
