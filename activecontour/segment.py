@@ -332,26 +332,27 @@ def _smooth_light(values, init, params, run):
     """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
     update (partition and constants fixed).  Returns the result, its image model and parameters.
 
-    Two starts for the light: uniform (the first run is the constant fit, and every later step
-    lowers J below it) and the least-squares light of the whole image as one region (right when
-    the objects are a small part of the image, as faint objects under a vignette, where the
-    constant fit splits the image along the light instead; wrong when large objects make the
-    light).  The backend's start (its default start on the image corrected by each light, or
-    ``init``) is scored under both; the alternation runs from the one of lower energy.  When
-    the light stays uniform the result is the constant fit's, and ``result.light`` is None.
+    Two starts for the light: uniform (the constant fit: c_k b = c_k) and the least-squares light
+    of the whole image as one region (right when the objects are a small part of the image, as
+    faint objects under a vignette, where the constant fit splits the image along the light
+    instead; wrong when large objects make the light).  The constant fit always runs; the other
+    start runs too when its start (the backend's default start on the image corrected by that
+    light, or ``init``) has the lower energy.  The alternation continues from the better result,
+    and the lowest energy of every run is returned, so the smooth fit never ends above the
+    constant fit.  When that is the constant fit's own result, ``result.light`` is None.
     """
     from activecontour.models.smooth import fit_light, light_basis, smooth_light_model
 
     basis = light_basis(values.shape[:2])
     one_region = np.zeros(values.shape[:2], dtype=np.intp)
-    light = fit_light(values, one_region, np.ones((1, values.shape[2])), params, basis)
-    model, model_params = smooth_light_model(values, light, params)
-    # with b = 1 the smooth model is the constant one (c_k b = c_k): that start runs on the image
-    # alone; the other on the features.  The start of lower energy (before any iteration) runs.
-    starts = [(ImageModel(values), params, None), (model, model_params, light)]
-    model, model_params, light = min(
-        starts, key=lambda start: run(start[0], init, start[1], max_num_iter=0).energy)
-    result = run(model, init, model_params)
+    whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), params, basis)
+    plain = (ImageModel(values), params, None)
+    lit = (*smooth_light_model(values, whole_light, params), whole_light)
+    runs = [(run(plain[0], init, plain[1]), *plain)]
+    start_energy = [run(start[0], init, start[1], max_num_iter=0).energy for start in (plain, lit)]
+    if start_energy[1] < start_energy[0]:
+        runs.append((run(lit[0], init, lit[1]), *lit))
+    result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
     for _ in range(_LIGHT_ROUNDS):
         new = fit_light(values, *_classes_and_constants(result), model_params, basis)
         if np.max(np.abs(new - (1.0 if light is None else light))) < _LIGHT_TOL:
@@ -359,6 +360,8 @@ def _smooth_light(values, init, params, run):
         light = new
         model, model_params = smooth_light_model(values, light, params)
         result = run(model, result, model_params)
+        runs.append((result, model, model_params, light))
+    result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
     result.light = light
     return result, model, model_params
 

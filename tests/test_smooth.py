@@ -102,3 +102,15 @@ def test_smooth_n_regions_on_the_label_field():
 def test_bad_fit_is_refused():
     with pytest.raises(ValueError, match="fit must be one of"):
         ac.segment(np.zeros((10, 10)), fit="linear")
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_smooth_never_ends_above_the_constant_fit(backend):
+    # a large noisy disk: the whole image's light is the disk itself, a start that loses it
+    rows, cols = np.mgrid[:128, :128]
+    truth = np.hypot(rows - 60, cols - 66) < 38
+    image = 0.3 + 0.4 * truth + np.random.default_rng(4).normal(0, 0.4, truth.shape)
+    constant = ac.segment(image, backend=backend)
+    smooth = ac.segment(image, backend=backend, fit="smooth")
+    assert smooth.energy <= constant.energy
+    assert _dice(smooth.mask, truth) > 0.95
