@@ -313,7 +313,12 @@ class ImageModel:
     Parameters
     ----------
     values : ndarray of shape (M, N, C)
-        Normalised intensities, as returned by :func:`normalize_image`.
+        Normalised intensities, as returned by :func:`normalize_image`, or the feature channels
+        of a model whose integrands are quadratic forms in them (:mod:`activecontour.models`).
+    image : ndarray of shape (M, N, C'), optional
+        What a start looks at (:func:`activecontour.initial.initial_curves`): the intensities
+        when ``values`` are features (the smooth fit's image corrected by its light field);
+        by default ``values``.
 
     Attributes
     ----------
@@ -325,11 +330,12 @@ class ImageModel:
         ``int_D 1``, ``int_D I`` and ``int_D I^2``, exactly, for the outside region by subtraction.
     """
 
-    def __init__(self, values):
+    def __init__(self, values, image=None):
         values = np.ascontiguousarray(values, dtype=np.float64)
         if values.ndim != 3:
             raise ValueError("ImageModel expects normalised values of shape (M, N, C)")
         self.values = values
+        self.image = values if image is None else image
         self.shape = values.shape[:2]
         self.n_channels = values.shape[2]
         m, n = self.shape

@@ -145,7 +145,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
         phi = checkerboard_level_set(shape, period)  # redistanced below
     else:
-        phi = initial_level_set(init, shape, band=settings["band"], values=model.values,
+        phi = initial_level_set(init, shape, band=settings["band"], values=model.image,
                                 dtype=np.float32)
     # after the start: its temporaries (the default start's) are gone before the work arrays come
     problem = _Problem(model, params, settings)

@@ -18,21 +18,14 @@ def heaviside(phi, epsilon=1.0):
 
 
 def _force(values, c_in, c_out, params):
-    """The integrand f of the shape derivative (6.41) at pixels of the image: the Chan-Vese density.
+    """The integrand f of the shape derivative (6.41) at pixels of the image: ``g_i - g_o``.
 
-    ``f = omega + lambda_in mean_ch (I - c_in)^2 - lambda_out mean_ch (I - c_out)^2`` for
-    ``values (..., C)``; returns ``(...)`` float64.  The level set's only view of the energy's
-    density: the region terms of (6.38) are written here once.
+    The model's :meth:`~activecontour.models.ChanVeseParameters.load_form` evaluated on
+    ``values (..., C)`` (for (6.38): ``omega + lambda_in mean_ch (I - c_in)^2 - lambda_out mean_ch
+    (I - c_out)^2``); returns ``(...)`` float64.  The level set's only view of the energy's
+    density, which the model writes once for every consumer.
     """
-    lambda_in, lambda_out = params.weights(values.shape[-1])
-    pixels = values.reshape(-1, values.shape[-1])  # (K, C)
-    # expanded in powers of I: linear in I (one pass) unless lambda_in != lambda_out; einsum, not
-    # a BLAS matrix-vector product, whose threads spin on a shared machine
-    f = np.einsum("kc,c->k", pixels, -2.0 * (lambda_in * c_in - lambda_out * c_out))
-    f += params.omega + lambda_in @ (c_in * c_in) - lambda_out @ (c_out * c_out)
-    if np.any(lambda_in != lambda_out):
-        f += np.einsum("kc,kc,c->k", pixels, pixels, lambda_in - lambda_out)
-    return f.reshape(values.shape[:-1])
+    return params.load_form(c_in, c_out).density(values)
 
 
 class _Problem:
