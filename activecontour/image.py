@@ -30,8 +30,8 @@ import numpy as np
 
 from activecontour import _kernels
 
-__all__ = ["MAX_PIXELS", "NORMALIZATIONS", "ImageModel", "SizeLimitError", "channels_last",
-           "intensity_scale", "load_image", "normalize_image"]
+__all__ = ["CHANNEL_COUNTS", "MAX_PIXELS", "NORMALIZATIONS", "ImageModel", "SizeLimitError", "channels_last",
+           "intensity_scale", "load_image", "normalize_image", "single_image"]
 
 _COLOR_MODES = ("gray", "vector")
 #: The choices of ``normalize``: the image's own range (default), its dtype's range, or as given.
@@ -107,6 +107,16 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
         raise ValueError(f"image path is a directory, not a file: {path!r}")
     if max_pixels is not None:
         _check_size(path, _declared_pixels(path), max_pixels)
+    if path.lower().endswith((".tif", ".tiff")):
+        from activecontour.sequence import tiff_frame_count
+
+        try:
+            frames = tiff_frame_count(path)
+        except Exception:  # not a TIFF tifffile reads: the readers below say what it is
+            frames = 1
+        if frames > 1:
+            raise ValueError(f"{path!r} is a stack of {frames} frames, not one image: segment it with "
+                             f"activecontour.segment_sequence")
     image = _read_opencv(path)
     if image is None:  # a format or variant OpenCV does not read
         import skimage.io
@@ -205,6 +215,51 @@ def channels_last(image):
             and min(image.shape[1:]) > 4):
         return np.moveaxis(image, 0, -1)
     return image
+
+
+#: Sizes of an axis that can hold channels: gray, gray + alpha, RGB, RGBA.
+CHANNEL_COUNTS = (1, 2, 3, 4)
+
+
+def single_image(image, channel_axis=None):
+    """The array as one image, (M, N) or (M, N, C) channel-last, or a one-line error for a stack.
+
+    The layout rule of :func:`activecontour.segment`: a 2-D array is an image; a 3-D array whose
+    last axis has 1-4 entries is an image with channels (gray, gray + alpha, RGB, RGBA); a 3-D
+    array whose *first* axis has 2-4 entries and whose last is longer may be that many frames or
+    channel-first colour, so it is refused unless ``channel_axis`` says which axis holds the
+    channels (``channel_axis=0``); any other 3-D or higher array is a stack of frames (time or z)
+    and is refused with the name of :func:`activecontour.segment_sequence`.
+
+    Parameters
+    ----------
+    image : ndarray
+    channel_axis : int or None
+        The axis holding the channels (1-4 entries) of a 3-D array; None: the rule above.
+    """
+    image = np.asarray(image)
+    if channel_axis is not None:
+        if isinstance(channel_axis, bool) or not isinstance(channel_axis, (int, np.integer)):
+            raise TypeError(f"channel_axis must be an integer axis or None, got {channel_axis!r}")
+        if image.ndim != 3 or not -3 <= channel_axis < 3 or image.shape[channel_axis] not in CHANNEL_COUNTS:
+            raise ValueError(f"channel_axis={channel_axis} must name an axis of 1-4 channels of a 3-D "
+                             f"image, got shape {image.shape}")
+        return np.moveaxis(image, channel_axis, -1)
+    if image.ndim <= 2 or (image.ndim == 3 and image.shape[2] in CHANNEL_COUNTS):
+        return image
+    if image.ndim == 3 and image.shape[0] in CHANNEL_COUNTS[1:]:
+        raise ValueError(
+            f"image of shape {image.shape} is ambiguous: {image.shape[0]} frames or channel-first "
+            f"colour? pass channel_axis=0 for colour, or segment the frames with "
+            f"activecontour.segment_sequence")
+    if image.ndim == 3 and image.shape[0] < min(image.shape[1:]):
+        raise ValueError(
+            f"image of shape {image.shape} is a stack of {image.shape[0]} frames, not one image: "
+            f"segment it with activecontour.segment_sequence, or pass one frame")
+    raise ValueError(
+        f"image of shape {image.shape} is not one image with 1 (gray), 2 (gray + alpha), 3 (RGB) or "
+        f"4 (RGBA) channels last; a stack of frames (time or z) is segmented by "
+        f"activecontour.segment_sequence (axis= names the frame axis)")
 
 
 def _intensity_channels(image):

@@ -60,6 +60,7 @@ import threading
 import time
 from pathlib import Path
 
+from . import sequence_cli
 from .status_line import StatusLine, duration
 
 PROG = "activecontour"
@@ -166,6 +167,7 @@ def build_parser():
     )
     _add_options(segment.add_argument_group("outputs and limits"), _output_options())
     _add_parameter_options(segment)
+    sequence_cli.add_options(segment)
     segment.add_argument(
         "--option", dest="options", action="append", type=_option, default=None, metavar="KEY=VALUE",
         help="a backend setting passed in segment(options=...), e.g. smoothing=10 or dt=32; "
@@ -299,9 +301,19 @@ def _run_segment(args):
     left_out = []
     # folders and patterns expanded; a missing file stops here
     images = find_images(*args.images, left_out=left_out)
+    stacks = [path for path in images if sequence_cli.is_stack(path, args.axis)]
+    if args.frames is not None and not stacks:
+        raise UsageError("--frames selects frames of a stack (a multi-page TIFF or a video); "
+                         "no input is one")
+    images = [path for path in images if path not in stacks]
     plans = _plan_outputs(images, args.output, args.formats, args.objects)
     overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
+    first_init = list(init) if isinstance(init, _ContourInit) else init  # the first frame's start
+    stack_failures = (sequence_cli.run(stacks, args, settings, overlay, _print_line, first_init)
+                      if stacks else 0)
+    if not plans:
+        return EXIT_USAGE if stack_failures else 0
     if left_out and not args.quiet:
         more = f" and {len(left_out) - 1} more" if len(left_out) > 1 else ""
         print(f"{PROG}: note: left out {_shown(left_out[0])}{more}, named like this tool's outputs "
@@ -322,7 +334,13 @@ def _run_segment(args):
     if failures and len(plans) > 1:
         print(f"{PROG}: error: {failures} of {len(plans)} images failed; the others were written",
               file=sys.stderr)
-    return EXIT_USAGE if failures else 0
+    return EXIT_USAGE if failures or stack_failures else 0
+
+
+def _print_line(line, failed):
+    """A stack's summary line (stdout) or error line (stderr), as for images."""
+    print(f"{PROG}: error: {_shown(line)}" if failed else _shown(line),
+          file=sys.stderr if failed else sys.stdout, flush=True)
 
 
 def _segment_serially(plans, batch, show_progress):
