@@ -42,6 +42,7 @@ __all__ = [
     "chan_vese_energy",
     "evaluate",
     "evaluate_partition",
+    "partition_load",
     "partition_moments",
     "region_moments",
     "stack_curves",
@@ -120,7 +121,7 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     """
     area, length, s1, s2 = _moments(model, points, next_index)
     total_area, total1, total2 = model.totals
-    constants = params.fit_constants(area, s1, model.totals, empty_ok=empty_ok)
+    constants = params.fit_constants(area, s1, s2, model.totals, empty_ok=empty_ok)
     if constants is None:
         nan = np.full(model.n_channels, np.nan)
         return Evaluation(np.inf, nan, nan, area, length, None)
@@ -189,19 +190,50 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None):
     """
     areas, first, second = partition_moments(model, boundary, n_classes)
     if constants is None:
-        mean = model.totals[1] / model.totals[0]
-        filled = areas > 1e-9
-        constants = np.where(filled[:, None], first / np.where(filled, areas, 1.0)[:, None], mean)
+        whole = params.region_constant(*model.totals)
+        constants = np.array([params.region_constant(a, f, q) if a > 1e-9 else whole
+                              for a, f, q in zip(areas, first, second, strict=True)])
     lengths = boundary.length
-    length = float(lengths[boundary.outer >= 0].sum() + lengths[(boundary.outer < 0) & (boundary.inner > 0)].sum())
+    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
+    length = float(lengths[counted].sum())
     forms = params.class_forms(constants)
     energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
                                       in zip(forms, areas, first, second, strict=True))
     return PartitionEvaluation(float(energy), constants, areas, length)
 
 
+def partition_load(model, boundary, params, constants):
+    """The derivative of the N-region functional (:func:`evaluate_partition`, constants fixed) with
+    respect to both ends of every boundary segment, shape (S, 2, 2): ``[s, 0]`` the start's.
+
+    On a segment between regions i (inner) and o (outer) the integrand of (6.41) is ``g_i - g_o``
+    (``g_i`` alone on the image border); the length term is mu's on interfaces and on the border
+    of regions other than the background.  A point shared by several segments (a junction) moves
+    with the sum of their loads.
+    """
+    forms = params.class_forms(constants)
+    zero = forms[0] - forms[0]
+    load = np.zeros((len(boundary.start), 2, 2))
+    pairs = np.unique(np.column_stack([boundary.inner, boundary.outer]), axis=0)
+    for inner, outer in pairs:
+        chosen = np.flatnonzero((boundary.inner == inner) & (boundary.outer == outer))
+        form = forms[inner] - (forms[outer] if outer >= 0 else zero)
+        mu = params.mu if (outer >= 0 or inner > 0) else 0.0
+        points = np.empty((2 * chosen.size, 2))
+        points[0::2], points[1::2] = boundary.start[chosen], boundary.end[chosen]
+        next_index = np.repeat(np.arange(1, len(points), 2), 2)
+        out = np.zeros_like(points)
+        _kernels.edge_integrals(points, next_index, model.values, model.table, 1,
+                                np.ascontiguousarray(form.linear), np.ascontiguousarray(form.square),
+                                form.constant, float(mu), np.zeros(model.n_channels),
+                                np.zeros(model.n_channels), np.zeros(2), out)
+        load[chosen, 0], load[chosen, 1] = out[0::2], out[1::2]
+    return load
+
+
 def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,
-                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range"):
+                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
+                     light=None):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
@@ -228,6 +260,9 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     color : {"gray", "vector"}
     normalize : {"range", "dtype", None}
         As in :func:`activecontour.segment`: pass the same choices to score a result.
+    light : ndarray (M, N), optional
+        The light field b of the smooth fit (``result.light`` of ``fit="smooth"``): region k's
+        intensity is ``c_k b`` (:mod:`activecontour.models.smooth`).  None: the constant fit.
 
     Returns
     -------
@@ -246,9 +281,15 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     from activecontour.image import ImageModel, normalize_image
     from activecontour.noise import auto_mu, is_auto
 
-    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
-    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
+    values = normalize_image(image, color=color, normalize=normalize)
+    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
+    if light is None:
+        model = ImageModel(values)
+    else:
+        from activecontour.models.smooth import smooth_light_model
+
+        model, params = smooth_light_model(values, np.asarray(light, dtype=np.float64), params)
     if (contours is None) == (classes is None):
         raise TypeError("chan_vese_energy takes either contours or classes")
     if classes is not None:
@@ -298,9 +339,9 @@ def _classes_energy(model, classes, params):
             raise ValueError("c_in and c_out fix the constants of two regions; leave them None "
                              "for classes with more than two regions")
         fit = evaluate_partition(model, class_boundary(classes), params, 2)
-        constants = np.array([fit.constants[0] if params.c_out is None else
-                              params.constant("c_out", model.n_channels),
-                              fit.constants[1] if params.c_in is None else
-                              params.constant("c_in", model.n_channels)])
+        channels = params.image_channels(model.n_channels)
+        fixed = {name: params.constant(name, channels) for name in ("c_out", "c_in")}
+        constants = np.array([fit.constants[k] if fixed[name] is None else fixed[name]
+                              for k, name in enumerate(("c_out", "c_in"))])
     return evaluate_partition(model, class_boundary(classes), params, max(n_classes, 2),
                               constants).energy

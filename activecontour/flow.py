@@ -157,7 +157,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
     # exactly: resampling it would cut its corners and move it off its minimum
     geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
-                             for c in initial_curves(init, shape, model.values, params.mu)])
+                             for c in initial_curves(init, shape, model.image, params.mu)])
     current = evaluate(model, *geometry[:2], params, gradient=True)
     if not np.isfinite(current.energy):
         raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")

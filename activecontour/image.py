@@ -106,7 +106,7 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
     if os.path.isdir(path):
         raise ValueError(f"image path is a directory, not a file: {path!r}")
     if max_pixels is not None:
-        _check_size(path, _declared_size(path), max_pixels)
+        _check_size(path, _declared_pixels(path), max_pixels)
     if path.lower().endswith((".tif", ".tiff")):
         from activecontour.sequence import tiff_frame_count
 
@@ -131,27 +131,27 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
     if image.ndim not in (2, 3) or image.size == 0:
         raise ValueError(f"image {path!r} is not a 2-D image (shape {image.shape})")
     if max_pixels is not None:
-        _check_size(path, image.shape[:2], max_pixels)
+        rows, cols = image.shape[:2]
+        _check_size(path, (rows * cols, f"{rows} x {cols} = {rows * cols:,}"), max_pixels)
     return image
 
 
-def _check_size(path, size, max_pixels):
-    if size is None:
-        return
-    rows, cols = size
-    if rows * cols > max_pixels:
-        raise SizeLimitError(f"image {path!r} has {rows} x {cols} = {rows * cols:,} pixels, more than "
-                             f"the limit of {max_pixels:,} (max_pixels)")
+def _check_size(path, declared, max_pixels):
+    """Refuse ``declared = (pixels, how to say it)`` over ``max_pixels``; None passes."""
+    if declared is not None and declared[0] > max_pixels:
+        raise SizeLimitError(f"image {path!r} has {declared[1]} pixels, more than the limit of "
+                             f"{max_pixels:,} (max_pixels)")
 
 
-def _declared_size(path):
-    """(rows, cols) as the file's header declares them, without decoding the pixels; None when the
-    header cannot be read this way (the size is then checked after decoding)."""
+def _declared_pixels(path):
+    """``(pixels, how to say it)`` as the file's header declares them, without decoding the
+    pixels; None when the header cannot be read this way (the size is then checked after
+    decoding)."""
     with open(path, "rb") as handle:
         head = handle.read(24)
     if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
-        width, height = struct.unpack(">II", head[16:24])
-        return height, width
+        cols, rows = struct.unpack(">II", head[16:24])
+        return rows * cols, f"{rows} x {cols} = {rows * cols:,}"
     try:
         from PIL import Image
     except ModuleNotFoundError:  # pragma: no cover - Pillow comes with scikit-image
@@ -160,13 +160,12 @@ def _declared_size(path):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # Pillow's own (lower) decompression-bomb warning
             with Image.open(path) as opened:
-                width, height = opened.size
-    except Image.DecompressionBombError:
-        # over twice Pillow's limit; Pillow does not say by how much
-        return 1, 2 * Image.MAX_IMAGE_PIXELS + 1
+                cols, rows = opened.size
+    except Image.DecompressionBombError:  # over twice Pillow's own limit, by how much it does not say
+        return 2 * Image.MAX_IMAGE_PIXELS + 1, f"more than {2 * Image.MAX_IMAGE_PIXELS:,}"
     except Exception:  # not a format Pillow knows, or damaged: the readers below say so
         return None
-    return height, width
+    return rows * cols, f"{rows} x {cols} = {rows * cols:,}"
 
 
 def _read_opencv(path):
@@ -369,7 +368,12 @@ class ImageModel:
     Parameters
     ----------
     values : ndarray of shape (M, N, C)
-        Normalised intensities, as returned by :func:`normalize_image`.
+        Normalised intensities, as returned by :func:`normalize_image`, or the feature channels
+        of a model whose integrands are quadratic forms in them (:mod:`activecontour.models`).
+    image : ndarray of shape (M, N, C'), optional
+        What a start looks at (:func:`activecontour.initial.initial_curves`): the intensities
+        when ``values`` are features (the smooth fit's image corrected by its light field);
+        by default ``values``.
 
     Attributes
     ----------
@@ -381,11 +385,12 @@ class ImageModel:
         ``int_D 1``, ``int_D I`` and ``int_D I^2``, exactly, for the outside region by subtraction.
     """
 
-    def __init__(self, values):
+    def __init__(self, values, image=None):
         values = np.ascontiguousarray(values, dtype=np.float64)
         if values.ndim != 3:
             raise ValueError("ImageModel expects normalised values of shape (M, N, C)")
         self.values = values
+        self.image = values if image is None else image
         self.shape = values.shape[:2]
         self.n_channels = values.shape[2]
         m, n = self.shape

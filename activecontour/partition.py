@@ -167,7 +167,8 @@ def chain(starts, ends):
 
     Segment ends lie on the half-pixel lattice (midpoints and cell centres), so they are matched
     exactly.  Where a region pinches (two of its corners meet at a junction) a point has two
-    outgoing segments; either pairing gives closed curves of the same region.
+    outgoing segments; either pairing gives closed curves of the same region.  Vertices inside
+    straight runs are dropped.
     """
     if len(starts) == 0:
         return []
@@ -191,8 +192,18 @@ def chain(starts, ends):
             seen[current] = True
             loop.append(current)
             current = following[current]
-        curves.append(starts[loop])
+        curves.append(_corners(starts[loop]))
     return curves
+
+
+def _corners(curve):
+    """The curve without its vertices inside straight runs (exactly collinear on the half-pixel
+    lattice): the same polygon, a fraction of the vertices."""
+    before = curve - np.roll(curve, 1, axis=0)
+    after = np.roll(curve, -1, axis=0) - curve
+    turn = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
+    straight = (turn == 0) & (np.einsum("ij,ij->i", before, after) > 0)
+    return curve[~straight] if np.count_nonzero(~straight) >= 3 else curve
 
 
 def _keys(points):

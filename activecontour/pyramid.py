@@ -68,21 +68,24 @@ def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, to
 
     factor = reduction_factor(model.shape, max_side)
     if factor == 1:
-        return initial_curves(init, model.shape, model.values, params.mu)
+        return initial_curves(init, model.shape, model.image, params.mu)
     m, n = model.shape[0] // factor, model.shape[1] // factor
     # block means; the last (shape % factor) rows and columns are left out of the reduced copy
-    reduced = model.values[: m * factor, : n * factor].reshape(m, factor, n, factor, -1).mean(axis=(1, 3))
+    reduced, reduced_image = (
+        array[: m * factor, : n * factor].reshape(m, factor, n, factor, -1).mean(axis=(1, 3))
+        for array in (model.values, model.image))
     # reduced pixel (i, j) covers full pixels factor * i .. factor * i + factor - 1: its centre
     # is at factor * i + (factor - 1) / 2
     offset = (factor - 1) / 2.0
     start = None  # the default start, found on the reduced copy (it reads every pixel)
     if init is not None:
-        curves = initial_curves(init, model.shape, model.values, params.mu)
+        curves = initial_curves(init, model.shape, model.image, params.mu)
         start = [(curve - offset) / factor for curve in curves]
         if min(abs(signed_area(curve)) for curve in start) < _MIN_REDUCED_AREA:
             return curves  # a curve too small to see on the reduced copy: start at full size
-    result = segment_polygon(ImageModel(reduced), start, dataclasses.replace(params, mu=params.mu / factor),
+    result = segment_polygon(ImageModel(reduced, reduced_image), start,
+                             dataclasses.replace(params, mu=params.mu / factor),
                              max_num_iter=max_num_iter, tol=tol, callback=None, **options)
     if not result.contours:
-        return initial_curves(init, model.shape, model.values, params.mu)
+        return initial_curves(init, model.shape, model.image, params.mu)
     return [factor * curve + offset for curve in result.contours]

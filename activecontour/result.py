@@ -67,6 +67,9 @@ class SegmentationResult:
     classes : int ndarray (M, N) or None
         The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
         by increasing mean intensity; set by :func:`activecontour.segment`.
+    light : ndarray (M, N) or None
+        The light field b of ``fit="smooth"`` (mean 1): region k's intensity is ``c_k b``; None
+        for ``fit="constant"`` and when the smooth fit found the light uniform.
     constants : ndarray (K, C) or None
         The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
         :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
@@ -95,6 +98,7 @@ class SegmentationResult:
     object_contours: list | None = None
     classes: np.ndarray | None = None
     constants: np.ndarray | None = None
+    light: np.ndarray | None = None
     roi: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)

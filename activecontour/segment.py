@@ -18,7 +18,14 @@ from activecontour.raster import mask_to_curves
 from activecontour.result import build_result, scalar_if_gray
 from activecontour.roi import ROI_INIT_MARGIN, crop_init, init_neighbourhood, resolve_roi, restrict_values
 
-__all__ = ["BACKENDS", "INSIDE", "segment"]
+__all__ = ["BACKENDS", "FITS", "INSIDE", "segment"]
+
+#: The models of the regions' intensities (``fit``).
+FITS = ("constant", "smooth")
+#: Rounds of the smooth fit's alternation (light field, then contour) at most ...
+_LIGHT_ROUNDS = 4
+#: ... ending when the light field changes by less than this (it has mean 1).
+_LIGHT_TOL = 0.01
 
 #: The choices of ``inside``: which region holds the objects.
 INSIDE = ("auto", "bright", "dark")
@@ -32,8 +39,8 @@ BACKENDS = {
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, inside="auto", roi=None, separate=True,
-            channel_axis=None, options=None):
+            color="gray", normalize="range", n_regions=2, fit="constant", inside="auto", roi=None,
+            separate=True, channel_axis=None, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -93,6 +100,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
         :mod:`activecontour.backends.labelfield`), started from the global K-means of the
         intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+    fit : {"constant", "smooth"}
+        ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
+        is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
+        mean 1), estimated with the contour by alternating minimisation
+        (:mod:`activecontour.models.smooth`): for uneven illumination, vignetting, shading.
+        ``result.light`` is b; ``constants``, ``c_in``, ``c_out`` are the c_k.
     inside : {"auto", "bright", "dark"}
         Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
         the class that covers less of the image border, and given curves are the inside as drawn.
@@ -109,7 +122,9 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     separate : bool
         Objects that touch get their own ids in ``result.labels`` (split along the necks of the
         inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
-        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
+        piece.  With ``n_regions > 2`` an object is a piece of one class (touching pieces of two
+        classes are two objects; ``result.objects["class"]`` says which).  ``result.mask``,
+        ``result.contours`` and the energy do not depend on it.
     channel_axis : int, optional
         The axis holding the colour channels of a 3-D array, e.g. 0 for channel-first (3, M, N);
         None: the last, when it has 1-4 entries.
@@ -141,6 +156,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
     _check_regions(n_regions, backend, c_in, c_out, options, roi)
+    if fit not in FITS:
+        raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     image = single_image(image, channel_axis)
@@ -156,7 +173,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         _check_options(solver, backend, options or {})
     solve = functools.partial(
         _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
-        inside=inside, normalize=normalize, callback=callback,
+        inside=inside, normalize=normalize, callback=callback, fit=fit,
         settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
     if isinstance(roi, str) and roi == "init":
         # the smallest neighbourhood of the init that holds the object: grown while the result
@@ -177,15 +194,19 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     pixels = np.asarray(image)
     if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
+    # objects are the connected pieces of each non-background region (N regions: of each class,
+    # traced on the label field's own pixel grid)
+    by_class = result.contours if result.classes is None else [
+        mask_to_curves(result.classes == k) for k in range(1, int(n_regions))]
     result.object_contours, result.labels, result.objects = find_objects(
-        result.contours, shape, pixels, separate=bool(separate))
+        by_class, shape, pixels, separate=bool(separate))
     if result.classes is None:  # two regions: the inside is region 1
         result.classes = result.mask.astype(np.int32)
         result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
     return result
 
 
-def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, settings):
+def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, settings):
     """Run the backend on the image, or on the crop of a region of interest.
 
     Returns the result in the whole image's frame, the parameters used, and the affine map
@@ -203,9 +224,16 @@ def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callb
         init = crop_init(init, box, shape)
         if callback is not None:
             callback = _whole_image_callback(callback, box, shape)
-    model = ImageModel(values)
-    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, *constants)
-    result = solver(model, init, params, callback=callback, **settings)
+    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, *constants)
+
+    def run(model, init, params, max_num_iter=settings["max_num_iter"]):
+        return solver(model, init, params, callback=callback, **{**settings, "max_num_iter": max_num_iter})
+
+    if fit == "smooth":
+        result, model, params = _smooth_light(values, init, params, run)
+    else:
+        model = ImageModel(values)
+        result = run(model, init, params)
     result = _make_inside(result, inside, model, params)
     if domain is not None:
         domain_curves = mask_to_curves(domain)
@@ -312,3 +340,48 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
     if options:
         raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
                         "takes none")
+
+
+def _smooth_light(values, init, params, run):
+    """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
+    update (partition and constants fixed).  Returns the result, its image model and parameters.
+
+    Two starts for the light: uniform (the constant fit: c_k b = c_k) and the least-squares light
+    of the whole image as one region (right when the objects are a small part of the image, as
+    faint objects under a vignette, where the constant fit splits the image along the light
+    instead; wrong when large objects make the light).  The constant fit always runs; the other
+    start runs too when its start (the backend's default start on the image corrected by that
+    light, or ``init``) has the lower energy.  The alternation continues from the better result,
+    and the lowest energy of every run is returned, so the smooth fit never ends above the
+    constant fit.  When that is the constant fit's own result, ``result.light`` is None.
+    """
+    from activecontour.models.smooth import fit_light, light_basis, smooth_light_model
+
+    basis = light_basis(values.shape[:2])
+    one_region = np.zeros(values.shape[:2], dtype=np.intp)
+    whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), params, basis)
+    plain = (ImageModel(values), params, None)
+    lit = (*smooth_light_model(values, whole_light, params), whole_light)
+    runs = [(run(plain[0], init, plain[1]), *plain)]
+    start_energy = [run(start[0], init, start[1], max_num_iter=0).energy for start in (plain, lit)]
+    if start_energy[1] < start_energy[0]:
+        runs.append((run(lit[0], init, lit[1]), *lit))
+    result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
+    for _ in range(_LIGHT_ROUNDS):
+        new = fit_light(values, *_classes_and_constants(result), model_params, basis)
+        if np.max(np.abs(new - (1.0 if light is None else light))) < _LIGHT_TOL:
+            break
+        light = new
+        model, model_params = smooth_light_model(values, light, params)
+        result = run(model, result, model_params)
+        runs.append((result, model, model_params, light))
+    result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
+    result.light = light
+    return result, model, model_params
+
+
+def _classes_and_constants(result):
+    """A result's regions and their constants (two regions: the inside is region 1)."""
+    if result.classes is not None:
+        return result.classes, result.constants
+    return result.mask.astype(np.intp), np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])

@@ -12,13 +12,14 @@ Usage
                           [--init-circle ROW COL RADIUS | --init-rect ROW0 COL0 ROW1 COL1 |
                            --init-mask FILE | --init-contours FILE | --init-grid |
                            --init-checkerboard] [--option KEY=VALUE ...]
-                          [--overlay-color COLOR] [--quiet]
-    activecontour view IMAGE [the same parameter and init options]
+                          [--line-color COLOR] [--line-width PX] [--max-pixels N] [--quiet]
+    activecontour view IMAGE [the same parameter and init options] [--max-pixels N]
 
 ``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
-(the contour drawn on the image) and ``<DIR>/<name>_contours.<fmt>`` for each format, where
-``<name>`` is the image's file name without its suffix.  ``DIR`` defaults to the directory of each
-image and is created when the first files go into it.  A FOLDER stands for the images in it and a
+(the contour drawn on the image, shown by its own range) and ``<DIR>/<name>_contours.<fmt>`` for
+each format, where ``<name>`` is the image's file name without its suffix, made safe
+(:func:`activecontour.io.output_stem`: never outside ``DIR``).  ``DIR`` defaults to the directory
+of each image and is created when the first files go into it.  A FOLDER stands for the images in it and a
 quoted GLOB (``'data/**/*.tif'``) for the files it matches, both sorted, without this tool's own
 outputs (:func:`activecontour.batch.find_images`).  ``--jobs N`` (default: every core) segments N
 images at a time in worker processes (:mod:`app.batch`); the files are the same as with
@@ -36,11 +37,13 @@ and that the output directory can be created.  Any problem there prints one line
 ``activecontour: error: ...`` on stderr and exits with status 2.  Then each image is read,
 checked against the init, segmented and saved; an image that fails (unreadable, init outside it,
 an error while writing) gets one such line naming it, and the batch goes on with the next image;
-the exit status is 2 if any image failed.  Each image's files are written as a group, all or none
+the exit status is 2 if any image failed.  Images over ``--max-pixels`` are refused from the size
+their file declares, before decoding.  Each image's files are written as a group, all or none
 (:func:`activecontour.io.save_result`), so a failed or interrupted run never leaves a half-written
 file, and images finished earlier keep their outputs.  Ctrl-C ends the run at once, status 130
 (the image being segmented is abandoned: nothing of it is written).  A run that reaches
 ``--max-iter`` without converging is not an error: its summary says ``success=False`` and why.
+File names in every line are escaped (a newline as ``\\n``), so each message is one line.
 """
 
 from __future__ import annotations
@@ -916,6 +919,8 @@ def _run_view(args):
         if not (takes_any or "formats" in accepted):
             raise UsageError("the viewer does not take --format")
         kwargs["formats"] = tuple(args.formats)
+    if takes_any or "max_pixels" in accepted:
+        kwargs["max_pixels"] = args.max_pixels
     status = launch(args.image, **kwargs)
     return 0 if status is None else int(status)
 

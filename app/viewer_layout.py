@@ -33,7 +33,7 @@ __all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLID
            "Layout", "build_layout", "fit_text", "refit_texts", "set_slider_value", "show_energy",
            "show_image"]
 
-#: Colour of the current contour: the default overlay colour of :func:`activecontour.io.save_result`.
+#: Colour of the current contour on screen (red, as the overlays of gray images are drawn).
 CONTOUR_COLOR = (1.0, 0.0, 0.0)
 #: Colour of the initial curve (dashed) and of the mouse preview.
 INIT_COLOR = (0.0, 0.85, 1.0)

@@ -112,3 +112,22 @@ def test_nucleation_follows_the_common_evaluator(change):
         sites = topology.nucleation_sites(values, inside, form, mu, radius)
         assert any(not hole and 20 <= c[0] < 40 and 20 <= c[1] < 40 for c, hole in sites) == found
 
+
+
+@pytest.mark.parametrize("change", PERTURBED)
+def test_level_set_force_follows_the_common_evaluator(change):
+    from activecontour.backends.levelset import DEFAULT_OPTIONS
+    from activecontour.backends.levelset.scheme import _Problem
+
+    params = _params(**change)
+    value = 0.75
+    g = _density_by_the_evaluator(params, value)
+    image = np.full((20, 20), 0.5)
+    image[5:15, 5:15] = value
+    model = _model(image)
+    problem = _Problem(model, params, DEFAULT_OPTIONS)
+    constants, _ = problem.force(params.c_in, params.c_out)
+    force = problem.force_rows(0, 20, constants)
+    # away from the border (which adds mu per side) the force is g_i - g_o of the pixel
+    assert force[10, 10] == pytest.approx(g, rel=1e-9, abs=1e-12)
+    assert force[0, 10] == pytest.approx(_density_by_the_evaluator(params, 0.5) + params.mu, rel=1e-9)

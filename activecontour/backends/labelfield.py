@@ -83,15 +83,20 @@ def order_classes(classes, values, n_classes):
     return mapping[classes]
 
 
-def _pixel_constants(classes, values, n_classes):
-    count = np.bincount(classes.ravel(), minlength=n_classes).astype(np.float64)
-    flat = values.reshape(-1, values.shape[2])
-    mean = flat.mean(axis=0)
-    out = np.empty((n_classes, values.shape[2]))
+def _pixel_constants(classes, values, n_classes, params):
+    """The model's constants (6.42) of every region from its pixel sums (the image mean for an
+    empty region)."""
+    flat = classes.ravel()
+    count = np.bincount(flat, minlength=n_classes).astype(np.float64)
+    first = np.empty((n_classes, values.shape[2]))
+    second = np.empty((n_classes, values.shape[2]))
     for ch in range(values.shape[2]):
-        sums = np.bincount(classes.ravel(), weights=flat[:, ch], minlength=n_classes)
-        out[:, ch] = np.where(count > 0, sums / np.maximum(count, 1), mean[ch])
-    return out
+        channel = values[..., ch].ravel()
+        first[:, ch] = np.bincount(flat, weights=channel, minlength=n_classes)
+        second[:, ch] = np.bincount(flat, weights=channel * channel, minlength=n_classes)
+    whole = params.region_constant(float(flat.size), first.sum(axis=0), second.sum(axis=0))
+    return np.array([params.region_constant(a, f, q) if a > 0 else whole
+                     for a, f, q in zip(count, first, second, strict=True)])
 
 
 def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callback):
@@ -119,39 +124,137 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     SegmentationResult
         With ``classes`` (0 = background, the others by mean intensity) and ``constants``.
     """
-    values = model.values
+    image = model.image
     shape = tuple(model.shape)
-    classes = order_classes(_initial(init, values, n_regions, shape), values, n_regions)
-    wall = np.zeros(shape, dtype=np.float32)
-    if params.mu > 0:  # a region other than the background pays for the image border it covers
-        for edge in (wall[0], wall[-1], wall[:, 0], wall[:, -1]):
-            edge += np.float32(params.mu)
-    current = evaluate_partition(model, class_boundary(classes), params, n_regions)
-    energies, status = [current.energy], 1
-    for n_iter in range(1, max_num_iter + 1):
-        cost = np.empty((n_regions,) + shape, dtype=np.float32)
-        for k, form in enumerate(params.class_forms(_pixel_constants(classes, values, n_regions))):
-            cost[k] = form.density(values)
-            if k > 0:
-                cost[k] += wall
-        new, changed = _sweep(classes, cost, params.mu)
-        if changed == 0:
-            n_iter -= 1
-            status = 0
+    classes = order_classes(_initial(init, image, n_regions, shape), image, n_regions)
+    run = _Descent(model, params, n_regions, max_num_iter, tol, callback)
+    classes, status = run.descend(classes)
+    # Local moves cannot bring back a region the descent emptied (its start sat on edges), nor
+    # free one that duplicates another's level, nor find a small region that K-means missed (it
+    # halves large noisy regions instead).  So at convergence: free a label (an empty region, or
+    # the cheapest merge of two regions by Ward's cost), give it to the pixels that stand out
+    # most significantly in some region (:func:`_split`), descend, and keep the result if J is
+    # lower; most significant split first, until none lowers J.  A start from a previous result
+    # (a smooth fit's next round, a sequence's next frame) keeps its regions: no reseeding.
+    for _ in range(0 if hasattr(init, "classes") else 2 * n_regions):
+        if status != 0:
             break
-        classes = new
-        current = evaluate_partition(model, class_boundary(classes), params, n_regions)
-        energies.append(current.energy)
-        if callback is not None and callback(FlowState(n_iter, [], current.energy, None, None, shape,
-                                                       max_num_iter, phi=np.where(classes > 0, 1.0, -1.0))):
-            status = 2
+        trial = _reseed(classes, image, n_regions, run, model, params)
+        if trial is None:
             break
-        if changed <= tol * max(current.length, 1.0):
-            status = 0
-            break
+        classes, status = trial
+    return _result(model, params, classes, n_regions, run.energies, run.n_iter, status)
+
+
+def _reseed(classes, image, n_regions, run, model, params, tries=3):
+    """One merge-and-split move (see :func:`segment_labels`): (labels, status) or None.
+
+    A candidate is descended only if it can pay: the most its pixels' fit can gain (their squared
+    distance to their region's mean) must exceed the merge's cost (Ward's, 0 for an empty
+    region).  Well separated regions then cost no trial at all.
+    """
+    gray = image.mean(axis=2)
+    weight = float(np.mean(params.weights(image.shape[2])[0])) * image.shape[2]
+    count = np.bincount(classes.ravel(), minlength=n_regions)
+    empty = np.flatnonzero(count == 0)
+    if empty.size:
+        base, label, merge_cost = classes, int(empty[0]), 0.0
     else:
-        n_iter = max_num_iter
-    return _result(model, params, classes, n_regions, energies, n_iter, status)
+        mean = np.bincount(classes.ravel(), weights=gray.ravel(), minlength=n_regions) / count
+        pairs = [(count[a] * count[b] / (count[a] + count[b]) * (mean[a] - mean[b]) ** 2, a, b)
+                 for a in range(n_regions) for b in range(a + 1, n_regions)]
+        merge_cost, keep, label = min(pairs)
+        merge_cost *= weight
+        base = np.where(classes == label, keep, classes).astype(classes.dtype)
+    splits = [_split(base, image, region, label)
+              for region in np.flatnonzero(np.bincount(base.ravel(), minlength=n_regions) > 1)]
+    splits = sorted((split for split in splits if split is not None), key=lambda split: -split[0])
+    for _, start in splits[:tries]:
+        moved = start == label
+        region = base[moved][0]
+        if weight * np.sum((gray[moved] - gray[base == region].mean()) ** 2) <= merge_cost:
+            continue
+        trial, status = run.descend(start, record=False)
+        energy = evaluate_partition(model, class_boundary(trial), params, n_regions).energy
+        if energy < run.energies[-1] * (1.0 - 1e-9):
+            run.energies.append(energy)
+            return trial, status
+    return None
+
+
+class _Descent:
+    """Alternating constants (6.42) and sweeps (:func:`_sweep`) until no pixel changes."""
+
+    def __init__(self, model, params, n_regions, max_num_iter, tol, callback):
+        self.model, self.params, self.n_regions = model, params, n_regions
+        self.max_num_iter, self.tol, self.callback = max_num_iter, tol, callback
+        shape = tuple(model.shape)
+        self.wall = np.zeros(shape, dtype=np.float32)
+        if params.mu > 0:  # a region other than the background pays for the image border it covers
+            for edge in (self.wall[0], self.wall[-1], self.wall[:, 0], self.wall[:, -1]):
+                edge += np.float32(params.mu)
+        self.energies, self.n_iter = [], 0
+
+    def descend(self, classes, record=True):
+        """Returns the labels and the status (0 converged, 1 out of iterations, 2 callback)."""
+        model, params, n_regions = self.model, self.params, self.n_regions
+        values = model.values
+        if record:
+            self.energies.append(evaluate_partition(model, class_boundary(classes), params, n_regions).energy)
+        while self.n_iter < self.max_num_iter:
+            cost = np.empty((n_regions,) + tuple(model.shape), dtype=np.float32)
+            constants = _pixel_constants(classes, values, n_regions, params)
+            for k, form in enumerate(params.class_forms(constants)):
+                cost[k] = form.density(values)
+                if k > 0:
+                    cost[k] += self.wall
+            new, changed = _sweep(classes, cost, params.mu)
+            if changed == 0:
+                return classes, 0
+            classes = new
+            self.n_iter += 1
+            if record:
+                current = evaluate_partition(model, class_boundary(classes), params, n_regions)
+                self.energies.append(current.energy)
+                if self.callback is not None and self.callback(FlowState(
+                        self.n_iter, [], current.energy, None, None, tuple(model.shape), self.max_num_iter,
+                        phi=np.where(classes > 0, 1.0, -1.0))):
+                    return classes, 2
+                if changed <= self.tol * max(current.length, 1.0):
+                    return classes, 0
+        return classes, 1
+
+
+def _split(classes, values, region, label):
+    """Give ``label`` to the pixels of ``region`` that stand out from it: (weight, labels) with
+    the sum of their squared deviations, or None.
+
+    The intensities are smoothed within the region (normalised convolution: no neighbouring
+    region's edge leaks in); a pixel stands out when it lies more than 3 robust standard deviations
+    (1.4826 MAD) from the region's median, on the side (above or below) whose deviations weigh
+    more.  Not a 2-means split: on a large noisy region 2-means halves the noise, whatever small
+    structure the region hides.
+    """
+    import cv2
+
+    member = classes == region
+    weight = member.astype(np.float32)
+    gray = values.mean(axis=2).astype(np.float32) * weight
+    blur = {"ksize": (0, 0), "sigmaX": _INIT_SMOOTHING, "borderType": cv2.BORDER_REPLICATE}
+    smooth = cv2.GaussianBlur(gray, **blur) / np.maximum(cv2.GaussianBlur(weight, **blur), 1e-6)
+    inside = smooth[member]
+    centre = np.median(inside)
+    spread = 1.4826 * np.median(np.abs(inside - centre))
+    deviation = smooth - centre
+    upper = member & (deviation > 3.0 * spread) & (deviation > 0)
+    lower = member & (deviation < -3.0 * spread) & (deviation < 0)
+    weight = max(np.sum(deviation[upper] ** 2), np.sum(deviation[lower] ** 2))
+    side = upper if np.sum(deviation[upper] ** 2) >= np.sum(deviation[lower] ** 2) else lower
+    if not side.any():
+        return None
+    out = classes.copy()
+    out[side] = label
+    return weight, out
 
 
 def _initial(init, values, n_regions, shape):
@@ -168,7 +271,7 @@ def _initial(init, values, n_regions, shape):
 
 
 def _result(model, params, classes, n_regions, energies, n_iter, status):
-    classes = order_classes(classes, model.values, n_regions)
+    classes = order_classes(classes, model.image, n_regions)
     boundary = class_boundary(classes)
     final = evaluate_partition(model, boundary, params, n_regions)
     energies = list(energies)
@@ -217,7 +320,9 @@ def _sweep(classes, cost, mu):
     """
     m, n = classes.shape
     classes = classes.copy()
-    prefers_other = np.argmin(cost, axis=0) != classes
+    # an interior pixel pays at least 4 corner cuts (half of them at the image border) to change
+    own = np.take_along_axis(cost, classes[None].astype(np.intp), axis=0)[0]
+    prefers_other = own - cost.min(axis=0) > np.float32(2.0 * _HALF * mu)
     changed = 0
     for pi in range(2):
         for pj in range(2):

@@ -60,9 +60,10 @@ class QuadraticForm:
 
     def density(self, values):
         """``g`` at every pixel: values (..., C) -> (...), float64."""
-        out = values @ self.linear + self.constant
-        if np.any(self.square != 0):
-            out += (values * values) @ self.square
+        out = np.full(values.shape[:-1], self.constant)
+        for channel, (linear, square) in enumerate(zip(self.linear, self.square, strict=True)):
+            v = values[..., channel]
+            out += v * (linear + square * v) if square != 0 else linear * v
         return out
 
     def integral(self, area, first, second):

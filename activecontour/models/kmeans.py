@@ -79,6 +79,6 @@ def histogram_kmeans(values, n_classes, *, bins=256):
         starts[k] = choice[k, j]
         j = starts[k] - 1
     stops = np.append(starts[1:], n)
-    levels = np.array([(p_total[b] - p_total[a]) / (p_count[b] - p_count[a]) for a, b in zip(starts, stops, strict=True)])
+    levels = (p_total[stops] - p_total[starts]) / (p_count[stops] - p_count[starts])
     thresholds = edges[stops[:-1] - 1]
     return thresholds, levels

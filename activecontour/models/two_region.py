@@ -89,40 +89,49 @@ class ChanVeseParameters:
             raise ValueError(f"{name} has {value.size} values for an image with {n_channels}")
         return np.broadcast_to(value, (n_channels,)).astype(np.float64)
 
-    def fit_constants(self, area, first, totals, *, empty_ok):
+    def fit_constants(self, area, first, second, totals, *, empty_ok):
         """``(c_in, c_out)`` by (6.42) from the inside moments, or None where (6.42) is undefined.
 
         Parameters
         ----------
-        area, first : float, ndarray (C,)
-            ``int_{Omega_i} 1`` and ``int_{Omega_i} I`` (per channel).
+        area, first, second : float, ndarray (C,), ndarray (C,)
+            ``int_{Omega_i} 1``, ``int v`` and ``int v^2`` per feature channel.
         totals : tuple
-            ``int_D 1``, ``int_D I``, ... over the domain (the outside by subtraction).
+            The same over the domain (the outside by subtraction).
         empty_ok : bool
             When a region whose constant is optimised is empty (6.42 is undefined): False returns
             None (the flow's view: no step is accepted into that state); True reports the
             constant equal to the other region's (its fitting term is 0 whatever it is).
         """
-        channels = len(first)
-        total_area, total1 = totals[0], totals[1]
-        outside_area = total_area - area
+        channels = self.image_channels(len(first))
+        inside = (area, first, second)
+        outside = tuple(total - part for total, part in zip(totals, inside, strict=True))
         c_in = self.constant("c_in", channels)
         c_out = self.constant("c_out", channels)
-        empty_in, empty_out = area <= 1e-9, outside_area <= 1e-9
+        empty_in, empty_out = area <= 1e-9, outside[0] <= 1e-9
         if (empty_in and c_in is None) or (empty_out and c_out is None):
             if not empty_ok:
                 return None
+            whole = self.region_constant(*totals)
             if empty_in:  # the whole image is outside (or, below, inside)
-                c_out = total1 / total_area if c_out is None else c_out
+                c_out = whole if c_out is None else c_out
                 c_in = c_out if c_in is None else c_in
             else:
-                c_in = total1 / total_area if c_in is None else c_in
+                c_in = whole if c_in is None else c_in
                 c_out = c_in if c_out is None else c_out
         if c_in is None:
-            c_in = first / area
+            c_in = self.region_constant(*inside)
         if c_out is None:
-            c_out = (total1 - first) / outside_area
+            c_out = self.region_constant(*outside)
         return c_in, c_out
+
+    def image_channels(self, n_features):
+        """The image's channels C for ``n_features`` feature channels: the same here."""
+        return n_features
+
+    def region_constant(self, area, first, second):
+        """(6.42): the region's mean, from its moments ``int 1, int v, int v^2``."""
+        return first / area
 
     def region_forms(self, c_in, c_out):
         """The integrands ``(g_0, g_1)`` of the outside and the inside as quadratic forms."""
