@@ -900,3 +900,15 @@ def test_the_mu_slider_is_logarithmic_and_the_default_sits_inside_it(disk_image,
     for value in (0.003, 0.05, 2.0):  # a click anywhere gives the value under the pointer
         set_slider(viewer, mu, value)
         assert viewer.parameters()["mu"] == pytest.approx(value, rel=1e-6)
+
+
+def test_the_contour_stands_out_from_a_red_image_on_screen_too(make_viewer):
+    import matplotlib.colors
+
+    red_image = np.zeros((48, 64, 3))
+    red_image[..., 0] = 0.8
+    red_image[10:30, 20:40, 0] = 0.4  # a darker red square
+    viewer = make_viewer(red_image)
+    shown = matplotlib.colors.to_rgb(viewer.contour_lines.get_color()[0])
+    assert shown != viewer_module.CONTOUR_COLOR  # red would vanish on red
+    assert np.linalg.norm(np.subtract(shown, (0.8, 0, 0))) > 0.9
