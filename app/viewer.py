@@ -68,6 +68,7 @@ from .viewer_layout import (
     SLIDERS,
     STEP_OPTIONS,
     build_layout,
+    contour_color,
     new_figure,
     refit_texts,
     set_slider_value,
@@ -418,6 +419,7 @@ class Viewer:
         self._clear_run()
         self.drawer.cancel()
         show_image(self.ax_image, display)
+        self.contour_lines.set_color(contour_color(display))
         toolbar = getattr(self.fig.canvas, "toolbar", None)
         if toolbar is not None:
             toolbar.update()  # forget the zoom and pan history of the old image

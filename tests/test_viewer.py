@@ -916,3 +916,15 @@ def test_drawing_around_one_blob_among_many_gives_that_blob(make_viewer):
     assert viewer.result is not None and viewer.result.labels.max() == 1
     assert synthetic.dice(viewer.result.mask, target) >= 0.97
     assert not (viewer.result.mask & others).any()
+
+
+def test_the_contour_stands_out_from_a_red_image_on_screen_too(make_viewer):
+    import matplotlib.colors
+
+    red_image = np.zeros((48, 64, 3))
+    red_image[..., 0] = 0.8
+    red_image[10:30, 20:40, 0] = 0.4  # a darker red square
+    viewer = make_viewer(red_image)
+    shown = matplotlib.colors.to_rgb(viewer.contour_lines.get_color()[0])
+    assert shown != viewer_module.CONTOUR_COLOR  # red would vanish on red
+    assert np.linalg.norm(np.subtract(shown, (0.8, 0, 0))) > 0.9
