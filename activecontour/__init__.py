@@ -7,6 +7,7 @@ derivative (6.41), on a polygon, or on a level-set function over the pixel grid.
 Parts
 -----
 segment            the entry point: ``segment(image, init, backend=..., mu=..., ...)``
+segment_sequence   a time-lapse or z-stack, each frame from the last, objects tracked (sequence)
 segment_many       many images in worker processes, results as they finish (also on Dask: batch)
 SegmentationResult the result of every backend
 circle, rectangle  initial curves (any (K, 2) array, list of them, or bool mask also works)
@@ -43,16 +44,20 @@ from activecontour.image import load_image
 from activecontour.initial import circle, rectangle
 from activecontour.result import FlowState, SegmentationResult
 from activecontour.segment import segment
+from activecontour.sequence import SequenceResult, iter_sequence, segment_sequence
 
 __all__ = [
     "FlowState",
     "SegmentationResult",
+    "SequenceResult",
     "chan_vese_energy",
     "circle",
     "load_image",
     "rectangle",
+    "iter_sequence",
     "segment",
     "segment_many",
+    "segment_sequence",
 ]
 
 __version__ = "0.1.0"

@@ -16,7 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["STALE_AFTER_S", "sweep_temporaries", "write_atomically", "write_group"]
+__all__ = ["STALE_AFTER_S", "sweep_temporaries", "temporary_file", "write_atomically", "write_group"]
 
 #: A temporary file older than this (seconds) is swept whoever wrote it (a writer on another
 #: machine of a shared file system, whose process cannot be asked after).
@@ -61,6 +61,13 @@ def write_group(items):
         raise
     for _, backup in backups:
         _remove_quietly(backup)
+
+
+def temporary_file(path):
+    """A new empty temporary file next to ``path``, for a file too large to render in memory (a
+    label stack written frame by frame): write it, then :func:`os.replace` it onto ``path``.  Named
+    like every temporary here, so :func:`sweep_temporaries` removes it if its writer is killed."""
+    return _temporary_copy(path, b"")
 
 
 def _temporary_copy(path, data):

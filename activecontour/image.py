@@ -30,8 +30,8 @@ import numpy as np
 
 from activecontour import _kernels
 
-__all__ = ["MAX_PIXELS", "NORMALIZATIONS", "ImageModel", "SizeLimitError", "channels_last",
-           "intensity_scale", "load_image", "normalize_image"]
+__all__ = ["CHANNEL_COUNTS", "MAX_PIXELS", "NORMALIZATIONS", "ImageModel", "SizeLimitError", "channels_last",
+           "intensity_scale", "load_image", "normalize_image", "single_image"]
 
 _COLOR_MODES = ("gray", "vector")
 #: The choices of ``normalize``: the image's own range (default), its dtype's range, or as given.
@@ -106,7 +106,17 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
     if os.path.isdir(path):
         raise ValueError(f"image path is a directory, not a file: {path!r}")
     if max_pixels is not None:
-        _check_size(path, _declared_size(path), max_pixels)
+        _check_size(path, _declared_pixels(path), max_pixels)
+    if path.lower().endswith((".tif", ".tiff")):
+        from activecontour.sequence import tiff_frame_count
+
+        try:
+            frames = tiff_frame_count(path)
+        except Exception:  # not a TIFF tifffile reads: the readers below say what it is
+            frames = 1
+        if frames > 1:
+            raise ValueError(f"{path!r} is a stack of {frames} frames, not one image: segment it with "
+                             f"activecontour.segment_sequence")
     image = _read_opencv(path)
     if image is None:  # a format or variant OpenCV does not read
         import skimage.io
@@ -121,27 +131,27 @@ def load_image(path, *, max_pixels=MAX_PIXELS):
     if image.ndim not in (2, 3) or image.size == 0:
         raise ValueError(f"image {path!r} is not a 2-D image (shape {image.shape})")
     if max_pixels is not None:
-        _check_size(path, image.shape[:2], max_pixels)
+        rows, cols = image.shape[:2]
+        _check_size(path, (rows * cols, f"{rows} x {cols} = {rows * cols:,}"), max_pixels)
     return image
 
 
-def _check_size(path, size, max_pixels):
-    if size is None:
-        return
-    rows, cols = size
-    if rows * cols > max_pixels:
-        raise SizeLimitError(f"image {path!r} has {rows} x {cols} = {rows * cols:,} pixels, more than "
-                             f"the limit of {max_pixels:,} (max_pixels)")
+def _check_size(path, declared, max_pixels):
+    """Refuse ``declared = (pixels, how to say it)`` over ``max_pixels``; None passes."""
+    if declared is not None and declared[0] > max_pixels:
+        raise SizeLimitError(f"image {path!r} has {declared[1]} pixels, more than the limit of "
+                             f"{max_pixels:,} (max_pixels)")
 
 
-def _declared_size(path):
-    """(rows, cols) as the file's header declares them, without decoding the pixels; None when the
-    header cannot be read this way (the size is then checked after decoding)."""
+def _declared_pixels(path):
+    """``(pixels, how to say it)`` as the file's header declares them, without decoding the
+    pixels; None when the header cannot be read this way (the size is then checked after
+    decoding)."""
     with open(path, "rb") as handle:
         head = handle.read(24)
     if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
-        width, height = struct.unpack(">II", head[16:24])
-        return height, width
+        cols, rows = struct.unpack(">II", head[16:24])
+        return rows * cols, f"{rows} x {cols} = {rows * cols:,}"
     try:
         from PIL import Image
     except ModuleNotFoundError:  # pragma: no cover - Pillow comes with scikit-image
@@ -150,13 +160,12 @@ def _declared_size(path):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # Pillow's own (lower) decompression-bomb warning
             with Image.open(path) as opened:
-                width, height = opened.size
-    except Image.DecompressionBombError:
-        # over twice Pillow's limit; Pillow does not say by how much
-        return 1, 2 * Image.MAX_IMAGE_PIXELS + 1
+                cols, rows = opened.size
+    except Image.DecompressionBombError:  # over twice Pillow's own limit, by how much it does not say
+        return 2 * Image.MAX_IMAGE_PIXELS + 1, f"more than {2 * Image.MAX_IMAGE_PIXELS:,}"
     except Exception:  # not a format Pillow knows, or damaged: the readers below say so
         return None
-    return height, width
+    return rows * cols, f"{rows} x {cols} = {rows * cols:,}"
 
 
 def _read_opencv(path):
@@ -206,6 +215,51 @@ def channels_last(image):
             and min(image.shape[1:]) > 4):
         return np.moveaxis(image, 0, -1)
     return image
+
+
+#: Sizes of an axis that can hold channels: gray, gray + alpha, RGB, RGBA.
+CHANNEL_COUNTS = (1, 2, 3, 4)
+
+
+def single_image(image, channel_axis=None):
+    """The array as one image, (M, N) or (M, N, C) channel-last, or a one-line error for a stack.
+
+    The layout rule of :func:`activecontour.segment`: a 2-D array is an image; a 3-D array whose
+    last axis has 1-4 entries is an image with channels (gray, gray + alpha, RGB, RGBA); a 3-D
+    array whose *first* axis has 2-4 entries and whose last is longer may be that many frames or
+    channel-first colour, so it is refused unless ``channel_axis`` says which axis holds the
+    channels (``channel_axis=0``); any other 3-D or higher array is a stack of frames (time or z)
+    and is refused with the name of :func:`activecontour.segment_sequence`.
+
+    Parameters
+    ----------
+    image : ndarray
+    channel_axis : int or None
+        The axis holding the channels (1-4 entries) of a 3-D array; None: the rule above.
+    """
+    image = np.asarray(image)
+    if channel_axis is not None:
+        if isinstance(channel_axis, bool) or not isinstance(channel_axis, (int, np.integer)):
+            raise TypeError(f"channel_axis must be an integer axis or None, got {channel_axis!r}")
+        if image.ndim != 3 or not -3 <= channel_axis < 3 or image.shape[channel_axis] not in CHANNEL_COUNTS:
+            raise ValueError(f"channel_axis={channel_axis} must name an axis of 1-4 channels of a 3-D "
+                             f"image, got shape {image.shape}")
+        return np.moveaxis(image, channel_axis, -1)
+    if image.ndim <= 2 or (image.ndim == 3 and image.shape[2] in CHANNEL_COUNTS):
+        return image
+    if image.ndim == 3 and image.shape[0] in CHANNEL_COUNTS[1:]:
+        raise ValueError(
+            f"image of shape {image.shape} is ambiguous: {image.shape[0]} frames or channel-first "
+            f"colour? pass channel_axis=0 for colour, or segment the frames with "
+            f"activecontour.segment_sequence")
+    if image.ndim == 3 and image.shape[0] < min(image.shape[1:]):
+        raise ValueError(
+            f"image of shape {image.shape} is a stack of {image.shape[0]} frames, not one image: "
+            f"segment it with activecontour.segment_sequence, or pass one frame")
+    raise ValueError(
+        f"image of shape {image.shape} is not one image with 1 (gray), 2 (gray + alpha), 3 (RGB) or "
+        f"4 (RGBA) channels last; a stack of frames (time or z) is segmented by "
+        f"activecontour.segment_sequence (axis= names the frame axis)")
 
 
 def _intensity_channels(image):

@@ -216,6 +216,13 @@ DEFAULT_INIT_BLUR = 1.0
 DEFAULT_INIT_MIN_AREA = 4.0
 
 
+def speck_area(mu, contrast):
+    """Area (px^2) below which a piece of a start is dropped: a disk of radius r pays ``2 pi r mu``
+    of length for ``pi r^2 contrast`` of fit, so pieces under ``pi (2 mu / contrast)^2`` (and
+    under ``DEFAULT_INIT_MIN_AREA``) would vanish at once.  ``contrast`` is ``(c_in - c_out)^2``."""
+    return max(DEFAULT_INIT_MIN_AREA, np.pi * (2.0 * mu / contrast) ** 2)
+
+
 def default_init(shape, values=None, mu=0.0):
     """The documented default start: the global minimiser of (6.38) over threshold sets, as curves.
 
@@ -272,7 +279,7 @@ def threshold_starts(values, mu=0.0, *, background=False):
     del planes, smooth  # image-sized: free before tracing the mask's outlines
     if contrast <= 0:
         return [[]] * (1 + background)
-    speck = max(DEFAULT_INIT_MIN_AREA, np.pi * (2.0 * mu / contrast) ** 2)
+    speck = speck_area(mu, contrast)
     return [mask_to_curves(part, min_area=speck) for part in ((inside, ~inside) if background else (inside,))]
 
 

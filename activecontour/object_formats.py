@@ -31,8 +31,8 @@ import numpy as np
 
 from activecontour.curve import to_xy
 
-__all__ = ["OBJECT_FORMATS", "encode_objects", "object_paths", "read_label_image", "read_objects_csv",
-           "read_objects_geojson"]
+__all__ = ["OBJECT_FORMATS", "encode_objects", "encode_table", "object_paths", "read_label_image",
+           "read_objects_csv", "read_objects_geojson"]
 
 #: format name -> file name suffix after the stem
 OBJECT_FORMATS = {
@@ -75,7 +75,7 @@ def encode_objects(result, fmt):
         return _geojson(result.object_contours, result.objects)
     if fmt == "roi":
         return _roi_zip(result.object_contours, result.objects["label"])
-    return _csv(result.objects)
+    return encode_table(result.objects)
 
 
 def _label_png(labels):
@@ -156,7 +156,9 @@ def _roi_zip(objects, ids):
     return buffer.getvalue()
 
 
-def _csv(table):
+def encode_table(table):
+    """A table (dict of 1-D arrays, one row per object) as CSV bytes: a header of the column
+    names, floats written exactly (repr)."""
     import csv
 
     text = io.StringIO()

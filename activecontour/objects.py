@@ -106,7 +106,7 @@ def find_objects(contours, shape, image=None, *, separate=True):
     table : dict of str to ndarray
         :func:`measure`, with a ``class`` column.
     """
-    by_class = [contours] if not contours or np.ndim(contours[0]) == 2 else list(contours)
+    by_class = [contours] if not contours or isinstance(contours[0], np.ndarray) else list(contours)
     objects, classes = [], []
     for k, curves in enumerate(by_class):
         found = group_curves(curves)
@@ -263,19 +263,30 @@ NECK_RATIO = 0.9
 #: Parts whose largest inscribed radius is below this (pixels) are never split off: at that size a
 #: neck is a pixel or two of the boundary's noise.
 MIN_SPLIT_RADIUS = 3.0
+#: A neck must also be this much (pixels) narrower than the thinner part's inscribed radius: the
+#: converged contour wiggles by a fraction of a pixel, which on a ring or a stroke of constant
+#: width makes necks of a few per cent.
+MIN_NECK_DEPTH = 1.0
 
 
 def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPLIT_RADIUS):
     """Split objects along their necks: touching objects become separate objects.
 
-    For each object, the pixels of its label are over-segmented by the watershed of their
-    Euclidean distance to the background from every local maximum (an inscribed-circle centre).
+    For each object, the pixels inside its outer boundary (holes filled: the rim around a hole is
+    not a neck) are over-segmented by the watershed of their exact distance to that boundary from
+    every local maximum (an inscribed-circle centre).
     Neighbouring parts are then merged, the pair with the widest neck first, while the half-width
     of the neck between them (the largest distance value on their common border) is at least
-    ``neck_ratio`` times the smaller of their largest inscribed radii, or the smaller radius is
-    below ``min_radius``.  The parts left have a narrow neck between every two of them.  A shape
-    of one piece (a ring, a stroke, a limb on a body) has no neck narrower than the thinner side,
-    so it is never split.
+    ``neck_ratio`` times the smaller of their largest inscribed radii, or within
+    ``MIN_NECK_DEPTH`` pixels of it, or the smaller radius is below ``min_radius``.  The parts
+    left have a narrow neck between every two of them.  A neck must also be a waist: the split
+    line ends in a concavity of the outline (``MIN_WAIST_DEPTH`` inside the convex hull) at both
+    ends; a notch on one side of one object (a coin's dark slit) is not a contact of two.  Last,
+    a part that is not blob-like (solidity below ``MIN_PART_SOLIDITY`` or aspect above
+    ``MAX_PART_ASPECT``: a body with legs, a bent stroke) takes its neighbours back, until every
+    part is a blob or one is left.
+    A shape of one piece (a ring, a stroke, a limb on a body) has no neck much narrower than its
+    thinner side, or has parts that are no blobs, so it is not split.
 
     The split is applied to the sub-pixel polygon: the parts' pixels, grown over the object's
     bounding box, become cells whose shared borders are straightened (``shapely.coverage_simplify``
@@ -303,8 +314,13 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
             result.append(curves)
             continue
         low = np.array([box[0].start - 1, box[1].start - 1])
-        window = np.pad(labels[box] == k + 1, 1)
-        parts = _neck_parts(window, _boundary_distance(curves, window, low), neck_ratio, min_radius)
+        # the outline's shape decides (holes filled): the rim around a hole is no neck
+        window = np.pad(scipy.ndimage.binary_fill_holes(labels[box] == k + 1), 1)
+        if not _may_have_necks(window):
+            result.append(curves)
+            continue
+        parts = _neck_parts(window, curves[0] - low, _boundary_distance(curves[:1], window, low),
+                            neck_ratio, min_radius)
         if parts.max() <= 1:
             result.append(curves)
             continue
@@ -312,22 +328,41 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
     return result
 
 
+def _may_have_necks(region):
+    """Whether the pixel distance transform has two maxima of dynamic above half a pixel: without
+    them no neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors (a cheap test that
+    spares most single objects the exact distance)."""
+    import scipy.ndimage
+    import skimage.morphology
+
+    distance = scipy.ndimage.distance_transform_edt(region)
+    return scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
+
+
+#: :func:`_boundary_distance` measures on a raster this many times finer than the pixels ...
+DISTANCE_SUPERSAMPLE = 8
+#: ... or coarser, so that the finer raster has at most this many pixels (giant objects).
+DISTANCE_MAX_SAMPLES = 1 << 20
+
+
 def _boundary_distance(curves, region, low):
-    """The exact distance from each pixel centre of ``region`` to the object's sub-pixel boundary
-    (0 outside): a pixel distance transform would add half-pixel steps, 8 % of the radius of a
-    12 px object, enough to make necks out of nothing."""
-    import shapely
+    """The distance from each pixel centre of ``region`` to the object's sub-pixel boundary (0
+    outside): the Euclidean distance transform of the polygon rasterised ``DISTANCE_SUPERSAMPLE``
+    times finer, within half a fine pixel.  On the pixel grid itself its half-pixel steps, 8 % of
+    the radius of a 12 px object, would make necks out of nothing."""
+    import scipy.ndimage
 
-    rows, cols = np.nonzero(region)
-    boundary = shapely.MultiLineString([np.vstack([c, c[:1]]) for c in curves])
-    distance = np.zeros(region.shape)
-    distance[rows, cols] = shapely.distance(shapely.points(rows + low[0], cols + low[1]), boundary)
-    return distance
+    m, n = region.shape
+    fine = int(np.clip(np.sqrt(DISTANCE_MAX_SAMPLES / (m * n)), 1, DISTANCE_SUPERSAMPLE))
+    # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one
+    inside = rasterize([(c - low) * fine for c in curves], (fine * (m - 1) + 1, fine * (n - 1) + 1))
+    distance = (scipy.ndimage.distance_transform_edt(inside)[::fine, ::fine] - 0.5) / fine
+    return np.where(region, np.maximum(distance, 0.0), 0.0)
 
 
-def _neck_parts(region, distance, neck_ratio, min_radius):
-    """Label the pixels of a bool region by parts separated by narrow necks (0 outside), given
-    each pixel's distance to the boundary."""
+def _neck_parts(region, outline, distance, neck_ratio, min_radius):
+    """Label the pixels of a bool region by parts separated by narrow waists (0 outside), given
+    its outer boundary (window coordinates) and each pixel's distance to it."""
     import scipy.ndimage
     import skimage.measure
     import skimage.morphology
@@ -337,15 +372,20 @@ def _neck_parts(region, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32)
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    graph = _PartGraph(parts, distance, count)
+    graph = _PartGraph(parts, distance, count, _concavity(region, outline))
     while graph.saddle:
         # the widest neck relative to the thinner side first; a side too small to be an object
         # is merged whatever its neck
         merit = {(i, j): np.inf if min(graph.peak[i], graph.peak[j]) < min_radius
                  else v / min(graph.peak[i], graph.peak[j]) for (i, j), v in graph.saddle.items()}
         pair = max(merit, key=merit.get)
-        if merit[pair] < neck_ratio:
-            break
+        thinner = min(graph.peak[pair[0]], graph.peak[pair[1]])
+        if merit[pair] < neck_ratio and graph.saddle[pair] < thinner - MIN_NECK_DEPTH:
+            # the narrowest necks are left: the ones that are a notch on one side only go too
+            one_sided = [p for p in graph.saddle if not graph.is_waist(*p)]
+            if not one_sided:
+                break
+            pair = max(one_sided, key=merit.get)
         graph.merge(*pair)
     # a part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were a
     # shape's own: it takes its neighbours back, until every part is a blob or one is left
@@ -372,35 +412,79 @@ def _is_blob(props):
             and props.axis_major_length <= MAX_PART_ASPECT * max(props.axis_minor_length, 1e-9))
 
 
-class _PartGraph:
-    """Parts of a watershed as a graph: each part's peak distance, each border's neck (saddle)."""
+#: A split line must end in a concavity of the outline at both ends, at least this deep (pixels
+#: inside the convex hull): two objects that touch make a waist, a notch on one side of one
+#: object (a coin's dark slit) does not.
+MIN_WAIST_DEPTH = 1.0
 
-    def __init__(self, parts, distance, count):
+
+def _concavity(region, outline):
+    """For the pixels on the region's edge (a 4-neighbour outside): their distance to the convex
+    hull of the outline (a polygon in window coordinates), the hull's boundary being where the
+    outline is convex; -1 elsewhere.  A pixel centre on a convex stretch lies about half a pixel
+    inside, one in a waist as deep as the waist."""
+    import scipy.ndimage
+    import shapely
+
+    edge = region & ~scipy.ndimage.binary_erosion(region, border_value=0)
+    rows, cols = np.nonzero(edge)
+    hull = shapely.convex_hull(shapely.MultiPoint(outline)).exterior
+    depth = np.full(region.shape, -1.0)
+    depth[rows, cols] = shapely.distance(shapely.points(rows.astype(float), cols.astype(float)), hull)
+    return depth
+
+
+class _PartGraph:
+    """Parts of a watershed as a graph: each part's peak distance, each border's neck (saddle)
+    and its pixels."""
+
+    def __init__(self, parts, distance, count, concavity):
         import scipy.ndimage
 
         self.parts = parts
+        self.concavity = concavity
         self.peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
         self.parent = np.arange(count + 1)
         # the neck between two adjacent parts: the largest distance over their 4-neighbour pairs
-        self.saddle = {}
-        for a, b, da, db in ((parts[:, :-1], parts[:, 1:], distance[:, :-1], distance[:, 1:]),
-                             (parts[:-1], parts[1:], distance[:-1], distance[1:])):
+        self.saddle, self.border = {}, {}
+        index = np.arange(parts.size).reshape(parts.shape)
+        for a, b, da, db, ia, ib in ((parts[:, :-1], parts[:, 1:], distance[:, :-1], distance[:, 1:],
+                                      index[:, :-1], index[:, 1:]),
+                                     (parts[:-1], parts[1:], distance[:-1], distance[1:], index[:-1],
+                                      index[1:])):
             border = (a != b) & (a > 0) & (b > 0)
             pa, pb, value = a[border], b[border], np.minimum(da[border], db[border])
-            for i, j, v in zip(np.minimum(pa, pb), np.maximum(pa, pb), value, strict=True):
+            for i, j, v, p, q in zip(np.minimum(pa, pb), np.maximum(pa, pb), value, ia[border],
+                                     ib[border], strict=True):
                 if v > self.saddle.get((i, j), -1.0):
                     self.saddle[(i, j)] = v
+                self.border.setdefault((i, j), []).extend((p, q))
+
+    def is_waist(self, i, j):
+        """Whether the border of i and j ends in a concavity of the outline at two places."""
+        import scipy.ndimage
+
+        pixels = np.asarray(self.border[(i, j)])
+        depth = self.concavity.ravel()[pixels]
+        ends = np.zeros(self.parts.shape, dtype=bool)
+        ends.ravel()[pixels[depth >= 0]] = True
+        pieces, count = scipy.ndimage.label(ends, structure=np.ones((3, 3)))
+        if count < 2:
+            return False
+        deepest = np.sort(scipy.ndimage.maximum(self.concavity, pieces, np.arange(1, count + 1)))
+        return deepest[-2] >= MIN_WAIST_DEPTH
 
     def merge(self, keep, gone):
         self.parent[self.parent == gone] = keep
         self.peak[keep] = max(self.peak[keep], self.peak[gone])
-        merged = {}
+        saddle, border = {}, {}
         for (i, j), v in self.saddle.items():
-            i, j = (keep if i == gone else i), (keep if j == gone else j)
-            if i != j:
-                key = (min(i, j), max(i, j))
-                merged[key] = max(v, merged.get(key, -1.0))
-        self.saddle = merged
+            i2, j2 = (keep if i == gone else i), (keep if j == gone else j)
+            if i2 != j2:
+                key = (min(i2, j2), max(i2, j2))
+                saddle[key] = max(v, saddle.get(key, -1.0))
+                border.setdefault(key, []).extend(self.border[(i, j)])
+        self.saddle, self.border = saddle, border
 
     def neighbours(self, root):
         return [j if i == root else i for (i, j) in self.saddle if root in (i, j)]

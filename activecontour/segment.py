@@ -11,7 +11,7 @@ import os
 import numpy as np
 
 from activecontour.energy import ChanVeseParameters
-from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
+from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
 from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
 from activecontour.raster import mask_to_curves
@@ -40,14 +40,18 @@ BACKENDS = {
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
             color="gray", normalize="range", n_regions=2, fit="constant", inside="auto", roi=None,
-            separate=True, options=None):
+            separate=True, channel_axis=None, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
     ----------
     image : ndarray of shape (M, N) or (M, N, C), or a path
         Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
-        or the path of an image file (read by :func:`activecontour.image.load_image`).
+        or the path of an image file (read by :func:`activecontour.image.load_image`).  A stack
+        of frames (a time-lapse, a z-stack, a multi-page TIFF) is refused with one line naming
+        :func:`activecontour.segment_sequence`; a (2-4, M, N) array is ambiguous (frames or
+        channel-first colour) and needs ``channel_axis`` (the rule:
+        :func:`activecontour.image.single_image`).
     init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), SegmentationResult or str
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
         (default) starts from the outlines of the two-means threshold of the lightly blurred image
@@ -118,7 +122,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     separate : bool
         Objects that touch get their own ids in ``result.labels`` (split along the necks of the
         inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
-        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
+        piece.  With ``n_regions > 2`` an object is a piece of one class (touching pieces of two
+        classes are two objects; ``result.objects["class"]`` says which).  ``result.mask``,
+        ``result.contours`` and the energy do not depend on it.
+    channel_axis : int, optional
+        The axis holding the colour channels of a 3-D array, e.g. 0 for channel-first (3, M, N);
+        None: the last, when it has 1-4 entries.
     options : dict, optional
         Backend-specific settings, documented by the backend function
         (:func:`activecontour.flow.segment_polygon`,
@@ -151,6 +160,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
+    image = single_image(image, channel_axis)
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
     if n_regions > 2:
@@ -184,8 +194,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     pixels = np.asarray(image)
     if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
+    # objects are the connected pieces of each non-background region (N regions: of each class,
+    # traced on the label field's own pixel grid)
+    by_class = result.contours if result.classes is None else [
+        mask_to_curves(result.classes == k) for k in range(1, int(n_regions))]
     result.object_contours, result.labels, result.objects = find_objects(
-        result.contours, shape, pixels, separate=bool(separate))
+        by_class, shape, pixels, separate=bool(separate))
     if result.classes is None:  # two regions: the inside is region 1
         result.classes = result.mask.astype(np.int32)
         result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])

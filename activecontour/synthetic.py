@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.ndimage
 
-__all__ = ["add_noise", "annulus", "coins", "dice", "disk", "disk_image", "ellipse", "equal_gray_colour",
-           "rectangle", "render", "star", "touching_clumps", "union"]
+__all__ = ["add_noise", "annulus", "coins", "dice", "disk", "disk_image", "disk_sequence", "ellipse",
+           "equal_gray_colour", "rectangle", "render", "star", "touching_clumps", "union"]
 
 
 def disk(center, radius):
@@ -253,3 +253,40 @@ def touching_clumps(size=(256, 256), *, n_clumps=10, per_clump=(2, 4), minor=(6.
         take = (radius <= 1.0) & (radius < depth)
         labels[take], depth[take] = k + 1, radius[take]
     return add_noise(image, 1.0 / snr, seed), labels
+
+
+def disk_sequence(size, frames, *, inside=0.75, outside=0.25, sigma=0.0, seed=0):
+    """A time-lapse of disks with known identities: the images and the ground-truth label stack.
+
+    Parameters
+    ----------
+    size : int or (M, N)
+    frames : list (one item per frame) of lists of ``(track_id, (row, col), radius)``
+        The disks of each frame; a track id > 0 names one object for its whole life.  A disk
+        may lie partly or wholly outside the image (an object entering or leaving the field).
+    inside, outside : float
+        Intensities of the disks and of the background.
+    sigma : float
+        Standard deviation of the additive Gaussian noise (SNR = (inside - outside) / sigma).
+    seed : int
+        Noise seed; frame t uses ``seed + t``.
+
+    Returns
+    -------
+    images : ndarray (T, M, N) float64
+        Anti-aliased (:func:`disk_image`; where disks overlap, the larger coverage) plus noise.
+    truth : ndarray (T, M, N) int32
+        The track id of the disk containing each pixel centre, 0 outside every disk.
+    """
+    m, n = (size, size) if np.isscalar(size) else size
+    images = np.empty((len(frames), m, n))
+    truth = np.zeros((len(frames), m, n), dtype=np.int32)
+    for t, disks in enumerate(frames):
+        coverage = np.zeros((m, n))
+        for track_id, center, radius in disks:
+            covered, inside_disk = disk_image((m, n), center, radius)
+            np.maximum(coverage, covered, out=coverage)
+            truth[t][inside_disk] = track_id
+        image = outside + (inside - outside) * coverage
+        images[t] = add_noise(image, sigma, seed + t) if sigma > 0 else image
+    return images, truth

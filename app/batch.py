@@ -31,7 +31,7 @@ def run(segment_one, plans, *, jobs, expected, report_line, report_failure, show
     expected : tuple of exception types
         What an image may raise and the batch survives: passed to ``report_failure``.  Anything
         else is raised here, as the serial loop would.  A worker that dies (killed, out of memory)
-        is the failure of the images it breaks.
+        is the failure of the images in flight at that moment; the others go to new workers.
     report_line : callable or None
         ``report_line(line)`` for a finished image; None prints nothing (``--quiet``).
     report_failure : callable
@@ -58,6 +58,9 @@ def run(segment_one, plans, *, jobs, expected, report_line, report_failure, show
                 raise error
             if bar is not None:
                 bar.clear()
+            if isinstance(error, BrokenProcessPool):  # say what happened, not the pool's words
+                error = BrokenProcessPool("a worker process died (killed, or out of memory) while "
+                                          "this image was being segmented; the others went on")
             if error is not None:
                 failures += 1
                 report_failure(plans[index][0], error)

@@ -12,13 +12,14 @@ Usage
                           [--init-circle ROW COL RADIUS | --init-rect ROW0 COL0 ROW1 COL1 |
                            --init-mask FILE | --init-contours FILE | --init-grid |
                            --init-checkerboard] [--option KEY=VALUE ...]
-                          [--overlay-color COLOR] [--quiet]
-    activecontour view IMAGE [the same parameter and init options]
+                          [--line-color COLOR] [--line-width PX] [--max-pixels N] [--quiet]
+    activecontour view IMAGE [the same parameter and init options] [--max-pixels N]
 
 ``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
-(the contour drawn on the image) and ``<DIR>/<name>_contours.<fmt>`` for each format, where
-``<name>`` is the image's file name without its suffix.  ``DIR`` defaults to the directory of each
-image and is created when the first files go into it.  A FOLDER stands for the images in it and a
+(the contour drawn on the image, shown by its own range) and ``<DIR>/<name>_contours.<fmt>`` for
+each format, where ``<name>`` is the image's file name without its suffix, made safe
+(:func:`activecontour.io.output_stem`: never outside ``DIR``).  ``DIR`` defaults to the directory
+of each image and is created when the first files go into it.  A FOLDER stands for the images in it and a
 quoted GLOB (``'data/**/*.tif'``) for the files it matches, both sorted, without this tool's own
 outputs (:func:`activecontour.batch.find_images`).  ``--jobs N`` (default: every core) segments N
 images at a time in worker processes (:mod:`app.batch`); the files are the same as with
@@ -36,11 +37,13 @@ and that the output directory can be created.  Any problem there prints one line
 ``activecontour: error: ...`` on stderr and exits with status 2.  Then each image is read,
 checked against the init, segmented and saved; an image that fails (unreadable, init outside it,
 an error while writing) gets one such line naming it, and the batch goes on with the next image;
-the exit status is 2 if any image failed.  Each image's files are written as a group, all or none
+the exit status is 2 if any image failed.  Images over ``--max-pixels`` are refused from the size
+their file declares, before decoding.  Each image's files are written as a group, all or none
 (:func:`activecontour.io.save_result`), so a failed or interrupted run never leaves a half-written
 file, and images finished earlier keep their outputs.  Ctrl-C ends the run at once, status 130
 (the image being segmented is abandoned: nothing of it is written).  A run that reaches
 ``--max-iter`` without converging is not an error: its summary says ``success=False`` and why.
+File names in every line are escaped (a newline as ``\\n``), so each message is one line.
 """
 
 from __future__ import annotations
@@ -57,6 +60,7 @@ import threading
 import time
 from pathlib import Path
 
+from . import sequence_cli
 from .status_line import StatusLine, duration
 
 PROG = "activecontour"
@@ -163,6 +167,7 @@ def build_parser():
     )
     _add_options(segment.add_argument_group("outputs and limits"), _output_options())
     _add_parameter_options(segment)
+    sequence_cli.add_options(segment)
     segment.add_argument(
         "--option", dest="options", action="append", type=_option, default=None, metavar="KEY=VALUE",
         help="a backend setting passed in segment(options=...), e.g. smoothing=10 or dt=32; "
@@ -296,9 +301,19 @@ def _run_segment(args):
     left_out = []
     # folders and patterns expanded; a missing file stops here
     images = find_images(*args.images, left_out=left_out)
+    stacks = [path for path in images if sequence_cli.is_stack(path, args.axis)]
+    if args.frames is not None and not stacks:
+        raise UsageError("--frames selects frames of a stack (a multi-page TIFF or a video); "
+                         "no input is one")
+    images = [path for path in images if path not in stacks]
     plans = _plan_outputs(images, args.output, args.formats, args.objects)
     overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
+    first_init = list(init) if isinstance(init, _ContourInit) else init  # the first frame's start
+    stack_failures = (sequence_cli.run(stacks, args, settings, overlay, _print_line, first_init)
+                      if stacks else 0)
+    if not plans:
+        return EXIT_USAGE if stack_failures else 0
     if left_out and not args.quiet:
         more = f" and {len(left_out) - 1} more" if len(left_out) > 1 else ""
         print(f"{PROG}: note: left out {_shown(left_out[0])}{more}, named like this tool's outputs "
@@ -319,7 +334,13 @@ def _run_segment(args):
     if failures and len(plans) > 1:
         print(f"{PROG}: error: {failures} of {len(plans)} images failed; the others were written",
               file=sys.stderr)
-    return EXIT_USAGE if failures else 0
+    return EXIT_USAGE if failures or stack_failures else 0
+
+
+def _print_line(line, failed):
+    """A stack's summary line (stdout) or error line (stderr), as for images."""
+    print(f"{PROG}: error: {_shown(line)}" if failed else _shown(line),
+          file=sys.stderr if failed else sys.stdout, flush=True)
 
 
 def _segment_serially(plans, batch, show_progress):
@@ -898,6 +919,8 @@ def _run_view(args):
         if not (takes_any or "formats" in accepted):
             raise UsageError("the viewer does not take --format")
         kwargs["formats"] = tuple(args.formats)
+    if takes_any or "max_pixels" in accepted:
+        kwargs["max_pixels"] = args.max_pixels
     status = launch(args.image, **kwargs)
     return 0 if status is None else int(status)
 

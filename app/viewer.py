@@ -56,7 +56,7 @@ from pathlib import Path
 import numpy as np
 
 from activecontour.curve import length, to_xy
-from activecontour.image import load_image, normalize_image
+from activecontour.image import MAX_PIXELS, load_image, normalize_image
 from activecontour.image_files import display_rgb
 from activecontour.initial import initial_curves
 from activecontour.noise import auto_mu, is_auto
@@ -68,6 +68,7 @@ from .viewer_layout import (
     SLIDERS,
     STEP_OPTIONS,
     build_layout,
+    contour_color,
     new_figure,
     refit_texts,
     set_slider_value,
@@ -166,6 +167,9 @@ class Viewer:
         The status line.
     running, closed : bool
     """
+
+    #: The largest image the "image" field opens (:func:`activecontour.load_image`'s limit).
+    max_pixels = MAX_PIXELS
 
     def __init__(self, image, *, image_path=None, backend=None, mu=None, omega=None, lambda_in=None,
                  lambda_out=None, max_num_iter=None, tol=None, init=None, c_in=None, c_out=None,
@@ -391,7 +395,7 @@ class Viewer:
             self._set_message("type an image file's path in the 'image' field, then press i")
             return False
         try:
-            image = load_image(Path(path).expanduser())
+            image = load_image(Path(path).expanduser(), max_pixels=self.max_pixels)
             display = display_rgb(image)
         except (OSError, ValueError, TypeError) as exc:
             self._set_message(f"image not opened: {_one_line(exc)}")
@@ -415,6 +419,7 @@ class Viewer:
         self._clear_run()
         self.drawer.cancel()
         show_image(self.ax_image, display)
+        self.contour_lines.set_color(contour_color(display))
         toolbar = getattr(self.fig.canvas, "toolbar", None)
         if toolbar is not None:
             toolbar.update()  # forget the zoom and pan history of the old image
@@ -848,7 +853,7 @@ class Viewer:
 
 def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lambda_out=None,
            max_num_iter=None, tol=None, init=None, c_in=None, c_out=None, color="gray",
-           formats=("json",), inside="auto"):
+           formats=("json",), inside="auto", max_pixels=MAX_PIXELS):
     """Open the viewer's window on an image and return an exit code when it is closed.
 
     Parameters
@@ -858,6 +863,9 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
     backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats, inside
         See :class:`Viewer` (None: the library's default); ``init`` may also be a name from
         :data:`NAMED_INITS` (``"grid"``, ``"checkerboard"``) or a mask file's path.
+    max_pixels : int or None
+        The largest image opened, this one and those opened later in the window (see
+        :func:`activecontour.load_image`).
 
     Returns
     -------
@@ -868,11 +876,12 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
     import matplotlib.pyplot as plt
 
     try:
-        image = load_image(image_path)
+        image = load_image(image_path, max_pixels=max_pixels)
         viewer = Viewer(image, image_path=image_path, backend=backend, mu=mu, omega=omega,
                         lambda_in=lambda_in, lambda_out=lambda_out, max_num_iter=max_num_iter,
                         tol=tol, init=init, c_in=c_in, c_out=c_out, color=color, formats=formats,
                         inside=inside)
+        viewer.max_pixels = max_pixels
     except (OSError, ValueError, TypeError) as exc:
         print(f"activecontour view: {exc}", file=sys.stderr)
         return 2

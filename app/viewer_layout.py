@@ -30,10 +30,10 @@ import numpy as np
 from .viewer_tools import INIT_MODES, TextField
 
 __all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS",
-           "Layout", "build_layout", "fit_text", "refit_texts", "set_slider_value", "show_energy",
-           "show_image"]
+           "Layout", "build_layout", "contour_color", "fit_text", "refit_texts", "set_slider_value",
+           "show_energy", "show_image"]
 
-#: Colour of the current contour: the default overlay colour of :func:`activecontour.io.save_result`.
+#: Colour of the current contour on a gray image (on a colour image: :func:`contour_color`).
 CONTOUR_COLOR = (1.0, 0.0, 0.0)
 #: Colour of the initial curve (dashed) and of the mouse preview.
 INIT_COLOR = (0.0, 0.85, 1.0)
@@ -255,6 +255,15 @@ def show_energy(ax, line, note, history):
     ax.autoscale_view()
 
 
+def contour_color(display):
+    """The contour's colour on the display image, as the overlays draw it
+    (:func:`activecontour.image_files.contrasting_color`: red on gray, one that stands out on
+    colour), as matplotlib RGB in [0, 1]."""
+    from activecontour.image_files import contrasting_color
+
+    return tuple(channel / 255.0 for channel in contrasting_color(display))
+
+
 def _image_axes(fig, display):
     from matplotlib.collections import LineCollection
 
@@ -264,7 +273,7 @@ def _image_axes(fig, display):
     ax.set_ylabel("row", fontsize=_LABEL_SIZE, labelpad=2)
     ax.tick_params(labelsize=7)
     init_lines = LineCollection([], colors=[INIT_COLOR], linewidths=1.3, linestyles="--", zorder=3)
-    contour_lines = LineCollection([], colors=[CONTOUR_COLOR], linewidths=2.0, zorder=4)
+    contour_lines = LineCollection([], colors=[contour_color(display)], linewidths=2.0, zorder=4)
     ax.add_collection(init_lines, autolim=False)
     ax.add_collection(contour_lines, autolim=False)
     return ax, init_lines, contour_lines

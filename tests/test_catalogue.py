@@ -108,7 +108,7 @@ API_USABLE = {
                                         evaluator={"color": "vector"}),
     "RGBA": lambda: usable(np.dstack([IMAGE, IMAGE, IMAGE, np.ones(SHAPE)])),
     "gray + alpha (M, N, 2)": lambda: usable(np.dstack([IMAGE, np.ones(SHAPE)])),
-    "channel-first (3, M, N)": lambda: usable(np.stack([IMAGE] * 3, 0)),
+    "channel-first (3, M, N) with channel_axis=0": lambda: usable(np.stack([IMAGE] * 3, 0), channel_axis=0),
     "Fortran-ordered, strided view": lambda: usable(np.asfortranarray(np.repeat(IMAGE, 2, 1))[:, ::2]),
     "rectangle partly outside the image": lambda: usable(IMAGE, ac.rectangle((-20, -20), (40, 50))),
     "two disjoint circles": lambda: usable(IMAGE, [ac.circle((10, 10), 5), ac.circle((23, 33), 8)]),
@@ -199,6 +199,11 @@ API_REFUSED = {
     "NaN in the image": (lambda: ac.segment(np.where(TRUTH, np.nan, 0.5)), ValueError, "NaN"),
     "1 x N image": (lambda: ac.segment(np.zeros((1, 30))), ValueError, "2 x 2"),
     "4-D array": (lambda: ac.segment(np.zeros((4, 5, 6, 3))), ValueError, "shape"),
+    "(3, M, N): frames or channel-first colour": (lambda: ac.segment(np.stack([IMAGE] * 3, 0)), ValueError,
+                                                  "ambiguous.*channel_axis=0.*segment_sequence"),
+    "a stack of 6 frames": (lambda: ac.segment(np.stack([IMAGE] * 6, 0)), ValueError,
+                            "stack of 6 frames.*segment_sequence"),
+    "channel_axis on a 2-D image": (lambda: ac.segment(IMAGE, channel_axis=0), ValueError, "channel_axis"),
     "complex image": (lambda: ac.segment(IMAGE.astype(complex)), TypeError, "dtype"),
     "unknown backend": (lambda: ac.segment(IMAGE, backend="snake"), ValueError, "polygon"),
     "negative mu": (lambda: ac.segment(IMAGE, mu=-1.0), ValueError, "mu must be >= 0"),
@@ -584,7 +589,7 @@ def test_a_gray_and_alpha_image_reports_c_in_in_the_gray_units():
 
 def test_save_result_takes_a_channel_first_image_as_segment_does(tmp_path):
     rgb = np.dstack([IMAGE, IMAGE[::-1], 1 - IMAGE])
-    result = ac.segment(np.moveaxis(rgb, -1, 0))
+    result = ac.segment(np.moveaxis(rgb, -1, 0), channel_axis=0)  # (3, M, N) needs the word: frames?
     first = io.save_result(result, np.moveaxis(rgb, -1, 0), tmp_path / "first")
     last = io.save_result(result, rgb, tmp_path / "last")
     assert [p.read_bytes() for p in first[:2]] == [p.read_bytes() for p in last[:2]]

@@ -247,6 +247,25 @@ def test_energy_history_never_increases_not_even_by_rounding(seed, init):
     assert result.energy == ac.chan_vese_energy(image, result.contours, mu=0.003, omega=-0.05)
 
 
+@pytest.mark.parametrize("shape", [(9, 26), (15, 37), (19, 38), (13, 23)])
+def test_checkerboard_on_a_ramp_scores_its_start_as_its_contours(shape):
+    # the checkerboard's zero lines pass within 1e-16 of pixel centres here; the reinitialised
+    # start must score (6.38) as its own marching-squares contours do (a soup of segments
+    # through values ~1e-38 once scored -180 where the contours score +30), and never go up
+    from activecontour.energy import evaluate, stack_curves
+
+    image = np.add.outer(np.arange(shape[0]), np.arange(shape[1])).astype(float)
+    model = ImageModel(normalize_image(image))
+    params = ChanVeseParameters(mu=0.003)
+    problem = _Problem(model, params, DEFAULT_OPTIONS)
+    start = problem.redistance(checkerboard_level_set(shape, min(shape) / 4.0))
+    points, next_index, _ = stack_curves(level_set_contours(start.phi))
+    chained = evaluate(model, points, next_index, params, empty_ok=True).energy
+    assert problem.evaluate(start).energy == pytest.approx(chained, rel=1e-9)
+    result = ac.segment(image, "checkerboard", backend="levelset", mu=0.003)
+    assert np.all(np.diff(result.energies) <= 0.0)
+
+
 @pytest.mark.parametrize("start", ["mask", "rectangle"])
 def test_a_start_covering_the_whole_image_finds_the_square(start):
     # The whole image inside: Gamma is the domain's edge, and the flow must move it inwards to

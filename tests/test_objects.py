@@ -141,3 +141,148 @@ def test_segment_gives_labels_and_objects(backend):
     assert area[1] == pytest.approx(np.pi * (22**2 - 9**2), rel=0.03)
     assert res.objects["perimeter"][order][1] == pytest.approx(2 * np.pi * (22 + 9), rel=0.05)
     assert len(res.object_contours[int(res.labels[60, 100 + 15]) - 1]) == 2  # the ring has its hole
+
+
+# ---- touching objects kept apart, single objects never split -----------------------------------
+
+def _pair(distance, radius=12.0, size=(80, 110)):
+    """Two disks of ``radius`` whose centres are ``distance`` apart, noisy, and the true labels
+    (a pixel of the overlap goes to the nearer centre)."""
+    centers = [(40.0, 55.0 - distance / 2), (40.0, 55.0 + distance / 2)]
+    image, union = synthetic.render(synthetic.union(*[synthetic.disk(c, radius) for c in centers]), size)
+    rr, cc = np.mgrid[:size[0], :size[1]]
+    first, second = (np.hypot(rr - r, cc - c) for r, c in centers)
+    nearer = first > second
+    truth = np.where(union, 1 + nearer, 0)
+    return synthetic.add_noise(image, 0.1, seed=int(distance * 10)), truth
+
+
+def _no_overlap_and_union_is_region(res):
+    import shapely
+
+    from activecontour.objects import _to_shapely
+
+    polygons = [_to_shapely(curves) for curves in res.object_contours]
+    region = _to_shapely(res.contours)
+    total = sum(p.area for p in polygons)
+    assert total == pytest.approx(region.area, rel=1e-9)  # a partition of the inside ...
+    assert shapely.union_all(polygons).area == pytest.approx(total, rel=1e-9)  # ... without overlaps
+    assert all(p.is_valid for p in polygons)
+
+
+# neck half-width / radius = sqrt(1 - (d / 2R)^2): 0 (tangent) to 0.745 (overlap of a third of
+# the diameter, d = 4R/3), below NECK_RATIO = 0.9 (the length term rounds the waist of the
+# converged contour, so at d = R, 0.866 in theory, the neck is already too wide to split)
+@pytest.mark.parametrize("distance", [24.5, 24.0, 22.0, 20.0, 18.0, 16.0])
+def test_touching_pair_is_two_objects_at_every_contact_width(distance):
+    image, truth = _pair(distance)
+    res = ac.segment(image)
+    assert res.labels.max() == 2
+    from activecontour.metrics import match_instances
+
+    score = match_instances(res.labels, truth)
+    assert score["tp"] == 2 and score["mean_iou"] > 0.85
+    _no_overlap_and_union_is_region(res)
+    np.testing.assert_array_equal(res.labels > 0, res.mask)
+    # the split line is straight across the neck: each part is about one disk
+    np.testing.assert_allclose(np.sort(res.objects["area"]), np.pi * 12.0**2 - _lens(12.0, distance) / 2,
+                               rtol=0.08)
+    assert ac.segment(image, separate=False).labels.max() == 1
+
+
+@pytest.mark.parametrize("distance", [24.0, 16.0])
+def test_touching_pair_is_two_objects_from_the_level_set_too(distance):
+    image, truth = _pair(distance)
+    res = ac.segment(image, backend="levelset")
+    from activecontour.metrics import match_instances
+
+    assert match_instances(res.labels, truth)["tp"] == 2 and res.labels.max() == 2
+    _no_overlap_and_union_is_region(res)
+
+
+def _lens(radius, distance):
+    """Area of the overlap of two disks of ``radius`` with centres ``distance`` apart."""
+    if distance >= 2 * radius:
+        return 0.0
+    half_chord = np.sqrt(4 * radius**2 - distance**2) / 2
+    return 2 * radius**2 * np.arccos(distance / (2 * radius)) - distance * half_chord
+
+
+def test_a_peanut_with_a_wide_waist_is_one_object():
+    # d = 0.6 R: waist half-width sqrt(1 - 0.09) R = 0.95 R, above NECK_RATIO: one object
+    image, _ = _pair(0.6 * 12.0)
+    assert ac.segment(image).labels.max() == 1
+
+
+def _strokes():
+    """A comb of 3 px strokes: five horizontal bars joined by two vertical ones."""
+    image = np.zeros((120, 120))
+    for k in range(5):
+        image[15 + 20 * k: 18 + 20 * k, 10:110] = 1.0
+    image[15:98, 10:13] = image[15:98, 60:63] = 1.0
+    return image
+
+
+def _slit_disk():
+    """A disk with a slit from the left to 3/10 of its diameter from the right: a one-sided notch
+    whose tip makes a neck, but no waist (the right side is convex)."""
+    disk, slit = synthetic.disk((50, 50), 25), synthetic.rectangle((47, 20), (53, 65))
+    return synthetic.render(lambda r, c: disk(r, c) & ~slit(r, c), (100, 100))[0]
+
+
+SINGLE_OBJECTS = {
+    "slit disk": _slit_disk,
+    "horse": lambda: (~__import__("skimage.data").data.horse()).astype(float),
+    "strokes": _strokes,
+    "ring": lambda: synthetic.render(synthetic.annulus((60, 60), 25, 35), (120, 120))[0],
+    "thick ring": lambda: synthetic.render(synthetic.annulus((50, 70), 9, 22), (100, 140))[0],
+    "ellipse aspect 3": lambda: synthetic.render(synthetic.ellipse((60, 60), 45, 15, 0.5), (120, 120))[0],
+    "star": lambda: synthetic.render(synthetic.star((60, 60), 35, amplitude=0.35, arms=5), (120, 120))[0],
+}
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+@pytest.mark.parametrize("name", list(SINGLE_OBJECTS))
+def test_a_single_object_is_never_split(name, backend):
+    image = synthetic.add_noise(SINGLE_OBJECTS[name](), 0.2, seed=len(name))
+    res = ac.segment(image, backend=backend)
+    assert len(group_curves(res.contours)) == 1  # one connected piece ...
+    assert res.labels.max() == 1  # ... and one object
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_touching_clumps_f1(backend):
+    import scipy.ndimage
+
+    from activecontour.metrics import match_instances
+
+    counts = np.zeros(3)
+    components = np.zeros(3)
+    for seed in (0, 1):
+        image, truth = synthetic.touching_clumps(seed=seed)
+        res = ac.segment(image, backend=backend)
+        score = match_instances(res.labels, truth)
+        counts += [score["tp"], score["fp"], score["fn"]]
+        pieces = match_instances(scipy.ndimage.label(res.mask)[0], truth)
+        components += [pieces["tp"], pieces["fp"], pieces["fn"]]
+    f1 = 2 * counts[0] / (2 * counts[0] + counts[1] + counts[2])
+    assert f1 >= 0.9
+    assert 2 * components[0] / (2 * components[0] + components[1] + components[2]) < 0.5
+
+
+def test_n_regions_objects_are_pieces_of_each_class():
+    bright, dim = synthetic.disk((40, 40), 14), synthetic.disk((40, 66), 13)  # touching, d = 26 < 27
+
+    def values(r, c):
+        return np.where(bright(r, c), 1.0, np.where(dim(r, c), 0.5, 0.0))
+
+    # no anti-aliasing: an edge pixel between 1 and 0 would read as the middle class
+    image, _ = synthetic.render(synthetic.union(bright, dim), (80, 110), values=values, supersample=1)
+    image = synthetic.add_noise(image, 0.05, seed=6)
+    res = ac.segment(image, n_regions=3, backend="levelset", separate=False)
+    assert res.labels.max() == 2
+    np.testing.assert_array_equal(res.labels > 0, res.classes > 0)
+    by_class = dict(zip(res.objects["class"], res.objects["area"], strict=True))
+    assert by_class[2] == pytest.approx(np.pi * 14**2, rel=0.05)  # class 2: the brighter one
+    assert by_class[1] == pytest.approx(np.pi * 13**2, rel=0.05)
+    assert res.labels[40, 40] != res.labels[40, 66]

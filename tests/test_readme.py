@@ -66,3 +66,23 @@ def test_readme_summary_line_is_what_the_first_command_prints(tmp_path, monkeypa
     timing = r"time=\d+\.\d\ds"
     assert re.sub(timing, "time=", printed) == re.sub(timing, "time=", line), (
         f"README's summary line should read:\n{printed}")
+
+
+def test_the_gallery_page_shows_figures_the_script_wrote():
+    docs = README.parent / "docs"
+    assert "docs/gallery.md" in README.read_text()
+    page = (docs / "gallery.md").read_text()
+    figures = re.findall(r"!\[[^\]]*\]\((gallery/[^)]+\.png)\)", page)
+    assert len(figures) >= 10 and all((docs / figure).is_file() for figure in figures)
+    assert sum((docs / figure).stat().st_size for figure in figures) < 3e6
+    assert "nuclei" in page and "make_gallery.py" in page
+
+
+def test_readme_objects_example_runs():
+    (objects,) = [code for code in python_blocks() if "res.labels" in code and "roi=" in code]
+    namespace = run_blocks(objects)
+    assert namespace["score"]["f1"] >= 0.95  # README says ~0.98
+    res, pair, truth = namespace["res"], namespace["pair"], namespace["truth"]
+    assert len(res.objects["area"]) == res.labels.max()
+    assert pair.labels.max() == 2 and not (pair.mask & ~pair.roi).any()
+    assert set(np.unique(truth[pair.mask])) <= {0, 4, 5}  # the two ellipses around (33, 145)

@@ -900,3 +900,31 @@ def test_the_mu_slider_is_logarithmic_and_the_default_sits_inside_it(disk_image,
     for value in (0.003, 0.05, 2.0):  # a click anywhere gives the value under the pointer
         set_slider(viewer, mu, value)
         assert viewer.parameters()["mu"] == pytest.approx(value, rel=1e-6)
+
+
+def test_drawing_around_one_blob_among_many_gives_that_blob(make_viewer):
+    # the viewer's main use: draw around one object, run, get that object (segment's roi="init")
+    centers = [(25 + 35 * i, 25 + 35 * j) for i in range(3) for j in range(3)]
+    image, _ = synthetic.render(synthetic.union(*[synthetic.disk(c, 11.0) for c in centers]), SIZE)
+    image = synthetic.add_noise(image, 0.1, seed=3)
+    target = synthetic.render(synthetic.disk(centers[4], 11.0), SIZE)[1]
+    others = synthetic.render(synthetic.union(*[synthetic.disk(c, 11.0) for i, c in enumerate(centers)
+                                                if i != 4]), SIZE)[1]
+    viewer = make_viewer(image)
+    drag(viewer, centers[4], (centers[4][0] + 17.0, centers[4][1]))
+    key(viewer, " ")
+    assert viewer.result is not None and viewer.result.labels.max() == 1
+    assert synthetic.dice(viewer.result.mask, target) >= 0.97
+    assert not (viewer.result.mask & others).any()
+
+
+def test_the_contour_stands_out_from_a_red_image_on_screen_too(make_viewer):
+    import matplotlib.colors
+
+    red_image = np.zeros((48, 64, 3))
+    red_image[..., 0] = 0.8
+    red_image[10:30, 20:40, 0] = 0.4  # a darker red square
+    viewer = make_viewer(red_image)
+    shown = matplotlib.colors.to_rgb(viewer.contour_lines.get_color()[0])
+    assert shown != viewer_module.CONTOUR_COLOR  # red would vanish on red
+    assert np.linalg.norm(np.subtract(shown, (0.8, 0, 0))) > 0.9

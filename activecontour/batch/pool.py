@@ -29,7 +29,7 @@ __all__ = ["default_jobs", "map_unordered"]
 
 #: Seconds an interrupted worker gets to stop on its own (it may be removing a temporary file)
 #: before it is killed.
-STOP_GRACE_S = 1.0
+STOP_GRACE_S = 0.5
 
 #: Seconds between two looks of a worker's watcher thread at its parent.
 PARENT_POLL_S = 0.5
@@ -86,12 +86,15 @@ def _map_in_pool(function, items, jobs, start_method):
     pool, pending = None, {}
     try:
         while True:
-            if pool is None:
-                pool = _new_pool(jobs, start_method, stop)
-            # one item per worker and none queued: an interrupt then stops every item in flight,
-            # and a generator is not read ahead of the workers
-            for index, item in itertools.islice(numbered, jobs - len(pending)):
-                pending[_submit(pool, function, item)] = index
+            # the workers start (on a submit, for "spawn" and "forkserver") with Ctrl-C held back,
+            # not in the middle of their imports; one held meanwhile is raised here afterwards
+            with _interrupts_held():
+                if pool is None:
+                    pool = _new_pool(jobs, start_method, stop)
+                # one item per worker and none queued: an interrupt then stops every item in
+                # flight, and a generator is not read ahead of the workers
+                for index, item in itertools.islice(numbered, jobs - len(pending)):
+                    pending[_submit(pool, function, item)] = index
             if not pending:
                 break
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -121,26 +124,31 @@ def _map_in_pool(function, items, jobs, start_method):
 def _new_pool(jobs, start_method, stop):
     from concurrent.futures import ProcessPoolExecutor
 
-    with _interrupts_held():  # the workers start with Ctrl-C held back, not in the middle of it
-        return ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_start_worker,
-                                   initargs=(stop, os.getpid()))
+    return ProcessPoolExecutor(jobs, mp_context=start_method, initializer=_start_worker,
+                               initargs=(stop, os.getpid()))
 
 
 def _stop_workers(pool):
     """Interrupt the workers of an abandoned pool, and kill those still running after a grace time.
 
     A Ctrl-C at the terminal reaches the workers too, and they stop by themselves; SIGINT sent to
-    this process alone, or the caller closing the iteration, reaches only this process.
+    this process alone, or the caller closing the iteration, reaches only this process.  An
+    interrupted worker gets :data:`STOP_GRACE_S` to leave its item (a write removes its temporary
+    file) and to exit once the pool is shut down.
     """
+    import time
+
     processes = list((getattr(pool, "_processes", None) or {}).values())
-    for process in processes:
-        process.join(0.2 / max(len(processes), 1))
+    pool.shutdown(wait=False, cancel_futures=True)  # idle workers exit, none takes a new item
+    for process in processes:  # those that had Ctrl-C too are leaving their item: not twice
+        process.join(0.1 / max(len(processes), 1))
     for process in processes:
         if process.is_alive():
             with contextlib.suppress(OSError):
                 os.kill(process.pid, signal.SIGINT)
+    deadline = time.monotonic() + STOP_GRACE_S
     for process in processes:
-        process.join(STOP_GRACE_S)
+        process.join(max(0.0, deadline - time.monotonic()))
         if process.is_alive():
             process.kill()
             process.join()

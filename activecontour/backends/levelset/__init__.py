@@ -34,7 +34,10 @@ One iteration
        L^2 flow (6.25) whose fixed point is ``mu kappa + f = 0`` on Gamma, i.e. (6.41) = 0.
 
    ``S`` has constant coefficients: one pair of discrete cosine transforms applies it exactly
-   (Neumann boundary), unconditionally stable.
+   (Neumann boundary), unconditionally stable.  In step (b) phi changes only near Gamma (beyond
+   the band it is ``+-band``, which S leaves as it is), so there S is solved on the band's pixels
+   alone, phi held beyond them, by conjugate gradients, whenever that costs less than the DCT
+   pair (a narrow band on a large image).
 3. Reinitialisation: phi is replaced by the signed distance to its zero level set, computed in a
    narrow band ``|phi| < band`` only and clipped to ``+-band`` beyond (:func:`signed_distance`).
 4. The step is accepted if (6.38) of the new zero set, by the common evaluator, is not larger;
@@ -60,7 +63,10 @@ over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find n
 steps are explicit on the band when ``tau mu <= 1/4`` (stable, no DCT).  The unsmoothed flow can
 stop in a pixel-scale local minimum that a smoothed step leaves (a continued run would then move
 on), so when it ends a smoothed stage of the first step size is tried, up to twice: if its first
-step finds no descent the end stands, otherwise the stages run on from there.
+step finds no descent the end stands, otherwise the stages run on from there.  From the default
+start (``init=None``: the global minimiser of the fit terms, traced at the pixel scale, see
+:func:`activecontour.initial.default_init`) the coarse stages have nothing to find: stage (b)
+runs at once, and those smoothed steps at its end are the only ones.
 
 How far Gamma moved is measured geometrically, in pixels: the area between the old and the new
 zero set, ``sum_px |H_eps(d_new) - H_eps(d_old)|`` over the band, divided by the length of Gamma,
@@ -82,8 +88,15 @@ hole of an annulus) phi crosses zero and a hole opens without a seed, while sing
 are held by the smoothing; the energy test accepts such a change only when it pays, length
 included.
 
-Cost: an iteration is one DCT pair over the image (O(MN log MN), float32), a few vectorised passes
-over the image, and the reinitialisation on the pixels of the narrow band only.
+Cost and memory: phi is float32 (a distance of a few pixels, rounded to ~2e-7 px, far below
+what the energy or the flow resolve; the marching-squares crossings, the distances and the energy
+are computed in float64 from it).  A step (a) is one DCT pair over the image (O(MN log MN),
+float32, its force computed in blocks of rows); a step (b) works on the band only (explicit, or
+conjugate gradients), but for one copy of phi.  The reinitialisation costs two sign passes over
+the image (the front is searched next to the previous one and the pixels that changed side) plus
+O(band), with work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
+reinitialisation found.  The image itself stays float64 (the model's tables and the common
+evaluator are exact in float64; the polygon backend shares them).
 
 The energy
 ----------

@@ -140,7 +140,6 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     """
     settings = _parse_options(options)
     shape = tuple(model.shape)
-    problem = _Problem(model, params, settings)
     if isinstance(init, str) and init == "checkerboard":
         # squares of at most a quarter of the smaller side: a small image gets several of them
         period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
@@ -148,7 +147,10 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     else:
         phi = initial_level_set(init, shape, band=settings["band"], values=model.image,
                                 dtype=np.float32)
+    # after the start: its temporaries (the default start's) are gone before the work arrays come
+    problem = _Problem(model, params, settings)
     state = problem.redistance(phi)
+    del phi  # the start's array: the state holds its own
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
     # step: pixels of travel at the typical force; ceiling: the largest step of this stage.  The
@@ -157,6 +159,12 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
     step = min(settings["dt"], max(0.5 * width, settings["dt_min"]))
     first_step, ceiling, grow, smooth_force = step, settings["dt_max"], True, True
+    if init is None:
+        # The default start is the global minimiser of the fit terms, traced at the pixel scale
+        # (activecontour.initial.default_init): the coarse smoothed stages, which carry a far
+        # start into its basin, have nothing to find there.  The unsmoothed stage runs at once,
+        # and the smoothed steps are tried when it ends (the rechecks), as for every start.
+        smooth_force, step = False, settings["dt_min"]
     status, n_iter, stage_start, streak = 1, 0, 0, 0
     # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):
     # the unsmoothed flow stops at pixel-scale local minima that a smoothed step can leave.
@@ -170,13 +178,16 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
         for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
-            trial = problem.redistance(problem.step(state, force, tau, smooth_force))
+            stepped = problem.step(state, force, tau, smooth_force)
+            trial = problem.redistance(stepped, previous=state)
+            problem.recycle(stepped)
             evaluation = problem.evaluate(trial)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
             # does it has flattened phi rather than followed the force.
             degenerate = smooth_force and (not trial.positive.any() or trial.positive.all())
             if evaluation.energy <= current.energy and not degenerate:
                 break
+            problem.recycle(trial.phi)
             step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
             if not smooth_force:
@@ -195,6 +206,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             n_iter += 1
             # mean normal displacement of Gamma in this iteration, pixels: swept area over length
             moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+            problem.recycle(state.phi)
             state, current = trial, evaluation
             energies.append(current.energy)
             streak = streak + 1 if attempt == 0 else 0
@@ -202,7 +214,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
                 flow_state = FlowState(
                     iteration=n_iter, contours=level_set_contours(state.phi), energy=current.energy,
                     c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
-                    phi=state.phi,
+                    phi=state.phi.copy(),  # the backend reuses its arrays
                 )
                 if callback(flow_state):
                     status = 2

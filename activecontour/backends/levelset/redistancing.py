@@ -9,6 +9,7 @@ from activecontour.backends.levelset.zeroset import _cell_segments, _change_cell
 from activecontour.raster import rasterize
 
 _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in float32
+_MIN_DISTANCE = 1e-6  # pixels: the smallest |phi| a reinitialisation writes (see _propagate)
 _ONE_SWEEP_BAND = 8.0  # bands up to this half-width (pixels) need one sweep per ring
 _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 
@@ -16,12 +17,13 @@ _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1,
 class _Redistanced:
     """A band-clipped signed distance, the pixels of its band and the cells Gamma crosses."""
 
-    def __init__(self, phi, positive, near_flat, near_distance, cells):
+    def __init__(self, phi, positive, near_flat, near_distance, cells, front):
         self.phi = phi  # (M, N), exact within the band, +-band beyond
         self.positive = positive  # phi > 0
         self.near_flat = near_flat  # flat indices of the pixels whose distance was computed
         self.near_distance = near_distance  # their signed distances (float64)
         self.cells = cells  # the cells with a sign change (zeroset._change_cells), the same after
+        self.front = front  # flat indices of the pixels with a 4-neighbour on the other side
 
 
 class _Scratch:
@@ -75,25 +77,86 @@ def signed_distance(phi, band=np.inf):
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
 
-def _redistance(phi, band, dtype=np.float64, scratch=None):
-    """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``; ``scratch``: a
-    :class:`_Scratch` of phi's shape to reuse (else one is made)."""
+def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=None):
+    """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``.
+
+    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  ``previous``: a
+    :class:`_Redistanced` that phi was stepped from; the front is then searched only next to the
+    previous front and the pixels that changed side (a front pixel whose side and whose
+    neighbours' sides are unchanged was a front pixel before), which gives the same front and
+    cells as a search over the image at the cost of two passes instead of a dozen.  ``out``: with
+    ``previous``, an array of phi's shape and ``dtype`` to write the result into (a copy of the
+    previous state with its band and the switched pixels reset, rather than a new array).
+    """
     positive = phi > 0
-    front = np.flatnonzero(_front_pixels(positive))
+    if previous is None:
+        front = np.flatnonzero(_front_pixels(positive))
+    else:
+        switched = np.flatnonzero(positive != previous.positive)
+        front = _front_among(positive, np.concatenate([previous.front, switched]))
     if front.size == 0 and positive.all():
         return _domain_edge_distance(phi.shape, band, dtype)
     if front.size == 0:
         return _Redistanced(_clipped(positive, band, dtype), positive, np.zeros(0, dtype=np.intp),
-                            np.zeros(0), np.zeros(0, dtype=np.intp))
+                            np.zeros(0), np.zeros(0, dtype=np.intp), front)
+    cells = _change_cells(positive) if previous is None else _cells_around(positive, front)
     rows, cols = np.divmod(front, phi.shape[1])
-    segments, nearest, cells = _front_segments(phi, positive, rows, cols)
+    segments, nearest = _front_segments(phi, positive, rows, cols, cells)
     # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
     # of a narrow band, one sweep and the walk along Gamma are
     sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
+    base = None
+    if previous is not None and out is not None:
+        # beyond the previous band and the switched pixels phi is +-band on the same side as before
+        base = out
+        np.copyto(base, previous.phi)
+        reset = np.concatenate([previous.near_flat, switched])
+        base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
     state = _propagate(positive, rows, cols, segments, nearest, band, sweeps,
-                       dtype=dtype, scratch=scratch)
-    state.cells = cells
+                       dtype=dtype, scratch=scratch, base=base)
+    state.cells, state.front = cells, front
     return state
+
+
+def _unique(flat):
+    """The distinct values of an integer array, sorted."""
+    flat = np.sort(flat)
+    return flat[np.concatenate([[True], flat[1:] != flat[:-1]])] if flat.size else flat
+
+
+def _front_among(positive, seeds):
+    """The front pixels among ``seeds`` (flat indices) and their 4-neighbours, sorted."""
+    m, n = positive.shape
+    rows, cols = np.divmod(seeds, n)
+    rows = np.concatenate([rows, rows - 1, rows + 1, rows, rows])
+    cols = np.concatenate([cols, cols, cols, cols - 1, cols + 1])
+    keep = (rows >= 0) & (rows < m) & (cols >= 0) & (cols < n)
+    candidates = _unique(rows[keep] * n + cols[keep])
+    rows, cols = np.divmod(candidates, n)
+    side = positive[rows, cols]
+    front = np.zeros(candidates.size, dtype=bool)
+    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        r, c = rows + dr, cols + dc
+        inside = (r >= 0) & (r < m) & (c >= 0) & (c < n)
+        front[inside] |= positive[r[inside], c[inside]] != side[inside]
+    return candidates[front]
+
+
+def _cells_around(positive, front):
+    """The cells with a sign change (as :func:`zeroset._change_cells`) from the front pixels: every
+    such cell has an edge with a sign change, whose two ends are front pixels."""
+    m, n = positive.shape
+    rows, cols = np.divmod(front, n)
+    rows = np.concatenate([rows - 1, rows - 1, rows, rows])
+    cols = np.concatenate([cols - 1, cols, cols - 1, cols])
+    keep = (rows >= 0) & (rows < m - 1) & (cols >= 0) & (cols < n - 1)
+    cells = _unique(rows[keep] * (n - 1) + cols[keep])
+    r, c = np.divmod(cells, n - 1)
+    corner = positive[r, c]
+    change = corner != positive[r, c + 1]
+    change |= corner != positive[r + 1, c + 1]
+    change |= corner != positive[r + 1, c]
+    return cells[change]
 
 
 def _domain_edge_distance(shape, band, dtype=np.float64):
@@ -109,12 +172,17 @@ def _domain_edge_distance(shape, band, dtype=np.float64):
     distance = np.minimum(to_rows[:, None], to_cols[None, :])
     near = np.flatnonzero(distance < band)
     return _Redistanced(np.minimum(distance, band).astype(dtype), np.ones(shape, dtype=bool), near,
-                        distance.ravel()[near], np.zeros(0, dtype=np.intp))
+                        distance.ravel()[near], np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp))
 
 
 def _clipped(positive, band, dtype=np.float64):
     """``+band`` inside, ``-band`` outside (inf for an infinite band)."""
-    return np.where(positive, dtype(band), dtype(-band))
+    if not np.isfinite(band):
+        return np.where(positive, dtype(band), dtype(-band))
+    phi = positive.astype(dtype)  # 0 or 1, then scaled in place: far faster than np.where
+    phi *= dtype(2.0 * band)
+    phi -= dtype(band)
+    return phi
 
 
 def _front_pixels(positive):
@@ -140,14 +208,13 @@ def _segment_distance(points, starts, ends):
     return np.where(np.isnan(gap), np.inf, gap)
 
 
-def _front_segments(phi, positive, rows, cols):
+def _front_segments(phi, positive, rows, cols, cells):
     """The zero-set segments (every cell with a sign change) and the nearest one to each front pixel.
 
-    Returns a :class:`_Segments` (every segment of Gamma once, and empty saddle slots),
-    ``nearest (F,)``, an index into it, and the cells with a sign change.
+    ``cells``: the cells with a sign change.  Returns a :class:`_Segments` (every segment of
+    Gamma once, and empty saddle slots) and ``nearest (F,)``, an index into it.
     """
     m, n = phi.shape
-    cells = _change_cells(positive)
     cell_r, cell_c = np.divmod(cells, n - 1)
     segments, keys = _cell_segments(*_corners(phi, cell_r, cell_c), cell_r, cell_c, n)
     segments, keys = segments.reshape(-1, 2, 2), keys.reshape(-1, 2)
@@ -166,7 +233,7 @@ def _front_segments(phi, positive, rows, cols):
     table = _Segments(segments, _links(keys))
     gap = table.squared_gap(rows.astype(np.float32)[:, None], cols.astype(np.float32)[:, None], candidates)
     nearest = candidates[np.arange(len(rows)), np.argmin(gap, axis=1)]
-    return table, nearest, cells
+    return table, nearest
 
 
 def _links(keys):
@@ -220,7 +287,7 @@ class _Segments:
 
 
 def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np.float64,
-               scratch=None):
+               scratch=None, base=None):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
     eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
     :func:`activecontour._kernels.grow_band`, O(pixels in the band))."""
@@ -246,12 +313,15 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     scratch.clear(framed)
     flat = (r - 1) * n + (c - 1)
     inside = positive.ravel()[flat]
-    # an inside pixel keeps a positive value (a distance that rounds to 0 would move it out): the
-    # sign pattern, and so the cells Gamma crosses, are those of the input
-    signed = np.where(inside, np.maximum(distance, np.finfo(np.float32).tiny), -distance)
-    phi = _clipped(positive, band, dtype)
+    # every pixel keeps its side, at least _MIN_DISTANCE from Gamma: the sign pattern, and so the
+    # cells Gamma crosses, are those of the input (a distance that rounds to 0 would move an
+    # inside pixel out), and no crossing lies closer to a pixel centre than the coordinates
+    # resolve (marching squares on values ~1e-20 orients its segments by rounding errors)
+    distance = np.maximum(distance, _MIN_DISTANCE)
+    signed = np.where(inside, distance, -distance)
+    phi = _clipped(positive, band, dtype) if base is None else base  # base: +-band beyond the band
     phi.ravel()[flat] = np.clip(signed, -band, band)
-    return _Redistanced(phi, positive, flat, signed, None)
+    return _Redistanced(phi, positive, flat, signed, None, None)
 
 
 def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
@@ -276,15 +346,13 @@ def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
     if positive.all():  # the whole image inside: the flow starts from the domain's edge
         return _domain_edge_distance(shape, band, dtype).phi
     rows, cols = np.divmod(np.flatnonzero(_front_pixels(positive)), shape[1])
-    pieces = [_densify(np.asarray(c, dtype=np.float64), 0.5) for c in curves]
-    starts = np.concatenate(pieces)
-    ends = np.concatenate([np.roll(piece, -1, axis=0) for piece in pieces])
+    vertices = [np.asarray(c, dtype=np.float64) for c in curves]
+    starts, first, size = _densify(np.concatenate(vertices), np.array([len(c) for c in vertices]), 0.5)
     # the neighbours of piece i along its curve are i - 1 and i + 1, cyclically
-    offsets = np.cumsum([0] + [len(piece) for piece in pieces])
     index = np.arange(len(starts))
-    first = np.repeat(offsets[:-1], np.diff(offsets))
-    size = np.repeat(np.diff(offsets), np.diff(offsets))
-    links = np.column_stack([first + (index - first - 1) % size, first + (index - first + 1) % size])
+    after = first + (index - first + 1) % size
+    links = np.column_stack([first + (index - first - 1) % size, after])
+    ends = starts[after]
     points = np.column_stack([rows, cols]).astype(np.float64)
     count = min(8, len(starts))
     _, near = scipy.spatial.cKDTree(0.5 * (starts + ends)).query(points, k=count)
@@ -295,10 +363,19 @@ def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
     return _propagate(positive, rows, cols, segments, nearest, band, sweeps=2, dtype=dtype).phi
 
 
-def _densify(curve, spacing):
-    end = np.roll(curve, -1, axis=0)
-    length = np.hypot(*(end - curve).T)
+def _densify(points, lengths, spacing):
+    """Closed curves (stacked ``points``, ``lengths`` vertices each) with every edge split into
+    pieces of at most ``spacing``: the new stacked points, and for each its curve's first index and
+    size in the new stack (all curves at once, no loop over them)."""
+    curve_first = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    curve_size = np.repeat(lengths, lengths)
+    index = np.arange(len(points))
+    end = points[curve_first + (index - curve_first + 1) % curve_size]
+    length = np.hypot(*(end - points).T)
     count = np.maximum(np.ceil(length / spacing).astype(np.intp), 1)
-    edge = np.repeat(np.arange(len(curve)), count)
+    edge = np.repeat(index, count)
     t = (np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)) / count[edge]
-    return curve[edge] + t[:, None] * (end - curve)[edge]
+    dense = points[edge] + t[:, None] * (end - points)[edge]
+    new_lengths = np.add.reduceat(count, np.cumsum(lengths) - lengths)
+    return (dense, np.repeat(np.cumsum(new_lengths) - new_lengths, new_lengths),
+            np.repeat(new_lengths, new_lengths))

@@ -77,9 +77,19 @@ def level_set_contours(phi):
     ``-|phi|`` (:func:`_closed_padding`): a region that touches the image border closes along the
     domain edge, half a pixel outside the outermost pixel centres, so every curve is closed.
     With ``positive_orientation="high"`` outer boundaries have positive signed area and holes
-    negative.  Each vertex is stored once.
+    negative.  Each vertex is stored once.  Only the box around the inside (and one pixel more)
+    is traced: beyond it phi is negative and has no zero crossing, and the float64 copies that
+    marching squares makes stay the size of that box.
     """
-    return level_curves(_closed_padding(phi), 0.0)
+    phi = np.asarray(phi)
+    positive = phi > 0
+    rows, cols = np.flatnonzero(positive.any(axis=1)), np.flatnonzero(positive.any(axis=0))
+    if rows.size == 0:
+        return []
+    top, left = max(rows[0] - 1, 0), max(cols[0] - 1, 0)
+    box = phi[top: rows[-1] + 2, left: cols[-1] + 2]
+    # the padding of a side of the box inside the image is -|phi| of negative pixels: phi itself
+    return [curve + (top, left) for curve in level_curves(_closed_padding(box), 0.0)]
 
 
 def _closed_padding(phi):
@@ -138,7 +148,8 @@ def _edge_soup(phi, positive, cells):
     base = np.column_stack([cell_r, cell_c]).astype(np.float64)
     # a point on the inside of each segment: the mean of the inside corners of a simple cell;
     # in a saddle each segment cuts off one inside corner (a and c, or b and d)
-    reference = np.repeat((base + inside @ offsets / inside.sum(axis=1)[:, None])[:, None], 2, axis=1)
+    mean_corner = np.einsum("ki,ij->kj", inside.astype(np.float64), offsets) / inside.sum(axis=1)[:, None]
+    reference = np.repeat((base + mean_corner)[:, None], 2, axis=1)
     saddle = inside.sum(axis=1) == 2
     saddle &= inside[:, 0] == inside[:, 2]
     a_in = inside[saddle, 0][:, None]
