@@ -97,9 +97,9 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         holds the region of every pixel (0 = the background, the region covering most of the
         image border; the others by increasing mean intensity), ``result.constants`` their
         constants; the inside (``mask``, ``contours``) is every region but the background.
-        K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
-        :mod:`activecontour.backends.labelfield`), started from the global K-means of the
-        intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+        K > 2 runs on ``backend="levelset"`` only (a label field descended on the exact
+        partition length, :mod:`activecontour.backends.labelfield`), started from the global
+        K-means of the intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
     fit : {"constant", "smooth"}
         ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
         is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,

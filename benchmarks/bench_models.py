@@ -207,7 +207,7 @@ def contact_sheets(folder):
         axes[0].set_title(name)
         for axis, (title, kwargs) in zip(axes[1:], runs, strict=True):
             t = time.perf_counter()
-            res = ac.segment(image, **kwargs)
+            res = ac.segment(image, separate=False, **kwargs)
             elapsed = time.perf_counter() - t
             if res.classes.max() > 1:
                 axis.imshow(res.classes, cmap="viridis", interpolation="nearest")
