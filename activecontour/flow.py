@@ -30,18 +30,20 @@ stall at the finest l is convergence; the run also stops at ``max_num_iter``.
 
 from __future__ import annotations
 
+import dataclasses
 from itertools import pairwise
 
 import numpy as np
 
 from activecontour import fem, topology
+from activecontour.backends.options import option, parse_options
 from activecontour.curve import edge_lengths, resample
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
 from activecontour.result import FlowState, build_result
 
-__all__ = ["segment_polygon"]
+__all__ = ["PolygonOptions", "segment_polygon"]
 
 _VELOCITIES = ("h1", "l2")
 _ARMIJO = 1e-4
@@ -62,12 +64,59 @@ _NUCLEATION_TRIALS = 30
 _REMESH_COOLDOWN = 10
 
 
-def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocity="h1", spacing=1.0,
-                    max_step=8.0, smoothing=None, min_smoothing=1.0, min_area=4.0, nucleate=True,
-                    accelerate=True, global_start=True):
+@dataclasses.dataclass(frozen=True)
+class PolygonOptions:
+    """The options of the polygon backend (``segment(..., options={...})``): each field's doc is
+    its ``help`` (:func:`activecontour.backends.options.option_specs`)."""
+
+    velocity: str = option("h1", "The bilinear form b: H^1 (6.39), the default, or L^2 (6.25).",
+                           choices=_VELOCITIES)
+    spacing: float = option(1.0, (
+        "Target distance between vertices, in pixels (>= 0.1).  About one vertex per pixel resolves "
+        "everything the image resolves; the cost of an iteration grows with the curve's length in "
+        "pixels either way."))
+    max_step: float = option(8.0, (
+        "Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps "
+        "double while they are accepted, up to this; backtracking halves them."))
+    smoothing: float | None = option(None, (
+        "First length l in b(V, Y) = int V.Y + l^2 int grad V : grad Y, in pixels (smoothing >= "
+        "min_smoothing).  The book's (6.39) is l = 1 in its units.  In pixel units l = 1 barely "
+        "smooths: on noisy images the fastest (noise-driven) vertex then caps the step and the bulk "
+        "of the curve crawls; a large l alone spreads every local force over l pixels and fills "
+        "corners slowly.  Coarse to fine gets both.  None (default): 30 px from curves or a mask "
+        "given as init, and 2 px from the default start (init=None), from a previous result and "
+        "after the global move (global_start), which already lie on the objects' boundaries "
+        "(measured on benchmarks/bench_robust.py: the same Dice to +-0.0002 in a third to a half "
+        "of the iterations)."))
+    min_smoothing: float = option(1.0, "Last length l of the coarse-to-fine H^1 metric, in pixels (>= 0).")
+    min_area: float = option(4.0, (
+        "Curves enclosing less than this many square pixels are removed (when that does not raise "
+        "the energy), e.g. circles of a grid start that shrink away on the background."))
+    nucleate: bool = option(True, (
+        "When the flow has converged, look for holes and new components that lower the energy (the "
+        "topological derivative, activecontour.topology.nucleation_sites), insert small circles "
+        "there and continue; repeated at most a few times.  This is how a single initial curve "
+        "finds a hole or a second object it cannot reach by deformation."))
+    accelerate: bool = option(True, (
+        "Combine the velocity with the last few steps (limited-memory BFGS in the metric b: the "
+        "first inverse Hessian guess is b^-1, so without memory the step is the book's velocity).  "
+        "Near a minimum the plain flow converges slowly along the directions the metric and the "
+        "energy weigh differently; this takes them in one step.  Every step still passes the same "
+        "descent test.  The memory is cleared when the vertices change and at each new stage."))
+    global_start: bool = option(True, (
+        "From curves, a mask or 'grid' given as init, the first iteration is a global move: to the "
+        "default start's threshold set (activecontour.initial.threshold_starts) or its complement, "
+        "whichever has the lower (6.38), when that is lower than the given curves' energy (the "
+        "first half of Chan and Vese's alternating minimisation), so the flow then only settles "
+        "details: on scikit-image's camera, from a drawn rectangle, ~70 iterations instead of "
+        "~1000 to the same J within 1 %.  False keeps the flow local to the given curves."))
+
+
+def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **options):
     """Minimise (6.38) by the H^1 gradient flow of a polygon (``backend="polygon"``).
 
-    Called by :func:`activecontour.segment`; the keywords after ``callback`` are its ``options``.
+    Called by :func:`activecontour.segment`; ``options`` are its ``options``, the fields of
+    :class:`PolygonOptions` (names, types, defaults and their documentation).
 
     Parameters
     ----------
@@ -77,74 +126,28 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     max_num_iter : int
     tol : float
     callback : callable or None
-    velocity : {"h1", "l2"}
-        The bilinear form b: H^1 (6.39), the default, or L^2 (6.25).
-    spacing : float
-        Target distance between vertices, in pixels (>= 0.1).  About one vertex per pixel resolves
-        everything the image resolves; the cost of an iteration grows with the curve's length in
-        pixels either way.
-    max_step : float
-        Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps
-        double while they are accepted, up to this; backtracking halves them.
-    smoothing, min_smoothing : float
-        First and last length l in ``b(V, Y) = int V.Y + l^2 int grad V : grad Y``, in pixels
-        (``smoothing >= min_smoothing >= 0``).  The book's (6.39) is l = 1 in its units.  In pixel
-        units l = 1 barely smooths: on noisy images the fastest (noise-driven) vertex then caps the
-        step and the bulk of the curve crawls; a large l alone spreads every local force over l
-        pixels and fills corners slowly.  Coarse to fine gets both: the curve reaches the object
-        in a few tens of iterations and then settles into its details.  ``smoothing=None``
-        (default) is 30 px from curves or a mask given as init, and 2 px from the default start
-        (``init=None``), from a previous result and after the global move (``global_start``),
-        which already lie on the objects' boundaries: there is nothing to move as a whole
-        (measured on ``benchmarks/bench_robust.py``: the same Dice to +-0.0002 in a third to a half of the
-        iterations).
-
-    min_area : float
-        Curves enclosing less than this many square pixels are removed (when that does not raise
-        the energy), e.g. circles of a grid start that shrink away on the background.
-    nucleate : bool
-        When the flow has converged, look for holes and new components that lower the energy
-        (the topological derivative, :func:`activecontour.topology.nucleation_sites`), insert
-        small circles there and continue; repeated at most a few times.  This is how a single
-        initial curve finds a hole or a second object it cannot reach by deformation.
-    accelerate : bool
-        Combine the velocity with the last few steps (limited-memory BFGS in the metric b: the
-        first inverse Hessian guess is b^{-1}, so without memory the step is the book's
-        velocity).  Near a minimum the plain flow converges slowly along the directions the
-        metric and the energy weigh differently (a small, smooth shift of a long contour); this
-        takes them in one step.  Every step still passes the same descent test.  The memory is
-        cleared when the vertices change (remesh, topology repair) and at each new stage.
-    global_start : bool
-        From curves, a mask or ``"grid"`` given as init, the first iteration is a global move:
-        to the default start's threshold set (:func:`activecontour.initial.threshold_starts`)
-        or its complement, whichever has the lower (6.38), when that is lower than the given
-        curves' energy.  It is the first half of Chan and Vese's alternating minimisation (the
-        best region for the class the curves outline, taken at once), so the flow then only
-        settles details, as from the default start: on scikit-image's camera, from a drawn
-        rectangle, ~70 iterations instead of ~1000 to the same J within 1 %.  The class with
-        the larger share of its area inside the given curves is inside (see ``_global_move``).
-        False keeps the flow local to the given curves (they move by deformation and
-        nucleation only).
+    **options
+        :class:`PolygonOptions` fields.
 
     Returns
     -------
     SegmentationResult
+
+    Raises
+    ------
+    TypeError
+        For an unknown option (the message lists the valid ones) or an option of the wrong type.
     """
-    if velocity not in _VELOCITIES:
-        raise ValueError(f"velocity must be one of {_VELOCITIES}, got {velocity!r}")
+    chosen = parse_options(PolygonOptions, "polygon", options)
+    velocity, spacing, max_step = chosen.velocity, chosen.spacing, chosen.max_step
+    smoothing, min_smoothing, min_area = chosen.smoothing, chosen.min_smoothing, chosen.min_area
+    nucleate, accelerate, global_start = chosen.nucleate, chosen.accelerate, chosen.global_start
     if not (np.isfinite(spacing) and spacing >= _MIN_SPACING):
         raise ValueError(f"spacing must be a number of pixels >= {_MIN_SPACING} (vertices closer than "
                          f"the image resolves only cost time), got {spacing!r}")
     if not (np.isfinite(max_step) and max_step > 0):
         raise ValueError(f"max_step must be a positive number of pixels, got {max_step!r}")
-    for name, value in (("spacing", spacing), ("max_step", max_step), ("smoothing", smoothing),
-                        ("min_smoothing", min_smoothing), ("min_area", min_area)):
-        if not (value is None and name == "smoothing") and (
-                isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))):
-            raise TypeError(f"option {name!r} must be a number of pixels, got {value!r}")
     from_result = hasattr(init, "contours") and hasattr(init, "mask")
-    if not isinstance(global_start, bool):
-        raise TypeError(f"option 'global_start' must be True or False, got {global_start!r}")
     if not (np.isfinite(min_smoothing) and (smoothing is None or np.isfinite(smoothing))
             and (smoothing is None or smoothing >= min_smoothing) and min_smoothing >= 0):
         raise ValueError(

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import importlib
-import inspect
 import os
 
 import numpy as np
 
+from activecontour.backends import BACKENDS
+from activecontour.backends.options import parse_options
 from activecontour.energy import ChanVeseParameters
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
 from activecontour.noise import auto_mu, is_auto
@@ -29,13 +29,6 @@ _LIGHT_TOL = 0.01
 
 #: The choices of ``inside``: which region holds the objects.
 INSIDE = ("auto", "bright", "dark")
-
-#: backend name -> "module:function" implementing it (imported on first use)
-BACKENDS = {
-    "polygon": "activecontour.flow:segment_polygon",
-    "levelset": "activecontour.backends.levelset:segment_levelset",
-}
-
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
@@ -129,9 +122,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         The axis holding the colour channels of a 3-D array, e.g. 0 for channel-first (3, M, N);
         None: the last, when it has 1-4 entries.
     options : dict, optional
-        Backend-specific settings, documented by the backend function
-        (:func:`activecontour.flow.segment_polygon`,
-        :func:`activecontour.backends.levelset.segment_levelset`).
+        Backend-specific settings: the fields of the backend's options dataclass
+        (:class:`activecontour.flow.PolygonOptions`,
+        :class:`activecontour.backends.levelset.LevelSetOptions`; the registry
+        :data:`activecontour.backends.BACKENDS`).  An unknown name is a TypeError listing the
+        valid ones.
 
     Returns
     -------
@@ -168,9 +163,9 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
 
         solver = functools.partial(segment_labels, n_regions=int(n_regions))
     else:
-        module_name, function_name = BACKENDS[backend].split(":")
-        solver = getattr(importlib.import_module(module_name), function_name)
-        _check_options(solver, backend, options or {})
+        chosen = BACKENDS[backend]
+        parse_options(chosen.options, backend, options or {})  # before any work: bad keys, types
+        solver = chosen.run
     solve = functools.partial(
         _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
         inside=inside, normalize=normalize, callback=callback, fit=fit,
@@ -306,19 +301,6 @@ def _whole_image_callback(callback, box, shape):
                                             shape=tuple(shape), phi=phi))
 
     return shifted
-
-
-def _check_options(solver, backend, options):
-    """Name the valid options of a backend that lists them as keywords (others check their own)."""
-    parameters = inspect.signature(solver).parameters.values()
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
-        return
-    valid = sorted(p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY
-                   and p.name not in ("max_num_iter", "tol", "callback"))
-    unknown = sorted(set(options) - set(valid))
-    if unknown:
-        raise TypeError(f"unknown option(s) {', '.join(map(repr, unknown))} for backend {backend!r}; "
-                        f"the valid options are {', '.join(valid)}")
 
 
 def _check_regions(n_regions, backend, c_in, c_out, options, roi):

@@ -218,13 +218,10 @@ def _warm_kwargs(segment_kwargs):
     Both only save iterations; options the caller gives win."""
     if segment_kwargs.get("backend", "polygon") != "polygon" or segment_kwargs.get("n_regions", 2) != 2:
         return segment_kwargs
-    import inspect
-
-    from activecontour.flow import segment_polygon
+    from activecontour.flow import PolygonOptions
 
     given = dict(segment_kwargs.get("options") or {})
-    finest = given.get("min_smoothing",
-                       inspect.signature(segment_polygon).parameters["min_smoothing"].default)
+    finest = given.get("min_smoothing", PolygonOptions().min_smoothing)
     return {**segment_kwargs, "options": {"smoothing": finest, "nucleate": False, **given}}
 
 

@@ -56,6 +56,7 @@ import math
 import os
 import signal
 import sys
+import textwrap
 import threading
 import time
 from pathlib import Path
@@ -147,6 +148,7 @@ def build_parser():
         help="segment images and write mask, overlay and contour files",
         description="Segment each IMAGE; write <name>_mask.png, <name>_overlay.png and "
         "<name>_contours.<fmt> into the output directory.",
+        epilog=_backend_options_help(), formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     segment.add_argument(
         "images", nargs="+", metavar="IMAGE",
@@ -171,7 +173,7 @@ def build_parser():
     segment.add_argument(
         "--option", dest="options", action="append", type=_option, default=None, metavar="KEY=VALUE",
         help="a backend setting passed in segment(options=...), e.g. smoothing=10 or dt=32; "
-        "repeatable (see the backends' docstrings)",
+        "repeatable (the backends' options are listed below)",
     )
     segment.set_defaults(run=_run_segment)
 
@@ -537,42 +539,44 @@ def _option(text):
 
 
 def _check_option_types(backend, options):
-    """Each ``--option KEY=VALUE`` of the kind of its default: a number for a number (or for None,
-    a number chosen automatically), true/false for a flag, text for text (unknown keys are left
-    to segment(), which lists the valid ones)."""
-    defaults = _backend_option_defaults(backend)
+    """Each ``--option KEY=VALUE`` of the kind of its field in the backend's options dataclass: a
+    number for a number (or for None, a number chosen automatically), true/false for a flag, text
+    for text (unknown keys are left to segment(), which lists the valid ones)."""
+    from activecontour.backends import BACKENDS
+
+    specs = {spec.name: spec for spec in BACKENDS[backend].option_specs()}
     for key, value in options.items():
-        if key not in defaults:
+        if key not in specs:
             continue
-        default = defaults[key]
-        if isinstance(default, bool):
+        spec = specs[key]
+        if spec.kind is bool:
             expected, ok = "true or false", isinstance(value, bool)
-        elif default is None or isinstance(default, (int, float)):
+        elif spec.kind in (int, float):
             expected, ok = "a number", isinstance(value, (int, float)) and not isinstance(value, bool)
             ok = ok and math.isfinite(value)
         else:
             expected, ok = "text", isinstance(value, str)
         if not ok:
-            shown = "automatic" if default is None else repr(default)
+            shown = "automatic" if spec.default is None else repr(spec.default)
             raise UsageError(f"--option {key}: expected {expected} (default {shown}), got "
                              f"{'true' if value is True else 'false' if value is False else value!r}")
 
 
-def _backend_option_defaults(backend):
-    """A backend's settings and their defaults: its keyword-only parameters, or the
-    ``DEFAULT_OPTIONS`` table of a backend that takes ``**options``."""
-    import importlib
+def _backend_options_help():
+    """The ``--option`` settings of every backend, from its options dataclass: name, default and
+    the first sentence of its help."""
+    from activecontour.backends import BACKENDS
 
-    from activecontour.segment import BACKENDS
-
-    module_name, function_name = BACKENDS[backend].split(":")
-    module = importlib.import_module(module_name)
-    parameters = inspect.signature(getattr(module, function_name)).parameters.values()
-    defaults = {p.name: p.default for p in parameters
-                if p.kind is inspect.Parameter.KEYWORD_ONLY and p.default is not inspect.Parameter.empty}
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
-        defaults.update(getattr(module, "DEFAULT_OPTIONS", {}))
-    return defaults
+    lines = ["backend options (--option KEY=VALUE):"]
+    for name, backend in BACKENDS.items():
+        lines.append(f"  --backend {name}:")
+        for spec in backend.option_specs():
+            default = "automatic" if spec.default is None else str(spec.default).lower() \
+                if spec.kind is bool else spec.default
+            first = spec.help.split(".  ")[0].rstrip(".")
+            lines.append(textwrap.fill(first, width=79, initial_indent=f"    {spec.name}={default}: ",
+                                       subsequent_indent=" " * 8))
+    return "\n".join(lines)
 
 
 def _with_option_names(message):

@@ -973,20 +973,13 @@ def _library_defaults():
 
 
 def _backend_default(backend, option):
-    """A backend option's default (its module's ``DEFAULT_OPTIONS`` or the function's signature),
-    or None when the backend or the option is not there."""
-    import importlib
-
-    module_name, function_name = BACKENDS[backend].split(":")
+    """A backend option's default, from the backend's options dataclass, or None when the backend
+    or the option is not there."""
     try:
-        module = importlib.import_module(module_name)
-        defaults = getattr(module, "DEFAULT_OPTIONS", {})
-        if option in defaults:
-            return float(defaults[option])
-        default = inspect.signature(getattr(module, function_name)).parameters[option].default
-    except (ImportError, AttributeError, KeyError):
+        default = getattr(BACKENDS[backend].options(), option)
+    except (KeyError, ImportError, AttributeError):
         return None
-    return None if default is inspect.Parameter.empty else float(default)
+    return None if default is None else float(default)
 
 
 def _jsonable_parameters(params):

@@ -119,7 +119,7 @@ scheme        the energy of an iterate, the force f of (6.41), the steps (a), (b
 driver        :func:`segment_levelset`: options, the step schedule, stages and the result
 """
 
-from activecontour.backends.levelset.driver import DEFAULT_OPTIONS, segment_levelset
+from activecontour.backends.levelset.driver import DEFAULT_OPTIONS, LevelSetOptions, segment_levelset
 from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
 from activecontour.backends.levelset.redistancing import curves_level_set, signed_distance
 from activecontour.backends.levelset.scheme import heaviside
@@ -127,6 +127,7 @@ from activecontour.backends.levelset.zeroset import level_set_contours, zero_set
 
 __all__ = [
     "DEFAULT_OPTIONS",
+    "LevelSetOptions",
     "checkerboard_level_set",
     "curves_level_set",
     "heaviside",

@@ -2,22 +2,41 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
 from activecontour.backends.levelset.scheme import _Problem, _swept_area
 from activecontour.backends.levelset.zeroset import level_set_contours
+from activecontour.backends.options import option, parse_options
 from activecontour.result import FlowState, build_result
 
-#: The backend-specific keywords of :func:`segment_levelset` and their defaults.
-DEFAULT_OPTIONS = {
-    "dt": 16.0,
-    "dt_min": 1.0,
-    "dt_max": 64.0,
-    "band": 4.0,
-    "checkerboard_period": 16.0,
-    "max_backtracks": 3,
-}
+
+@dataclasses.dataclass(frozen=True)
+class LevelSetOptions:
+    """The options of the level-set backend (``segment(..., options={...})``): each field's doc is
+    its ``help`` (:func:`activecontour.backends.options.option_specs`)."""
+
+    dt: float = option(16.0, (
+        "First step, pixels of travel at the typical force, at most half the width of the start's "
+        "regions (but not below dt_min)."))
+    dt_min: float = option(1.0, (
+        "Below this ceiling the smoothed-force stages end and the unsmoothed stage runs, with steps "
+        "up to dt_min and the force within the band only (no single pixel far from Gamma flips)."))
+    dt_max: float = option(64.0, (
+        "Largest step (pixels), the ceiling of the first stage.  A dt outside [dt_min, dt_max] "
+        "widens the defaults; bounds given explicitly must satisfy dt_min <= dt <= dt_max."))
+    band: float = option(4.0, (
+        "Narrow band: phi is the signed distance up to band pixels from Gamma and is clipped to "
+        "+-band beyond.  At least 2."))
+    checkerboard_period: float = option(16.0, "Side (pixels) of the squares of the 'checkerboard' start.")
+    max_backtracks: int = option(3, (
+        "Halvings of the step of the final stage before an iteration counts as stationary."))
+
+
+#: The options' defaults as a dict (the settings :class:`_Problem` reads).
+DEFAULT_OPTIONS = dataclasses.asdict(LevelSetOptions())
 
 _STAGE_TOL = 10.0  # a smoothed-force stage ends at 10 tol: the next, finer one moves faster
 _WINDOW = 3  # stages end when Gamma's mean displacement over this many iterations is small
@@ -26,22 +45,14 @@ _RECHECKS = 2  # smoothed steps tried after the unsmoothed stage ends (see segme
 
 
 def _parse_options(options):
-    unknown = sorted(set(options) - set(DEFAULT_OPTIONS))
-    if unknown:
-        raise TypeError(
-            f"unknown option(s) {', '.join(map(repr, unknown))} for backend 'levelset'; "
-            f"the valid options are {', '.join(sorted(DEFAULT_OPTIONS))}"
-        )
-    settings = {**DEFAULT_OPTIONS, **options}
+    settings = dataclasses.asdict(parse_options(LevelSetOptions, "levelset", options))
     for name in ("dt", "dt_min", "dt_max", "band", "checkerboard_period"):
         value = settings[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise TypeError(f"option {name!r} must be a number, got {type(value).__name__}")
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"option {name!r} must be a positive finite number, got {value!r}")
         settings[name] = float(value)
     value = settings["max_backtracks"]
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+    if value < 0:
         raise ValueError(f"option 'max_backtracks' must be an integer >= 0, got {value!r}")
     settings["max_backtracks"] = int(value)
     # a first step outside the default range widens it (a viewer's step slider, say); only
@@ -67,8 +78,8 @@ def _parse_options(options):
 def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **options):
     """Minimise the Chan-Vese functional (6.38) with a level set over the pixel grid.
 
-    Called by :func:`activecontour.segment` with ``backend="levelset"``; the keywords under
-    Other Parameters are passed there as ``options={...}``.  The scheme, the step schedule and the
+    Called by :func:`activecontour.segment` with ``backend="levelset"``; its ``options={...}``
+    are the fields of :class:`LevelSetOptions`.  The scheme, the step schedule and the
     energy are described in :mod:`activecontour.backends.levelset`.
 
     Parameters
@@ -100,26 +111,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         Called with a :class:`~activecontour.result.FlowState` (contours and ``phi``) after every
         accepted iteration; returning True stops the flow (status 2).
 
-    Other Parameters
-    ----------------
-    dt : float, default 16.0
-        First step, pixels of travel at the typical force (module docstring), at most half the
-        width of the start's regions (but not below ``dt_min``).
-    dt_min : float, default 1.0
-        Below this ceiling the smoothed-force stages end and the unsmoothed stage (b) runs, with
-        steps up to ``dt_min`` and the force within the band only (no single pixel far from
-        Gamma flips).
-    dt_max : float, default 64.0
-        Largest step (pixels), the ceiling of the first stage.  A ``dt`` outside
-        ``[dt_min, dt_max]`` widens the defaults; bounds given explicitly must satisfy
-        ``dt_min <= dt <= dt_max``.
-    band : float, default 4.0
-        Narrow band: phi is the signed distance up to ``band`` pixels from Gamma and is clipped to
-        ``+-band`` beyond.  At least 2.
-    checkerboard_period : float, default 16.0
-        Side (pixels) of the squares of the ``"checkerboard"`` start.
-    max_backtracks : int, default 3
-        Halvings of the step of the final stage before an iteration counts as stationary.
+    **options
+        The fields of :class:`LevelSetOptions` (names, types, defaults and their documentation).
 
     Returns
     -------
