@@ -77,7 +77,8 @@ class PolygonOptions:
         "pixels either way."))
     max_step: float = option(8.0, (
         "Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps "
-        "double while they are accepted, up to this; backtracking halves them."))
+        "double while they are accepted, up to this; backtracking halves them."),
+                             slider=("step (px)", 0.25, 10.0))
     smoothing: float | None = option(None, (
         "First length l in b(V, Y) = int V.Y + l^2 int grad V : grad Y, in pixels (smoothing >= "
         "min_smoothing).  The book's (6.39) is l = 1 in its units.  In pixel units l = 1 barely "

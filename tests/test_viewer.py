@@ -928,3 +928,16 @@ def test_the_contour_stands_out_from_a_red_image_on_screen_too(make_viewer):
     shown = matplotlib.colors.to_rgb(viewer.contour_lines.get_color()[0])
     assert shown != viewer_module.CONTOUR_COLOR  # red would vanish on red
     assert np.linalg.norm(np.subtract(shown, (0.8, 0, 0))) > 0.9
+
+
+def test_step_sliders_start_at_the_options_dataclass_defaults(disk_image, make_viewer):
+    # the slider of each backend is the option its dataclass marks, starting at that field's default
+    from activecontour.backends import BACKENDS
+    from activecontour.flow import PolygonOptions
+
+    viewer = make_viewer(disk_image[0])
+    assert set(viewer.step_sliders) == set(BACKENDS)
+    assert viewer.step_sliders["polygon"].val == PolygonOptions().max_step
+    for name, backend in BACKENDS.items():
+        option = backend.step_slider()[0]
+        assert viewer.step_sliders[name].val == getattr(backend.options(), option)

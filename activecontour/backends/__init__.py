@@ -44,6 +44,11 @@ class Backend:
 
         return option_specs(self.options)
 
+    def step_slider(self):
+        """``(option, label, lowest, highest)`` of the viewer's "step" slider: the option marked
+        with a slider (:func:`activecontour.backends.options.option`), or None."""
+        return next(((spec.name, *spec.slider) for spec in self.option_specs() if spec.slider), None)
+
 
 #: backend name -> its record; a new backend is its own module and one line here.
 BACKENDS = {

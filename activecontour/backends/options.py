@@ -22,11 +22,14 @@ __all__ = ["OptionSpec", "option", "option_specs", "parse_options"]
 _KINDS = (bool, int, float, str)
 
 
-def option(default, help, choices=None):
-    """A field of an options dataclass: its default, its documentation and, for text, its choices."""
+def option(default, help, choices=None, slider=None):
+    """A field of an options dataclass: its default, its documentation, for text its choices, and
+    for the backend's "step" option the viewer's slider ``(label, lowest, highest)``."""
     metadata = {"help": help}
     if choices is not None:
         metadata["choices"] = tuple(choices)
+    if slider is not None:
+        metadata["slider"] = tuple(slider)
     return dataclasses.field(default=default, metadata=metadata)
 
 
@@ -47,6 +50,8 @@ class OptionSpec:
         Whether None is a valid value.
     choices : tuple or None
         The valid values of a text option.
+    slider : tuple or None
+        ``(label, lowest, highest)`` of the viewer's slider of this option (one per backend).
     """
 
     name: str
@@ -55,6 +60,7 @@ class OptionSpec:
     help: str
     optional: bool = False
     choices: tuple | None = None
+    slider: tuple | None = None
 
     def check(self, value, backend):
         """Raise TypeError (ValueError for a fractional integer or a text not among the choices)
@@ -96,7 +102,8 @@ def option_specs(options_class):
             else (hints[field.name],)
         kind = next(k for k in kinds if k in _KINDS)
         specs.append(OptionSpec(field.name, kind, field.default, field.metadata["help"],
-                                optional=type(None) in kinds, choices=field.metadata.get("choices")))
+                                optional=type(None) in kinds, choices=field.metadata.get("choices"),
+                                slider=field.metadata.get("slider")))
     return tuple(specs)
 
 

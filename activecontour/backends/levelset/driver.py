@@ -20,7 +20,7 @@ class LevelSetOptions:
 
     dt: float = option(16.0, (
         "First step, pixels of travel at the typical force, at most half the width of the start's "
-        "regions (but not below dt_min)."))
+        "regions (but not below dt_min)."), slider=("first step (px)", 1.0, 64.0))
     dt_min: float = option(1.0, (
         "Below this ceiling the smoothed-force stages end and the unsmoothed stage runs, with steps "
         "up to dt_min and the force within the band only (no single pixel far from Gamma flips)."))
