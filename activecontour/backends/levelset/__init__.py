@@ -63,10 +63,7 @@ over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find n
 steps are explicit on the band when ``tau mu <= 1/4`` (stable, no DCT).  The unsmoothed flow can
 stop in a pixel-scale local minimum that a smoothed step leaves (a continued run would then move
 on), so when it ends a smoothed stage of the first step size is tried, up to twice: if its first
-step finds no descent the end stands, otherwise the stages run on from there.  From the default
-start (``init=None``: the global minimiser of the fit terms, traced at the pixel scale, see
-:func:`activecontour.initial.default_init`) the coarse stages have nothing to find: stage (b)
-runs at once, and those smoothed steps at its end are the only ones.
+step finds no descent the end stands, otherwise the stages run on from there.
 
 How far Gamma moved is measured geometrically, in pixels: the area between the old and the new
 zero set, ``sum_px |H_eps(d_new) - H_eps(d_old)|`` over the band, divided by the length of Gamma,

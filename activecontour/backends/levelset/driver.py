@@ -139,7 +139,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         phi = checkerboard_level_set(shape, period)  # redistanced below
     else:
         phi = initial_level_set(init, shape, band=settings["band"], values=model.image,
-                                dtype=np.float32)
+                                dtype=np.float32, mu=params.mu)
     # after the start: its temporaries (the default start's) are gone before the work arrays come
     problem = _Problem(model, params, settings)
     state = problem.redistance(phi)
@@ -152,12 +152,6 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
     step = min(settings["dt"], max(0.5 * width, settings["dt_min"]))
     first_step, ceiling, grow, smooth_force = step, settings["dt_max"], True, True
-    if init is None:
-        # The default start is the global minimiser of the fit terms, traced at the pixel scale
-        # (activecontour.initial.default_init): the coarse smoothed stages, which carry a far
-        # start into its basin, have nothing to find there.  The unsmoothed stage runs at once,
-        # and the smoothed steps are tried when it ends (the rechecks), as for every start.
-        smooth_force, step = False, settings["dt_min"]
     status, n_iter, stage_start, streak = 1, 0, 0, 0
     # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):
     # the unsmoothed flow stops at pixel-scale local minima that a smoothed step can leave.

@@ -27,12 +27,13 @@ def checkerboard_level_set(shape, period):
 
 
 def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, values=None,
-                      dtype=np.float64):
+                      dtype=np.float64, mu=0.0):
     """The signed-distance level set of any ``init`` that :func:`segment_levelset` accepts.
 
-    ``values`` (M, N, C), the normalised image, is used by ``"grid"`` only (see
-    :func:`activecontour.initial.grid`).  ``dtype``: of the returned array (the backend keeps
-    phi in float32).
+    ``values`` (M, N, C), the normalised image, and ``mu`` are used by the default start and
+    ``"grid"`` (see :func:`activecontour.initial.initial_curves`: the default start leaves out the
+    specks the length term ``mu`` would remove at once).  ``dtype``: of the returned array (the
+    backend keeps phi in float32).
 
     Raises
     ------
@@ -59,4 +60,4 @@ def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, val
         if not np.any(phi > 0):
             raise ValueError("init result has an empty inside (phi <= 0 everywhere)")
         return _redistance(phi, band, dtype=dtype).phi
-    return curves_level_set(initial_curves(init, shape, values), shape, band, dtype=dtype)
+    return curves_level_set(initial_curves(init, shape, values, mu), shape, band, dtype=dtype)

@@ -64,7 +64,7 @@ class _Problem:
     def recycle(self, array):
         """Hand back an image-sized float32 array that nothing refers to any more."""
         if array is not None and array.shape == self.shape and array.dtype == np.float32 \
-                and len(self._spare) < 3:
+                and len(self._spare) < 2:
             self._spare.append(array)
 
     def redistance(self, phi, previous=None):
