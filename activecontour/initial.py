@@ -160,7 +160,8 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
         scale = bins / (high - low)
 
         def index(x, low=low, scale=scale):
-            return np.minimum(((x - low) * scale).astype(np.intp), bins - 1).ravel()
+            # clipped at both ends: the rows below the sampled ones can lie outside [low, high]
+            return np.clip((x - low) * scale, 0, bins - 1).astype(np.intp).ravel()
 
         where = index(upper)
         count = np.bincount(where, minlength=bins).astype(np.float64)

@@ -72,3 +72,14 @@ def test_a_small_object_at_low_snr_is_found_by_the_default_start(fraction, sigma
     result = ac.segment(image)
     assert result.success, result.message
     assert synthetic.dice(result.mask, truth) >= 0.95
+
+
+def test_a_sampled_scan_of_a_large_image_takes_the_rows_below_the_sample_too():
+    # over 2**20 pixels the scan reads every other row, and the rows paired with them (below) may
+    # hold values outside the sampled range: they belong to the end bins, not to negative ones
+    rng = np.random.default_rng(5)
+    smooth = rng.normal(0.3, 0.05, (1100, 1000, 1))
+    smooth[1::2] += 0.5  # the unsampled rows (below each sampled one) reach far above its range
+    smooth[3::4] -= 1.0  # and far below it
+    direction, threshold, cost = threshold_split(smooth)
+    assert np.isfinite(cost) and np.isfinite(threshold) and direction.shape == (1,)
