@@ -293,7 +293,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     seam, when the two classes of the smoothed intensity differ by ``CONTRAST_DEPTH`` noise
     sigmas (and ``CONTRAST_FLOOR`` of the image's range) and every piece is a blob of a size
     comparable to the others.  On the DSB 2018 nuclei image (``benchmarks/bench_objects.py``)
-    this takes F1 from 0.68 to 0.74 (polygon) and from 0.70 to 0.77 (level set); the synthetic
+    this takes F1 from 0.68 to 0.74 (polygon) and from 0.70 to 0.74 (level set); the synthetic
     clumps, of equal brightness, are unchanged, and so are skimage's coins (25 and 29 objects).
 
     The split is applied to the sub-pixel polygon: the parts' pixels, grown over the object's
