@@ -94,8 +94,8 @@ def find_objects(contours, shape, image=None, *, separate=True):
     image : ndarray (M, N) or (M, N, C), optional
         The input image in its own units, for ``intensity_mean``.
     separate : bool
-        Split touching objects along their necks (:func:`split_touching`); False keeps the
-        connected pieces.
+        Split touching objects along their necks, and by contrast where the image is given
+        (:func:`split_touching`); False keeps the connected pieces.
 
     Returns
     -------
@@ -111,7 +111,7 @@ def find_objects(contours, shape, image=None, *, separate=True):
     for k, curves in enumerate(by_class):
         found = group_curves(curves)
         if separate and found:
-            found = split_touching(found, label_image(found, shape))
+            found = split_touching(found, label_image(found, shape), image)
         objects += found
         classes += [k + 1] * len(found)
     order = sorted(range(len(objects)), key=lambda i: _top_left(objects[i]))
@@ -269,7 +269,7 @@ MIN_SPLIT_RADIUS = 3.0
 MIN_NECK_DEPTH = 1.0
 
 
-def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPLIT_RADIUS):
+def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPLIT_RADIUS):
     """Split objects along their necks: touching objects become separate objects.
 
     For each object, the pixels inside its outer boundary (holes filled: the rim around a hole is
@@ -288,6 +288,14 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
     A shape of one piece (a ring, a stroke, a limb on a body) has no neck much narrower than its
     thinner side, or has parts that are no blobs, so it is not split.
 
+    Given the image, each part is then split by intensity where the outline has no waist at all
+    (:func:`_contrast_parts`): a bright object touching a dim one, or two separated by a dark
+    seam, when the two classes of the smoothed intensity differ by ``CONTRAST_DEPTH`` noise
+    sigmas (and ``CONTRAST_FLOOR`` of the image's range) and every piece is a blob of a size
+    comparable to the others.  On the DSB 2018 nuclei image (``benchmarks/bench_objects.py``)
+    this takes F1 from 0.68 to 0.74 (polygon) and from 0.70 to 0.74 (level set); the synthetic
+    clumps, of equal brightness, are unchanged, and so are skimage's coins (25 and 29 objects).
+
     The split is applied to the sub-pixel polygon: the parts' pixels, grown over the object's
     bounding box, become cells whose shared borders are straightened (``shapely.coverage_simplify``
     keeps them shared), and each part is the polygon intersected with its cell.  Parts therefore
@@ -298,6 +306,8 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
     objects : list of list of ndarray
         Object k: outer boundary, then holes; id k + 1 in ``labels``.
     labels : int ndarray (M, N)
+    image : ndarray (M, N) or (M, N, C), optional
+        The input image (any units; colour channels are averaged): enables the split by contrast.
     neck_ratio, min_radius : float
 
     Returns
@@ -308,6 +318,15 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
     import scipy.ndimage
 
     boxes = scipy.ndimage.find_objects(labels, max_label=len(objects))
+    if image is not None:
+        from activecontour.noise import estimate_noise
+
+        image = np.asarray(image, dtype=np.float64)
+        image = image.mean(axis=2) if image.ndim == 3 else image
+        # the least contrast of a split by intensity: a number of noise sigmas, and on a noise-free
+        # image a fraction of its range (shading is not two objects)
+        least = max(CONTRAST_DEPTH * float(estimate_noise(image[:, :, None])[0]),
+                    CONTRAST_FLOOR * float(np.ptp(image)))
     result = []
     for k, (curves, box) in enumerate(zip(objects, boxes, strict=True)):
         if box is None:
@@ -316,11 +335,12 @@ def split_touching(objects, labels, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPL
         low = np.array([box[0].start - 1, box[1].start - 1])
         # the outline's shape decides (holes filled): the rim around a hole is no neck
         window = np.pad(scipy.ndimage.binary_fill_holes(labels[box] == k + 1), 1)
-        if not _may_have_necks(window):
-            result.append(curves)
-            continue
-        parts = _neck_parts(window, curves[0] - low, _boundary_distance(curves[:1], window, low),
-                            neck_ratio, min_radius)
+        parts = window.astype(np.int32)
+        if _may_have_necks(window):
+            parts = _neck_parts(window, curves[0] - low, _boundary_distance(curves[:1], window, low),
+                                neck_ratio, min_radius)
+        if image is not None:
+            parts = _contrast_parts(parts, _window(image, box), least, min_radius)
         if parts.max() <= 1:
             result.append(curves)
             continue
@@ -399,6 +419,105 @@ def _neck_parts(region, outline, distance, neck_ratio, min_radius):
         root = int(roots[worst])
         for neighbour in graph.neighbours(root):
             graph.merge(root, neighbour)
+
+
+#: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
+#: (pixels; normalised to the object, so the background does not darken its rim) ...
+CONTRAST_SCALE = 1.0
+#: ... and splits it in two classes (Otsu) only where their means differ by at least this many
+#: times the pixel noise (:func:`activecontour.noise.estimate_noise`).  On a uniform object the
+#: two classes of the smoothed noise differ by ~0.45 noise sigmas, a fifth of this; on the DSB
+#: 2018 nuclei image a bright nucleus touching a dim one differs by 6-25 sigmas.
+CONTRAST_DEPTH = 2.0
+#: ... and by at least this fraction of the image's range (a noise-free image).
+CONTRAST_FLOOR = 0.05
+#: The dim class counts only this far (pixels) from the bright one and from the outline: the
+#: blurred rim of a bright object is dim too, and would wrap around it.
+CONTRAST_RIM = 4.0
+#: Every piece must be at least this fraction of the largest one's area: a highlight or the
+#: relief on a coin (skimage's coins: pieces of 0.07-0.19 of their coin) is no object; touching
+#: nuclei are of comparable size (DSB 2018: 0.26-0.48 in the splits made).
+CONTRAST_SIZE_RATIO = 0.25
+
+
+def _window(image, box):
+    """The image under a label window (the box grown by one pixel, edge values repeated)."""
+    rows = np.clip(np.arange(box[0].start - 1, box[0].stop + 1), 0, image.shape[0] - 1)
+    cols = np.clip(np.arange(box[1].start - 1, box[1].stop + 1), 0, image.shape[1] - 1)
+    return image[np.ix_(rows, cols)]
+
+
+def _without_small(mask, area):
+    """The connected pieces (4-neighbours) of a bool mask of at least ``area`` pixels."""
+    import scipy.ndimage
+
+    pieces, count = scipy.ndimage.label(mask)
+    return (np.bincount(pieces.ravel(), minlength=count + 1) >= area)[pieces] & mask
+
+
+def _contrast_parts(parts, values, least, min_radius):
+    """Split each part where it holds a bright and a dim object (or two bright ones and a dark
+    seam), given the image under the window and the least contrast of a split.
+
+    Inside the part, the intensity smoothed by ``CONTRAST_SCALE`` is split at Otsu's threshold
+    when the two classes' means differ by ``least``.  The bright class
+    (holes filled, pieces below pi min_radius^2 dropped) and the dim class at ``CONTRAST_RIM``
+    from it and from the outline (pieces below half that dropped) are the cores; every pixel goes
+    to the nearest core.  The split stands only if there are two cores or more and every piece
+    is a blob (:func:`_is_blob`) with an inscribed radius of ``min_radius`` or more and an area
+    of ``CONTRAST_SIZE_RATIO`` of the largest piece's or more: texture, shading and highlights
+    inside one object make specks, rims or arcs, not blobs of a size side by side.
+    """
+    import scipy.ndimage
+    import skimage.measure
+
+    result, count = np.zeros_like(parts), 0
+    smallest = np.pi * min_radius ** 2
+    for j in range(1, int(parts.max()) + 1):
+        mask = parts == j
+        pieces = _contrast_split(mask, values, least, smallest)
+        if pieces is not None:
+            props = skimage.measure.regionprops(pieces)
+            largest = max(p.area for p in props)
+            if not all(_is_blob(p) and p.area >= CONTRAST_SIZE_RATIO * largest
+                       and scipy.ndimage.distance_transform_edt(pieces == p.label).max() >= min_radius
+                       for p in props):
+                pieces = None
+        if pieces is None:
+            count += 1
+            result[mask] = count
+        else:
+            result[mask] = pieces[mask] + count
+            count += int(pieces.max())
+    return result
+
+
+def _contrast_split(mask, values, least, smallest):
+    """The pieces of :func:`_contrast_parts` for one part, or None when there is no split."""
+    import scipy.ndimage
+    import skimage.filters
+
+    weight = scipy.ndimage.gaussian_filter(mask.astype(float), CONTRAST_SCALE)
+    smooth = (scipy.ndimage.gaussian_filter(np.where(mask, values, 0.0), CONTRAST_SCALE)
+              / np.maximum(weight, 1e-12))
+    inside = smooth[mask]
+    # the two classes' means differ by less than the range: a narrower range has no split
+    if inside.size <= 2 * smallest or np.ptp(inside) < least:
+        return None
+    threshold = skimage.filters.threshold_otsu(inside)
+    if inside[inside > threshold].mean() - inside[inside <= threshold].mean() < least:
+        return None
+    bright = _without_small(scipy.ndimage.binary_fill_holes((smooth > threshold) & mask), smallest) & mask
+    away = ((scipy.ndimage.distance_transform_edt(mask) > CONTRAST_RIM)
+            & (scipy.ndimage.distance_transform_edt(~bright) > CONTRAST_RIM))
+    dim = _without_small(mask & ~bright & away, smallest / 2)
+    bright_cores, n_bright = scipy.ndimage.label(bright)
+    dim_cores, n_dim = scipy.ndimage.label(dim)
+    if n_bright + n_dim < 2:
+        return None
+    cores = np.where(bright, bright_cores, np.where(dim, dim_cores + n_bright, 0))
+    nearest = scipy.ndimage.distance_transform_edt(cores == 0, return_distances=False, return_indices=True)
+    return np.where(mask, cores[tuple(nearest)], 0)
 
 
 #: A part of a split object must be blob-like: at least this solid (area / convex hull area) ...

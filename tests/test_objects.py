@@ -250,6 +250,41 @@ def test_a_single_object_is_never_split(name, backend):
     assert res.labels.max() == 1  # ... and one object
 
 
+def _bright_and_dim_halves():
+    """A disk of radius 20 cut by a chord through its centre, the left half twice as bright as
+    the right one (a bright nucleus touching a dim one): the outline is a disk, no waist."""
+    image = synthetic.render(synthetic.disk((40, 40), 20), (80, 80))[0]
+    truth = (image > 0.5).astype(np.int32)
+    truth[:, 40:] *= 2
+    image[:, 40:] *= 0.5
+    return image, truth
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_a_bright_and_a_dim_object_touching_without_a_waist_are_two(backend):
+    from activecontour.metrics import match_instances
+
+    image, truth = _bright_and_dim_halves()
+    noisy = synthetic.add_noise(image, 0.5 / 3, seed=1)  # SNR 3 on the step between the halves
+    res = ac.segment(noisy, backend=backend)
+    score = match_instances(res.labels, truth)
+    # both halves found; mean IoU > 0.75 means a split line within ~4 px of the chord (a shift of
+    # d px moves 40 d px of a 628 px half)
+    assert res.labels.max() == 2 and score["tp"] == 2 and score["mean_iou"] > 0.75
+    _no_overlap_and_union_is_region(res)
+    assert ac.segment(noisy, backend=backend, separate=False).labels.max() == 1
+    # the same disk of one brightness at the same noise is one object
+    uniform = synthetic.add_noise((truth > 0).astype(float), 0.5 / 3, seed=1)
+    assert ac.segment(uniform, backend=backend).labels.max() == 1
+
+
+@pytest.mark.parametrize("name", list(SINGLE_OBJECTS))
+def test_a_single_object_is_never_split_at_snr_3(name):
+    # the split by contrast must not read noise as two classes: the noise at a third of the contrast
+    image = synthetic.add_noise(SINGLE_OBJECTS[name](), 1 / 3, seed=len(name))
+    assert ac.segment(image).labels.max() == 1
+
+
 @pytest.mark.parametrize("backend", ["polygon", "levelset"])
 def test_touching_clumps_f1(backend):
     import scipy.ndimage
