@@ -35,13 +35,55 @@ from activecontour import _kernels
 from activecontour.curve import as_curve
 
 __all__ = [
+    "EMPTY_FRACTION",
+    "PARAMETER_LIMIT",
     "ChanVeseParameters",
     "Evaluation",
     "chan_vese_energy",
     "evaluate",
     "region_moments",
     "stack_curves",
+    "to_frame",
+    "working_frame",
 ]
+
+
+#: A region with less than this fraction of the domain's area is empty for its constant (6.42):
+#: the domain-sized sums it is the difference of round at ~1e-16 of the domain, so its mean is
+#: then exact to ~1e-7 of the image's range.
+EMPTY_FRACTION = 1e-9
+#: In the frame where the image spans [0, 1] (:meth:`ChanVeseParameters.in_frame`): the largest
+#: mu, |omega|, |c_in|, |c_out| and lambda, and 1 / this the smallest lambda.  At 1e8 a weight
+#: makes every other term of (6.38) smaller than its rounding; J stays far from overflow.
+PARAMETER_LIMIT = 1e8
+
+
+def working_frame(values):
+    """``(offset, scale)`` with ``(values - offset) / scale`` spanning [0, 1]; (0, 1) for values
+    already within [0, 1] (every image ``normalize="range"`` gives, and integers by ``"dtype"``).
+
+    A constant image gets scale 1.
+
+    Raises
+    ------
+    ValueError
+        For intensities (``normalize=None`` or float ``"dtype"``) whose span squared overflows:
+        (6.38) of such intensities is not a float.
+    """
+    low, high = float(values.min()), float(values.max())
+    if 0.0 <= low and high <= 1.0:
+        return 0.0, 1.0
+    with np.errstate(over="ignore"):
+        span = high - low
+        if not np.isfinite(span * span * values.shape[0] * values.shape[1]):
+            raise ValueError(f"the image's intensities span {low:.3g}..{high:.3g}: (6.38) of them overflows; "
+                             "pass normalize='range' (the default) to scale them to [0, 1]")
+    return low, (span if span > 0 else 1.0)
+
+
+def to_frame(values, offset, scale):
+    """``(values - offset) / scale``: the image in the frame of :func:`working_frame`."""
+    return values if offset == 0.0 and scale == 1.0 else (values - offset) / scale
 
 
 @dataclass(frozen=True)
@@ -86,6 +128,48 @@ class ChanVeseParameters:
                 if arr.ndim != 1 or not np.all(np.isfinite(arr)):
                     raise ValueError(f"{name} must be None, a finite number or one per channel")
                 object.__setattr__(self, name, arr)
+
+    def in_frame(self, offset, scale):
+        """The same functional for the intensities ``(I - offset) / scale``, range-checked.
+
+        (6.38) of the image ``offset + scale I'`` is ``scale^2`` times (6.38) of I' with
+        ``mu / scale^2``, ``omega / scale^2``, the same lambdas and constants ``(c - offset) /
+        scale``: the backends compute in this frame, where the image spans [0, 1], so that a
+        large offset does not cancel (``sum (I - c)^2 = sum I^2 - 2 c sum I + c^2 |Omega|`` loses
+        every digit when c^2 is 1e16 times the variance) and nothing overflows.  In that frame
+        every weight and constant must lie within :data:`PARAMETER_LIMIT` (lambdas within its
+        inverse, too): beyond, one term of (6.38) is below the rounding of another, or J
+        overflows.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter, its value and the valid range in the caller's units.
+        """
+        low_lambda, high = 1.0 / PARAMETER_LIMIT, PARAMETER_LIMIT
+        for name in ("lambda_in", "lambda_out"):
+            value = np.asarray(getattr(self, name), dtype=np.float64)
+            if np.any(value < low_lambda) or np.any(value > high):
+                raise ValueError(f"{name} must be between {low_lambda:g} and {high:g}, "
+                                 f"got {getattr(self, name)}")
+        square = scale * scale
+        for name, limit in (("mu", high * square), ("omega", high * square)):
+            if abs(getattr(self, name)) > limit:
+                raise ValueError(f"|{name}| must be at most {limit:.6g} ({high:g} times the image's "
+                                 f"intensity range squared), got {getattr(self, name)}")
+        constants = {}
+        for name in ("c_in", "c_out"):
+            value = getattr(self, name)
+            if value is not None:
+                scaled = (value - offset) / scale
+                if np.any(np.abs(scaled) > high):
+                    raise ValueError(f"{name} must be within {high:g} image ranges of the image's "
+                                     f"intensities, got {value}")
+                constants[name] = scaled
+        if offset == 0.0 and scale == 1.0:
+            return self
+        return ChanVeseParameters(self.mu / square, self.omega / square, self.lambda_in, self.lambda_out,
+                                  constants.get("c_in"), constants.get("c_out"))
 
     def weights(self, n_channels):
         """(lambda_in, lambda_out) per channel, divided by the number of channels.
@@ -174,10 +258,13 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
         Also assemble ``load`` (K, 2), the derivative of J with respect to every vertex (6.41).
     empty_ok : bool
         How to treat curves that enclose no area or the whole domain while a constant is optimised
-        (6.42 is then undefined).  False (the flow's view): ``energy`` is ``inf``, so no step is
-        accepted into that state.  True (the value of a final result): the empty region's fitting
-        term is 0 whatever its constant, so J is finite, and the undefined constant is reported
-        equal to the other one.
+        (6.42 is then undefined).  A region smaller than ``EMPTY_FRACTION`` of the domain counts
+        as empty: its mean (6.42) is a difference of domain-sized sums divided by its area, all
+        rounding (a sliver of 1e-9 px^2 outside reports a c_out far outside the image's range).
+        False (the flow's view): ``energy`` is ``inf``, so no step is accepted into that state.
+        True (the value of a final result): the empty region's fitting term is 0 whatever its
+        constant (at most its area times the image's range squared for a sliver), so J is
+        finite, and the undefined constant is reported equal to the other one.
 
     Returns
     -------
@@ -189,7 +276,8 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     outside_area = total_area - area
     c_in = params.constant("c_in", channels)
     c_out = params.constant("c_out", channels)
-    empty_in, empty_out = area <= 1e-9, outside_area <= 1e-9
+    tiny = EMPTY_FRACTION * total_area
+    empty_in, empty_out = area <= tiny, outside_area <= tiny
     if (empty_in and c_in is None) or (empty_out and c_out is None):
         if not empty_ok:
             nan = np.full(channels, np.nan)
@@ -258,9 +346,11 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     from activecontour.image import ImageModel, normalize_image
     from activecontour.noise import auto_mu, is_auto
 
-    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
-    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
-                                lambda_out, c_in, c_out)
+    values = normalize_image(image, color=color, normalize=normalize)
+    offset, scale = working_frame(values)
+    model = ImageModel(to_frame(values, offset, scale))
+    params = ChanVeseParameters(auto_mu(model.values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
+                                lambda_out, c_in, c_out).in_frame(offset, scale)
     if isinstance(contours, np.ndarray) and contours.ndim == 2:
         contours = [contours]
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
@@ -272,7 +362,7 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     if problem is not None:
         raise ValueError(f"contours do not bound a region, (6.38) is not defined: {problem}")
     points, next_index, _ = stack_curves(curves)
-    return evaluate(model, points, next_index, params, empty_ok=True).energy
+    return scale**2 * evaluate(model, points, next_index, params, empty_ok=True).energy
 
 
 def _check_in_domain(curve, bounds, name):

@@ -159,12 +159,16 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
     geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
                              for c in initial_curves(init, shape, model.values, params.mu)])
     current = evaluate(model, *geometry[:2], params, gradient=True)
-    if not np.isfinite(current.energy):
-        raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")
-    energies = [current.energy]
+    # a start around the whole image (or nothing) has the energy of the empty set plus its
+    # length, but no constant (6.42) for the empty region: the global move can still leave it
+    energies = [evaluate(model, *geometry[:2], params, empty_ok=True).energy]
     n_iter = 0
     jumped = global_start and init is not None and not from_result and max_num_iter > 0 and (
-        moved := _global_move(model, params, geometry, current, spacing)) is not None
+        moved := _global_move(model, params, geometry, energies[0], spacing)) is not None
+    if not (jumped or np.isfinite(current.energy) or max_num_iter == 0):
+        side, constant = ("inside", "c_in") if current.area < 0.5 * model.totals[0] else ("outside", "c_out")
+        raise ValueError(f"init leaves the {side} empty ({current.area:.6g} of {model.totals[0]:.0f} px^2 "
+                         f"inside): its constant {constant} (6.42) is undefined")
     if jumped:
         (geometry, current), n_iter = moved, 1
         energies.append(current.energy)
@@ -220,9 +224,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocit
                         status=status, backend="polygon")
 
 
-def _global_move(model, params, geometry, current, spacing):
+def _global_move(model, params, geometry, energy, spacing):
     """The default start's threshold set or its complement, as (geometry, evaluation), when its
-    (6.38) is below ``current``'s; else None.
+    (6.38) is below ``energy`` (the given curves'); else None.
 
     Of the two classes, the one that has the larger share of its area inside the given curves
     is inside: a curve drawn around an object (with background around it) or inside one selects
@@ -242,7 +246,7 @@ def _global_move(model, params, geometry, current, spacing):
         return None
     moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in best[1]])
     new = evaluate(model, *moved[:2], params, gradient=True)
-    return (moved, new) if new.energy < current.energy else None
+    return (moved, new) if new.energy < energy else None
 
 
 class _Flow:

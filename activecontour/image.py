@@ -175,6 +175,11 @@ def normalize_image(image, *, color="gray", normalize="range"):
         raise ValueError("image contains NaN or infinite values")
     if normalize == "range" and image.dtype != bool:
         low, high = values.min(), values.max()
+        with np.errstate(over="ignore"):
+            overflow = not np.isfinite(high - low)
+        if overflow:  # values spanning more than the float range: halve first
+            values *= 0.5
+            low, high = 0.5 * low, 0.5 * high
         # ``values`` is this function's own copy (astype copies): scale it in place
         values -= low
         if high > low:

@@ -301,7 +301,8 @@ def initial_curves(init, shape, values=None, mu=0.0):
     ValueError
         For a mask of the wrong shape or an empty one, a malformed curve, or a curve that lies
         outside the image.  Curves partly outside are clipped to the image domain
-        ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``; curves given by the user are oriented by nesting
+        ``[-0.5, M - 0.5] x [-0.5, N - 0.5]`` (their regions intersected with it: a curve around
+        the whole image is the whole image); curves given by the user are oriented by nesting
         and overlaps are merged (:func:`region_boundary`).  An integer array of the image's shape
         with two values (0/1, 0/255) is a mask too.
     """
@@ -336,7 +337,8 @@ def initial_curves(init, shape, values=None, mu=0.0):
         raw = list(init)
     else:
         raw = [init]
-    curves = [_clip(as_curve(c, name=f"init curve {i}"), shape, i) for i, c in enumerate(raw)]
+    curves = [part for i, c in enumerate(raw)
+              for part in _clip(as_curve(c, name=f"init curve {i}"), shape, i)]
     return curves if from_result else region_boundary(curves)
 
 
@@ -383,13 +385,30 @@ def _is_mask(init, shape):
 
 
 def _clip(curve, shape, index):
+    """The parts of a curve's region inside the image domain, as curves: [curve] when it is inside.
+
+    A curve that leaves the domain is intersected with it exactly (shapely): clamping its
+    vertices to the border would not be its region's part inside (a curve around the whole
+    image clamps to the image's corners; a large rotated square loses its corners' pieces).
+    """
     m, n = shape
     low, high = np.array([-0.5, -0.5]), np.array([m - 0.5, n - 0.5])
-    clipped = np.clip(curve, low, high)
-    if abs(signed_area(clipped)) <= 1e-9 * max(1.0, abs(signed_area(curve))):
-        raise ValueError(
-            f"init curve {index} lies outside the image (rows -0.5..{m - 0.5}, "
-            f"cols -0.5..{n - 0.5}); its bounding box is rows {curve[:, 0].min():.1f}.."
-            f"{curve[:, 0].max():.1f}, cols {curve[:, 1].min():.1f}..{curve[:, 1].max():.1f}"
-        )
-    return clipped
+    if np.all(curve >= low) and np.all(curve <= high):
+        return [curve]
+    import shapely
+    from shapely.geometry.polygon import orient as orient_polygon
+
+    box = shapely.box(low[0], low[1], high[0], high[1])
+    inside = shapely.make_valid(shapely.Polygon(curve)).intersection(box)
+    parts = []
+    for polygon in shapely.get_parts(inside):
+        if isinstance(polygon, shapely.Polygon) and polygon.area > 1e-9:
+            polygon = orient_polygon(polygon, sign=1.0 if signed_area(curve) > 0 else -1.0)
+            parts.extend(np.clip(np.asarray(ring.coords)[:-1], low, high)
+                         for ring in (polygon.exterior, *polygon.interiors))
+    if not parts:
+        half = np.ptp(curve, axis=0) / 2
+        box_text = ", ".join(f"{curve[:, k].min() + half[k]:.4g} +- {half[k]:.4g}" for k in (0, 1))
+        raise ValueError(f"init curve {index} lies outside the image (rows -0.5..{m - 0.5}, cols "
+                         f"-0.5..{n - 0.5}): it spans (row, col) = ({box_text})")
+    return parts

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 import os
 
 import numpy as np
 
-from activecontour.energy import ChanVeseParameters
+from activecontour.energy import ChanVeseParameters, to_frame, working_frame
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
 from activecontour.noise import auto_mu, is_auto
 from activecontour.result import scalar_if_gray
@@ -90,19 +91,42 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
-    model = ImageModel(normalize_image(image, color=color, normalize=normalize))
-    params = ChanVeseParameters(auto_mu(model.values) if is_auto(mu) else mu, omega, lambda_in,
+    values = normalize_image(image, color=color, normalize=normalize)
+    # the backends compute where the image spans [0, 1] (no cancellation, no overflow)
+    frame_offset, frame_scale = working_frame(values)
+    model = ImageModel(to_frame(values, frame_offset, frame_scale))
+    del values
+    square = frame_scale**2
+    params = ChanVeseParameters(auto_mu(model.values) * square if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out)
+    working = params.in_frame(frame_offset, frame_scale)
     module_name, function_name = BACKENDS[backend].split(":")
     solver = getattr(importlib.import_module(module_name), function_name)
     _check_options(solver, backend, options or {})
-    result = solver(model, init, params, max_num_iter=int(max_num_iter), tol=float(tol),
+    if callback is not None and working is not params:
+        callback = _in_caller_units(callback, frame_offset, frame_scale)
+    result = solver(model, init, working, max_num_iter=int(max_num_iter), tol=float(tol),
                     callback=callback, **(options or {}))
+    if working is not params:
+        result.energy *= square
+        result.energies = result.energies * square
+        result.c_in = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_in))
+        result.c_out = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_out))
     offset, scale = intensity_scale(image, normalize)
     result.mu = params.mu
     result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
     result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
     return result
+
+
+def _in_caller_units(callback, offset, scale):
+    """The callback, shown each state's energy and constants in the caller's intensity units."""
+    def wrapped(state):
+        return callback(dataclasses.replace(
+            state, energy=state.energy * scale**2,
+            c_in=offset + scale * np.asarray(state.c_in), c_out=offset + scale * np.asarray(state.c_out)))
+
+    return wrapped
 
 
 def _check_options(solver, backend, options):
