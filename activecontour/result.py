@@ -117,8 +117,9 @@ def scalar_if_gray(value):
     return float(value.reshape(-1)[0]) if value.size == 1 else value
 
 
-#: Energies that agree to this relative tolerance are the same number computed twice.
-_SAME_ENERGY = 1e-9
+#: Energies that agree to this relative tolerance are the same number computed twice, or before and
+#: after :func:`activecontour.curve.clean` (which moves the region by ~1e-9 of its extent).
+_SAME_ENERGY = 1e-8
 
 
 def build_result(model, params, contours, *, energies, n_iter, status, backend, phi=None):
