@@ -68,7 +68,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         Intensity scaling before the functional is set up: the image's own range onto [0, 1]
         (default), the dtype's range, or none (see :func:`activecontour.image.normalize_image`).
         ``result.c_in``/``c_out`` are in these normalised units; ``result.c_in_image`` and
-        ``result.c_out_image`` in the input's own.
+        ``result.c_out_image`` in the input's own.  Whatever the choice, the backends compute
+        where the image spans [0, 1] (:meth:`~activecontour.energy.ChanVeseParameters.in_frame`:
+        no cancellation for intensities far from 0, no overflow), and report energies and
+        constants in these units; weights and constants beyond ``PARAMETER_LIMIT`` (1e8) in
+        that frame are refused.
     options : dict, optional
         Backend-specific settings, documented by the backend function
         (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
