@@ -15,12 +15,14 @@ curve, fem         polygon geometry (tangent, normal, curvature) and P1 finite e
 image, energy      the image model with its cumulative tables; the functional and its derivative
 noise              the image's noise level and the default mu it implies
 initial, result    starts (the default one, circles, grids, masks); the one result constructor
-flow, levelset     the two backends
+flow               the polygon backend (the book's H^1 flow)
+backends.levelset  the level-set backend (redistancing, zero set, scheme, driver)
 topology, pyramid  crossings and their repair, nucleation; a start from a reduced copy
 _kernels           the compiled loops (Cython, built at install)
 io, raster         writers/readers of masks, overlays and contours (atomic, image_files,
                    contour_files, vector_formats); curves <-> masks
 synthetic          anti-aliased test images with exact ground truth
+compat             scikit-image's signatures: ``from activecontour.compat import chan_vese``
 batch              many images: worker processes, folders and globs, a Dask cluster
 
 Conventions: points are (row, col) with pixel centres at integer coordinates; outer boundaries are

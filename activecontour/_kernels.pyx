@@ -163,13 +163,15 @@ cdef inline void _cell(const double[:, :, ::1] values, const double[:, :, :, ::1
 
 def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
                    const double[:, :, ::1] values, const double[:, :, :, ::1] table, int stage,
-                   const double[::1] c_in, const double[::1] c_out, const double[::1] lambda_in,
-                   const double[::1] lambda_out, double omega, double mu, double[::1] s1,
-                   double[::1] s2, double[::1] sums, double[:, ::1] load):
+                   const double[::1] linear, const double[::1] square, double constant, double mu,
+                   double[::1] s1, double[::1] s2, double[::1] sums, double[:, ::1] load):
     """Exact integrals along every edge, split where it crosses a grid line.
 
     ``stage`` 0 accumulates the moments ``closed integral of G dc`` into s1, s2 and the signed area
-    and length into ``sums``; stage 1 adds the load (6.41) into ``load``.  Each piece between grid
+    and length into ``sums``; stage 1 adds the load (6.41) into ``load``, for the integrand
+    ``g(I) = constant + sum_ch (linear[ch] I_ch + square[ch] I_ch^2)``: the difference of the
+    quadratic forms of the regions on the two sides of the curve
+    (:class:`activecontour.models.base.QuadraticForm`), inside minus outside.  Each piece between grid
     lines lies in one interpolation cell [a, a + 1] x [j, j + 1], read once: there, with local
     coordinates (t, w), I is bilinear and its row-antiderivatives are the table values at row a
     plus the exact integral from a to u, so the integrands are polynomials of degree <= 5 in the
@@ -207,9 +209,9 @@ def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index
                     t_mid = t_prev + 0.5 * span
                     a = <Py_ssize_t> min(max(floor(u0 + t_mid * du), 0.0), <double> rows)
                     j = <Py_ssize_t> min(max(floor(v0 + t_mid * dv), 0.0), <double> cols)
-                    density[0] = omega
-                    density[1] = omega
-                    density[2] = omega
+                    density[0] = constant
+                    density[1] = constant
+                    density[2] = constant
                     for ch in range(channels):
                         _cell(values, table, a, j, ch, &cell)
                         for g in range(3):
@@ -234,8 +236,7 @@ def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index
                                 s2[ch] += weight * g2
                             else:
                                 intensity = w0 * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
-                                density[g] += (lambda_in[ch] * (intensity - c_in[ch]) ** 2
-                                               - lambda_out[ch] * (intensity - c_out[ch]) ** 2)
+                                density[g] += (linear[ch] + square[ch] * intensity) * intensity
                     if stage == 1:
                         for g in range(3):
                             t_edge = t_prev + span * nodes[g]
@@ -455,7 +456,7 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
               int sweeps, const double[::1] start_r, const double[::1] start_c,
               const double[::1] dir_r, const double[::1] dir_c, const double[::1] inverse,
               const Py_ssize_t[:, ::1] links):
-    """The rings of the level set's narrow band (:func:`activecontour.levelset._propagate`).
+    """The rings of the level set's narrow band (:func:`activecontour.backends.levelset.redistancing._propagate`).
 
     ``out[:n_ring]`` holds the front pixels (flat indices of the framed grid, their ``owner`` set);
     each further ring's pixels take the nearest of their neighbours' segments as of the previous

@@ -8,11 +8,22 @@ a half-written file, and a file that was already there is either replaced whole 
 
 from __future__ import annotations
 
+import hashlib
 import os
+import re
+import socket
 import tempfile
+import time
 from pathlib import Path
 
-__all__ = ["write_atomically", "write_group"]
+__all__ = ["STALE_AFTER_S", "sweep_temporaries", "write_atomically", "write_group"]
+
+#: A temporary file older than this (seconds) is swept whoever wrote it (a writer on another
+#: machine of a shared file system, whose process cannot be asked after).
+STALE_AFTER_S = 24 * 3600
+
+#: The temporaries' names: ``.<file name>.<pid>-<host>.<random>.part``.
+_TEMPORARY = re.compile(r"^\..+\.(?P<pid>\d+)-(?P<host>[0-9a-f]{8})\.[A-Za-z0-9_]+\.part$")
 
 
 def write_atomically(path, data):
@@ -58,7 +69,7 @@ def _temporary_copy(path, data):
     if not os.path.isdir(directory):
         raise FileNotFoundError(f"output directory does not exist: {directory!r}")
     handle, temporary = tempfile.mkstemp(
-        prefix=f".{os.path.basename(path)}.", suffix=".part", dir=directory
+        prefix=f".{os.path.basename(path)}.{os.getpid()}-{_host()}.", suffix=".part", dir=directory
     )
     try:
         with os.fdopen(handle, "wb") as stream:
@@ -80,3 +91,61 @@ def _remove_quietly(path):
         os.remove(path)
     except OSError:
         pass
+
+
+def sweep_temporaries(directory):
+    """Remove the temporary files that writers killed mid-write left in ``directory``.
+
+    A write that is interrupted normally removes its temporary file; one killed outright (``kill
+    -9``, a power cut) cannot.  Its temporary (a hidden ``.<name>.<pid>-<host>.<random>.part``) is
+    removed here when the process that wrote it, on this machine, no longer runs, or when it is
+    older than :data:`STALE_AFTER_S`.  Files of other names are never touched.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed.
+    """
+    removed = []
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return removed
+    now = time.time()
+    for name in names:
+        match = _TEMPORARY.match(name)
+        if match is None:
+            continue
+        path = Path(directory) / name
+        try:
+            age = now - os.lstat(path).st_mtime
+        except OSError:
+            continue
+        orphaned = match["host"] == _host() and not _running(int(match["pid"]))
+        if orphaned or age > STALE_AFTER_S:
+            try:
+                os.remove(path)
+            except OSError:
+                continue
+            removed.append(path)
+    return removed
+
+
+def _host():
+    """A short tag of this machine (temporaries of writers on other machines are left alone)."""
+    return hashlib.sha1(socket.gethostname().encode(errors="replace")).hexdigest()[:8]
+
+
+def _running(pid):
+    """Whether the process ``pid`` runs on this machine (POSIX); True where that cannot be asked."""
+    if os.name != "posix":
+        return True  # os.kill(pid, 0) would end the process on Windows
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True

@@ -30,6 +30,7 @@ inf) are written as null.
 
 from __future__ import annotations
 
+import functools
 import io as _stdio
 import json
 import math
@@ -42,11 +43,13 @@ import numpy as np
 
 from activecontour.atomic import write_atomically
 from activecontour.curve import as_curve, clean, signed_area
+from activecontour.image import MAX_PIXELS, SizeLimitError
 from activecontour.vector_formats import geojson_bytes, read_geojson, read_svg, svg_bytes
 
 __all__ = [
     "CONTOUR_FORMATS",
     "CONVENTION",
+    "MAX_POINTS",
     "curve_list",
     "encode_contours",
     "read_contours",
@@ -66,6 +69,11 @@ CONVENTION = (
 
 
 _FORMAT_TAG = "activecontour-contours"
+
+#: The most vertices :func:`read_contours` reads by default, all curves together: as many as the
+#: largest image :func:`activecontour.load_image` reads has pixels (no contour of an image needs
+#: more).  An NPZ file's arrays are checked by their headers before anything is decompressed.
+MAX_POINTS = MAX_PIXELS
 
 
 def write_contours(path, contours, *, metadata=None, image_shape=None, fmt=None):
@@ -97,13 +105,16 @@ def write_contours(path, contours, *, metadata=None, image_shape=None, fmt=None)
     return path
 
 
-def read_contours(path):
+def read_contours(path, *, max_points=MAX_POINTS):
     """Read contours written by :func:`write_contours` (or any GeoJSON polygon file).
 
     Parameters
     ----------
     path : str or os.PathLike
         A ``.json``, ``.geojson``, ``.svg``, ``.csv`` or ``.npz`` file.
+    max_points : int or None
+        Refuse a file of more vertices than this, all curves together (default
+        :data:`MAX_POINTS`); None: no limit.
 
     Returns
     -------
@@ -115,15 +126,19 @@ def read_contours(path):
     ------
     FileNotFoundError
         For a missing file.
+    SizeLimitError
+        For a file of more than ``max_points`` vertices (a ValueError).
     ValueError
-        For an unknown suffix or a file that is not a valid contour file.
+        For an unknown suffix or a file that is not a valid contour file (nested too deeply
+        included).
     """
-    return _read(path)[0]
+    return _read(path, max_points)[0]
 
 
-def read_metadata(path):
-    """The metadata dict stored in a contour file (``{}`` when it holds none)."""
-    return _read(path)[1]
+def read_metadata(path, *, max_points=MAX_POINTS):
+    """The metadata dict stored in a contour file (``{}`` when it holds none); ``max_points`` as in
+    :func:`read_contours`."""
+    return _read(path, max_points)[1]
 
 
 def encode_contours(path, contours, metadata, image_shape, fmt):
@@ -249,14 +264,22 @@ def _csv_bytes(curves, meta):
 
 
 def _npz_bytes(curves, meta):
+    """An uncompressed NPZ, as :func:`numpy.savez` writes it but with a fixed time stamp on its
+    entries, so that the same contours give the same bytes whenever they are written."""
+    from numpy.lib import format as npy
+
     arrays = {f"contour_{i}": curve for i, curve in enumerate(curves)}
     arrays["metadata"] = np.array(json.dumps({"convention": CONVENTION, **meta}))
     buffer = _stdio.BytesIO()
-    np.savez(buffer, **arrays)
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_STORED, allowZip64=True) as archive:
+        for name, array in arrays.items():
+            entry = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            with archive.open(entry, "w", force_zip64=True) as member:
+                npy.write_array(member, np.asanyarray(array), allow_pickle=False)
     return buffer.getvalue()
 
 
-def _read(path):
+def _read(path, max_points):
     fmt = _format_of(path, None)
     path = os.fspath(path)
     if not os.path.exists(path):
@@ -268,15 +291,21 @@ def _read(path):
         "geojson": lambda path: read_geojson(_load_json(path)),
         "svg": read_svg,
         "csv": _read_csv,
-        "npz": _read_npz,
+        "npz": functools.partial(_read_npz, max_points=max_points),
     }[fmt]
     try:
         curves, meta = reader(path)
+    except RecursionError:
+        raise ValueError(f"contour file {path!r} is nested too deeply to be a contour file") from None
     except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, EOFError,
             ParseError, zipfile.BadZipFile) as exc:
         if isinstance(exc, ValueError) and str(exc).startswith("contour file"):
             raise
         raise ValueError(f"contour file {path!r} is not a valid {fmt} contour file: {exc}") from None
+    points = sum(len(curve) for curve in curves)
+    if max_points is not None and points > max_points:
+        raise SizeLimitError(f"contour file {path!r} holds {points:,} vertices, more than the limit "
+                             f"of {max_points:,} (max_points)")
     curves = [np.asarray(curve, dtype=np.float64).reshape(-1, 2) for curve in curves]
     for i, curve in enumerate(curves):
         if len(curve) < 3 or not np.all(np.isfinite(curve)):
@@ -318,7 +347,9 @@ def _read_csv(path):
     return [rows[i] for i in range(len(rows))], meta
 
 
-def _read_npz(path):
+def _read_npz(path, *, max_points):
+    if max_points is not None:
+        _check_npz_headers(path, max_points)
     with np.load(path, allow_pickle=False) as data:
         keys = [k for k in data.files if k.startswith("contour_")]
         numbers = sorted(int(k[len("contour_"):]) for k in keys)
@@ -328,3 +359,28 @@ def _read_npz(path):
         meta = json.loads(str(data["metadata"])) if "metadata" in data.files else {}
     meta.pop("convention", None)
     return curves, meta
+
+
+def _check_npz_headers(path, max_points):
+    """Refuse an NPZ whose arrays declare more than ``max_points`` vertices (or a metadata text
+    larger than 64 MB), from the arrays' headers: nothing is decompressed beyond them."""
+    from numpy.lib import format as npy
+
+    points, text_bytes = 0, 0
+    with zipfile.ZipFile(path) as archive:
+        for info in archive.infolist():
+            with archive.open(info) as member:
+                version = npy.read_magic(member)
+                read_header = npy.read_array_header_1_0 if version == (1, 0) else npy.read_array_header_2_0
+                shape, _, dtype = read_header(member)
+            count = math.prod(shape)
+            if info.filename.startswith("contour_"):
+                points += count // 2
+            else:
+                text_bytes += count * dtype.itemsize
+    if points > max_points:
+        raise SizeLimitError(f"contour file {path!r} declares {points:,} vertices, more than the limit "
+                             f"of {max_points:,} (max_points)")
+    if text_bytes > 2**26:
+        raise SizeLimitError(f"contour file {path!r} declares {text_bytes:,} bytes of metadata, more "
+                             f"than the limit of {2**26:,}")

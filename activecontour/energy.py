@@ -33,29 +33,24 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.curve import as_curve
+from activecontour.models import ChanVeseParameters
+from activecontour.models.two_region import EMPTY_FRACTION, PARAMETER_LIMIT
 
 __all__ = [
     "EMPTY_FRACTION",
     "PARAMETER_LIMIT",
     "ChanVeseParameters",
     "Evaluation",
+    "PartitionEvaluation",
     "chan_vese_energy",
     "evaluate",
+    "evaluate_partition",
+    "partition_moments",
     "region_moments",
     "stack_curves",
     "to_frame",
     "working_frame",
 ]
-
-
-#: A region with less than this fraction of the domain's area is empty for its constant (6.42):
-#: the domain-sized sums it is the difference of round at ~1e-16 of the domain, so its mean is
-#: then exact to ~1e-7 of the image's range.
-EMPTY_FRACTION = 1e-9
-#: In the frame where the image spans [0, 1] (:meth:`ChanVeseParameters.in_frame`): the largest
-#: mu, |omega|, |c_in|, |c_out| and lambda, and 1 / this the smallest lambda.  At 1e8 a weight
-#: makes every other term of (6.38) smaller than its rounding; J stays far from overflow.
-PARAMETER_LIMIT = 1e8
 
 
 def working_frame(values):
@@ -84,117 +79,6 @@ def working_frame(values):
 def to_frame(values, offset, scale):
     """``(values - offset) / scale``: the image in the frame of :func:`working_frame`."""
     return values if offset == 0.0 and scale == 1.0 else (values - offset) / scale
-
-
-@dataclass(frozen=True)
-class ChanVeseParameters:
-    """Weights of (6.38) and, optionally, fixed region constants.
-
-    ``c_in``/``c_out`` of None are updated by (6.42) at every evaluation; a number (or one per
-    channel) holds them fixed, as the book allows when the intensities are known.
-    ``lambda_in``/``lambda_out`` are numbers or, for a vector-valued image, one weight per channel
-    (Chan, Sandberg and Vese 2000).
-    """
-
-    mu: float = 0.2
-    omega: float = 0.0
-    lambda_in: float = 1.0
-    lambda_out: float = 1.0
-    c_in: object = None
-    c_out: object = None
-
-    def __post_init__(self):
-        for name in ("mu", "omega", "lambda_in", "lambda_out"):
-            value = getattr(self, name)
-            if name.startswith("lambda") and isinstance(value, (list, tuple, np.ndarray)):
-                value = np.asarray(value, dtype=np.float64)
-                if value.ndim != 1 or value.size == 0:
-                    raise ValueError(f"{name} must be a number or one number per channel")
-                object.__setattr__(self, name, value)
-            elif isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-                raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-            if not np.all(np.isfinite(value)):
-                raise ValueError(f"{name} must be finite, got {value}")
-        if self.mu < 0:
-            raise ValueError(f"mu must be >= 0 (length weight), got {self.mu}")
-        if np.any(self.lambda_in <= 0) or np.any(self.lambda_out <= 0):
-            raise ValueError(
-                f"lambda_in and lambda_out must be > 0, got {self.lambda_in}, {self.lambda_out}"
-            )
-        for name in ("c_in", "c_out"):
-            value = getattr(self, name)
-            if value is not None:
-                arr = np.atleast_1d(np.asarray(value, dtype=np.float64))
-                if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-                    raise ValueError(f"{name} must be None, a finite number or one per channel")
-                object.__setattr__(self, name, arr)
-
-    def in_frame(self, offset, scale):
-        """The same functional for the intensities ``(I - offset) / scale``, range-checked.
-
-        (6.38) of the image ``offset + scale I'`` is ``scale^2`` times (6.38) of I' with
-        ``mu / scale^2``, ``omega / scale^2``, the same lambdas and constants ``(c - offset) /
-        scale``: the backends compute in this frame, where the image spans [0, 1], so that a
-        large offset does not cancel (``sum (I - c)^2 = sum I^2 - 2 c sum I + c^2 |Omega|`` loses
-        every digit when c^2 is 1e16 times the variance) and nothing overflows.  In that frame
-        every weight and constant must lie within :data:`PARAMETER_LIMIT` (lambdas within its
-        inverse, too): beyond, one term of (6.38) is below the rounding of another, or J
-        overflows.
-
-        Raises
-        ------
-        ValueError
-            Naming the parameter, its value and the valid range in the caller's units.
-        """
-        low_lambda, high = 1.0 / PARAMETER_LIMIT, PARAMETER_LIMIT
-        for name in ("lambda_in", "lambda_out"):
-            value = np.asarray(getattr(self, name), dtype=np.float64)
-            if np.any(value < low_lambda) or np.any(value > high):
-                raise ValueError(f"{name} must be between {low_lambda:g} and {high:g}, "
-                                 f"got {getattr(self, name)}")
-        square = scale * scale
-        for name, limit in (("mu", high * square), ("omega", high * square)):
-            if abs(getattr(self, name)) > limit:
-                raise ValueError(f"|{name}| must be at most {limit:.6g} ({high:g} times the image's "
-                                 f"intensity range squared), got {getattr(self, name)}")
-        constants = {}
-        for name in ("c_in", "c_out"):
-            value = getattr(self, name)
-            if value is not None:
-                scaled = (value - offset) / scale
-                if np.any(np.abs(scaled) > high):
-                    raise ValueError(f"{name} must be within {high:g} image ranges of the image's "
-                                     f"intensities, got {value}")
-                constants[name] = scaled
-        if offset == 0.0 and scale == 1.0:
-            return self
-        return ChanVeseParameters(self.mu / square, self.omega / square, self.lambda_in, self.lambda_out,
-                                  constants.get("c_in"), constants.get("c_out"))
-
-    def weights(self, n_channels):
-        """(lambda_in, lambda_out) per channel, divided by the number of channels.
-
-        The fitting terms of a vector-valued image are the *mean* of the channel terms (Chan,
-        Sandberg and Vese's sum with weights lambda / C), so mu and omega mean the same relative to
-        the contrast of a gray image and of a colour one: three equal channels segment exactly
-        like their gray image.
-        """
-        out = []
-        for name in ("lambda_in", "lambda_out"):
-            value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
-            if value.size not in (1, n_channels):
-                raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} channels")
-            out.append(np.broadcast_to(value / n_channels, (n_channels,)))
-        return out
-
-    def constant(self, name, n_channels):
-        """The fixed constant ``name`` broadcast to ``n_channels``, or None when optimised."""
-        value = getattr(self, name)
-        if value is None:
-            return None
-        if value.size not in (1, n_channels):
-            raise ValueError(f"{name} has {value.size} values for an image with {n_channels}")
-        return np.broadcast_to(value, (n_channels,)).astype(np.float64)
 
 
 @dataclass
@@ -240,7 +124,7 @@ def _moments(model, points, next_index):
     sums = np.zeros(2)  # area, length
     unused = np.zeros(channels)
     _kernels.edge_integrals(np.ascontiguousarray(points), next_index, model.values, model.table, 0,
-                            unused, unused, unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
+                            unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
     return sums[0], sums[1], s1, s2
 
 
@@ -270,49 +154,96 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     -------
     Evaluation
     """
-    channels = model.n_channels
     area, length, s1, s2 = _moments(model, points, next_index)
     total_area, total1, total2 = model.totals
-    outside_area = total_area - area
-    c_in = params.constant("c_in", channels)
-    c_out = params.constant("c_out", channels)
-    tiny = EMPTY_FRACTION * total_area
-    empty_in, empty_out = area <= tiny, outside_area <= tiny
-    if (empty_in and c_in is None) or (empty_out and c_out is None):
-        if not empty_ok:
-            nan = np.full(channels, np.nan)
-            return Evaluation(np.inf, nan, nan, area, length, None)
-        if empty_in:  # the whole image is outside (or, below, inside)
-            c_out = total1 / total_area if c_out is None else c_out
-            c_in = c_out if c_in is None else c_in
-        else:
-            c_in = total1 / total_area if c_in is None else c_in
-            c_out = c_in if c_out is None else c_out
-    if c_in is None:
-        c_in = s1 / area
-    if c_out is None:
-        c_out = (total1 - s1) / outside_area
-    lambda_in, lambda_out = params.weights(channels)
-    inside = lambda_in @ (s2 - 2.0 * c_in * s1 + c_in * c_in * area)
-    outside = lambda_out @ ((total2 - s2) - 2.0 * c_out * (total1 - s1) + c_out * c_out * outside_area)
-    energy = params.mu * length + params.omega * area + inside + outside
+    constants = params.fit_constants(area, s1, model.totals, empty_ok=empty_ok)
+    if constants is None:
+        nan = np.full(model.n_channels, np.nan)
+        return Evaluation(np.inf, nan, nan, area, length, None)
+    c_in, c_out = constants
+    outside, inside = params.region_forms(c_in, c_out)
+    energy = (params.mu * length + inside.integral(area, s1, s2)
+              + outside.integral(total_area - area, total1 - s1, total2 - s2))
     result = Evaluation(float(energy), c_in, c_out, area, length)
     if gradient:
+        form = inside - outside  # the integrand of (6.41)
         load = np.zeros_like(points)
         _kernels.edge_integrals(np.ascontiguousarray(points), np.ascontiguousarray(next_index, dtype=np.intp),
-                                model.values, model.table, 1, np.ascontiguousarray(c_in),
-                                np.ascontiguousarray(c_out), np.ascontiguousarray(lambda_in),
-                                np.ascontiguousarray(lambda_out), float(params.omega), float(params.mu),
+                                model.values, model.table, 1, np.ascontiguousarray(form.linear),
+                                np.ascontiguousarray(form.square), form.constant, float(params.mu),
                                 s1, s2, np.zeros(2), load)
         result.load = load
     return result
 
 
-def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, lambda_out=1.0,
-                     c_in=None, c_out=None, color="gray", normalize="range"):
+@dataclass
+class PartitionEvaluation:
+    """Energy of a partition into K regions, with each region's constants, area and the length."""
+
+    energy: float
+    constants: np.ndarray
+    areas: np.ndarray
+    length: float
+
+
+def partition_moments(model, boundary, n_classes):
+    """``int 1``, ``int I`` and ``int I^2`` over every region of a partition.
+
+    Parameters
+    ----------
+    model : ImageModel
+    boundary : activecontour.partition.Boundary
+    n_classes : int
+
+    Returns
+    -------
+    areas : ndarray (K,)
+    first, second : ndarray (K, C)
+    """
+    from activecontour.partition import class_soup
+
+    areas = np.zeros(n_classes)
+    first = np.zeros((n_classes, model.n_channels))
+    second = np.zeros((n_classes, model.n_channels))
+    for k in range(n_classes):
+        starts, ends = class_soup(boundary, k)
+        points = np.empty((2 * len(starts), 2))
+        points[0::2], points[1::2] = starts, ends
+        next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
+        areas[k], _, first[k], second[k] = _moments(model, points, next_index)
+    return areas, first, second
+
+
+def evaluate_partition(model, boundary, params, n_classes, constants=None):
+    """The N-region functional of a partition (:meth:`ChanVeseParameters.class_forms`).
+
+    ``J = mu L + sum_k int_{Omega_k} g_k`` with L the length of the interfaces between regions,
+    each counted once, plus the domain's edge where a region other than the background (0) lies
+    on it: for two regions this is (6.38) of the contours of region 1 (:func:`evaluate`), which
+    close along the image border there.  ``constants`` (K, C), by default the region means (6.42);
+    an empty region's term is 0 whatever its constant, which is then the image mean.
+    """
+    areas, first, second = partition_moments(model, boundary, n_classes)
+    if constants is None:
+        mean = model.totals[1] / model.totals[0]
+        filled = areas > 1e-9
+        constants = np.where(filled[:, None], first / np.where(filled, areas, 1.0)[:, None], mean)
+    lengths = boundary.length
+    length = float(lengths[boundary.outer >= 0].sum()
+                   + lengths[(boundary.outer < 0) & (boundary.inner > 0)].sum())
+    forms = params.class_forms(constants)
+    energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
+                                      in zip(forms, areas, first, second, strict=True))
+    return PartitionEvaluation(float(energy), constants, areas, length)
+
+
+def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,
+                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
-    Any backend's result can be scored the same way: pass ``result.contours``.
+    Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
+    ``classes=result.classes`` (a result with ``n_regions > 2``, whose class boundaries are those
+    of its label image, see :mod:`activecontour.partition`).
 
     Parameters
     ----------
@@ -320,6 +251,12 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     contours : list of ndarray (K, 2)
         Closed curves in (row, col), outer boundaries positive, holes negative.  An empty list is
         the empty set: J is then the outside term alone.
+    classes : int ndarray (M, N), optional
+        Instead of ``contours``: a label image, 0 = the background region, 1..K-1 the others.
+        Scored as the partition of the domain it stands for (:mod:`activecontour.partition`:
+        boundaries through the midpoints between pixels of different classes, junctions at cell
+        centres) with the N-region functional of :func:`evaluate_partition`; for two classes it
+        is (6.38) of the marching-squares contours of ``classes == 1``.
     mu, omega, lambda_in, lambda_out : float
         Weights of (6.38); ``mu="auto"`` as in :func:`activecontour.segment` (``result.mu`` is the
         value a result used).
@@ -351,6 +288,10 @@ def chan_vese_energy(image, contours, *, mu="auto", omega=0.0, lambda_in=1.0, la
     model = ImageModel(to_frame(values, offset, scale))
     params = ChanVeseParameters(auto_mu(model.values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out).in_frame(offset, scale)
+    if (contours is None) == (classes is None):
+        raise TypeError("chan_vese_energy takes either contours or classes")
+    if classes is not None:
+        return scale**2 * _classes_energy(model, classes, params)
     if isinstance(contours, np.ndarray) and contours.ndim == 2:
         contours = [contours]
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
@@ -378,3 +319,27 @@ def _check_in_domain(curve, bounds, name):
             f"{name} has a vertex at (row, col) = ({row:.6g}, {col:.6g}) outside the image domain "
             f"rows {low_r:g}..{high_r:g}, cols {low_c:g}..{high_c:g}"
         )
+
+
+def _classes_energy(model, classes, params):
+    from activecontour.partition import class_boundary
+
+    classes = np.asarray(classes)
+    if classes.shape != tuple(model.shape) or not np.issubdtype(classes.dtype, np.integer):
+        raise ValueError(f"classes must be an integer array of the image's shape {tuple(model.shape)}, "
+                         f"got {classes.dtype} {classes.shape}")
+    if classes.min() < 0:
+        raise ValueError("classes must be >= 0 (0 = the background region)")
+    n_classes = int(classes.max()) + 1
+    constants = None
+    if params.c_in is not None or params.c_out is not None:
+        if n_classes > 2:
+            raise ValueError("c_in and c_out fix the constants of two regions; leave them None "
+                             "for classes with more than two regions")
+        fit = evaluate_partition(model, class_boundary(classes), params, 2)
+        constants = np.array([fit.constants[0] if params.c_out is None else
+                              params.constant("c_out", model.n_channels),
+                              fit.constants[1] if params.c_in is None else
+                              params.constant("c_in", model.n_channels)])
+    return evaluate_partition(model, class_boundary(classes), params, max(n_classes, 2),
+                              constants).energy

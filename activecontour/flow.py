@@ -60,6 +60,8 @@ _NUCLEATION_RADIUS = 4.0
 _NUCLEATION_ROUNDS = 4
 _NUCLEATION_TRIALS = 30
 _REMESH_COOLDOWN = 10
+_BACKGROUND_SHARE = 1.5  # the global move takes the background when the given curves hold 1.5x
+                         # the share of it that they hold of the objects
 
 
 def segment_polygon(model, init, params, *, max_num_iter, tol, callback, velocity="h1", spacing=1.0,
@@ -230,21 +232,24 @@ def _global_move(model, params, geometry, energy, spacing):
 
     Of the two classes, the one that has the larger share of its area inside the given curves
     is inside: a curve drawn around an object (with background around it) or inside one selects
-    the object, a curve drawn on the background the background.  (With lambda_in = lambda_out and
+    the object, a curve drawn on the background the background.  The background must hold
+    ``_BACKGROUND_SHARE`` times the objects' share: a start that selects neither (a speckle
+    mask, the whole image) gets the default start's objects.  (With lambda_in = lambda_out and
     omega = 0 a region and its complement have the same energy: the curves, not rounding, choose.)
     """
     from activecontour.initial import threshold_starts
 
     given = rasterize(_split(*geometry[::2]), model.shape)
-    best = None
-    for curves in threshold_starts(model.values, params.mu, background=True):
-        region = rasterize(curves, model.shape) if curves else None
-        share = np.count_nonzero(region & given) / max(1, np.count_nonzero(region)) if curves else -1.0
-        if best is None or share > best[0]:
-            best = (share, curves)
-    if not best[1]:
+    objects, background = threshold_starts(model.values, params.mu, background=True)
+    shares = []
+    for curves in (objects, background):
+        region = rasterize(curves, model.shape)
+        shares.append(np.count_nonzero(region & given) / max(1, np.count_nonzero(region)))
+    # the background only when the curves clearly select it: a speckle mask selects neither
+    chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
+    if not chosen:
         return None
-    moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in best[1]])
+    moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in chosen])
     new = evaluate(model, *moved[:2], params, gradient=True)
     return (moved, new) if new.energy < energy else None
 
@@ -300,8 +305,9 @@ class _Flow:
         """
         curves = _split(*geometry[::2])
         inside = rasterize(curves, self.model.shape)
-        sites = topology.nucleation_sites(self.model.values, inside, self.params, current.c_in,
-                                          current.c_out, _NUCLEATION_RADIUS)
+        sites = topology.nucleation_sites(self.model.values, inside,
+                                          self.params.load_form(current.c_in, current.c_out),
+                                          self.params.mu, _NUCLEATION_RADIUS)
         seeds = [np.clip(circle(center, _NUCLEATION_RADIUS), self.low, self.high)[:: -1 if hole else 1]
                  for center, hole in sites]
         best = None

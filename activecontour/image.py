@@ -20,18 +20,34 @@ cell is in :func:`activecontour._kernels.edge_integrals`.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import struct
+import sys
 import warnings
 
 import numpy as np
 
 from activecontour import _kernels
 
-__all__ = ["NORMALIZATIONS", "ImageModel", "intensity_scale", "load_image", "normalize_image"]
+__all__ = ["MAX_PIXELS", "NORMALIZATIONS", "ImageModel", "SizeLimitError", "channels_last",
+           "intensity_scale", "load_image", "normalize_image"]
 
 _COLOR_MODES = ("gray", "vector")
 #: The choices of ``normalize``: the image's own range (default), its dtype's range, or as given.
 NORMALIZATIONS = ("range", "dtype", None)
+
+
+#: The largest image :func:`load_image` reads by default, in pixels (rows x columns): 2**27, e.g.
+#: 11585 x 11585 or 16384 x 8192.  Segmenting takes about 30 bytes per pixel (an 8192^2 image about
+#: 2 GB), so this bounds a run near 4 GB.  The size a file declares is checked before it is decoded,
+#: so a small file that declares a huge image (a "decompression bomb") costs nothing.  Raise it with
+#: ``max_pixels=`` (``--max-pixels`` on the command line).
+MAX_PIXELS = 2**27
+
+
+class SizeLimitError(ValueError):
+    """An input larger than a documented limit (``max_pixels``); a ValueError."""
 
 
 #: Leading bytes of the formats the readers know, for saying what an unreadable file is.
@@ -59,24 +75,38 @@ def _why_unreadable(path, error):
     return "not an image in a format the readers know (PNG, JPEG, TIFF, BMP, GIF, WebP, ...)"
 
 
-def load_image(path):
+def load_image(path, *, max_pixels=MAX_PIXELS):
     """Read an image file into an array, with a clear error for a missing or unreadable file.
 
     Parameters
     ----------
     path : str or os.PathLike
         Any format OpenCV or scikit-image reads (PNG, JPEG, TIFF, BMP, ... including 16-bit PNG/TIFF).
+    max_pixels : int or None
+        Refuse an image of more pixels (rows x columns) than this, by the size the file declares,
+        before decoding it (default :data:`MAX_PIXELS`); None: no limit.
 
     Returns
     -------
     ndarray of shape (M, N) or (M, N, C)
         The pixel values in their stored dtype; colour in RGB(A) channel order.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    SizeLimitError
+        For an image larger than ``max_pixels`` (a ValueError).
+    ValueError
+        For a file that is not a readable image (one line saying why: empty, text, damaged, ...).
     """
     path = os.fspath(path)
     if not os.path.exists(path):
         raise FileNotFoundError(f"image file not found: {path!r}")
     if os.path.isdir(path):
         raise ValueError(f"image path is a directory, not a file: {path!r}")
+    if max_pixels is not None:
+        _check_size(path, _declared_size(path), max_pixels)
     image = _read_opencv(path)
     if image is None:  # a format or variant OpenCV does not read
         import skimage.io
@@ -87,12 +117,46 @@ def load_image(path):
                 image = skimage.io.imread(path)
         except Exception as exc:  # every reader raises its own type; report them all the same way
             raise ValueError(f"cannot read image {path!r}: {_why_unreadable(path, exc)}") from None
-    image = np.asarray(image)
-    if image.ndim == 3 and image.shape[0] in (3, 4) and image.shape[2] not in (3, 4):
-        image = np.moveaxis(image, 0, -1)  # channel-first TIFF
+    image = channels_last(np.asarray(image))
     if image.ndim not in (2, 3) or image.size == 0:
         raise ValueError(f"image {path!r} is not a 2-D image (shape {image.shape})")
+    if max_pixels is not None:
+        _check_size(path, image.shape[:2], max_pixels)
     return image
+
+
+def _check_size(path, size, max_pixels):
+    if size is None:
+        return
+    rows, cols = size
+    if rows * cols > max_pixels:
+        raise SizeLimitError(f"image {path!r} has {rows} x {cols} = {rows * cols:,} pixels, more than "
+                             f"the limit of {max_pixels:,} (max_pixels)")
+
+
+def _declared_size(path):
+    """(rows, cols) as the file's header declares them, without decoding the pixels; None when the
+    header cannot be read this way (the size is then checked after decoding)."""
+    with open(path, "rb") as handle:
+        head = handle.read(24)
+    if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
+        width, height = struct.unpack(">II", head[16:24])
+        return height, width
+    try:
+        from PIL import Image
+    except ModuleNotFoundError:  # pragma: no cover - Pillow comes with scikit-image
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # Pillow's own (lower) decompression-bomb warning
+            with Image.open(path) as opened:
+                width, height = opened.size
+    except Image.DecompressionBombError:
+        # over twice Pillow's limit; Pillow does not say by how much
+        return 1, 2 * Image.MAX_IMAGE_PIXELS + 1
+    except Exception:  # not a format Pillow knows, or damaged: the readers below say so
+        return None
+    return height, width
 
 
 def _read_opencv(path):
@@ -103,9 +167,54 @@ def _read_opencv(path):
     """
     import cv2
 
-    image = cv2.imread(path, cv2.IMREAD_UNCHANGED)  # stored dtype and channels, EXIF ignored
+    with _quiet_stderr():  # libpng and OpenCV print their own lines for a damaged file
+        image = cv2.imread(path, cv2.IMREAD_UNCHANGED)  # stored dtype and channels, EXIF ignored
     if image is not None and image.ndim == 3 and image.shape[2] in (3, 4):
         image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB if image.shape[2] == 3 else cv2.COLOR_BGRA2RGBA)
+    return image
+
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """Send what C libraries write on file descriptor 2 to /dev/null meanwhile (Python's own
+    ``sys.stderr`` is flushed first; other threads' writes to fd 2 are lost meanwhile)."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, AttributeError, ValueError):  # no file descriptor 2
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as devnull:
+            os.dup2(devnull.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def channels_last(image):
+    """The image with its channels on the last axis: a view of ``image``, never a copy.
+
+    A stack of shape (3 or 4, M, N) with M, N > 4 and a last axis that cannot be channels is
+    channel-first (as some TIFF writers store colour) and is moved to (M, N, 3 or 4); any other
+    shape is returned as it is.  :func:`normalize_image`, :func:`intensity_scale`, the loader and
+    the writers all read an image's layout through this one function.
+    """
+    image = np.asarray(image)
+    if (image.ndim == 3 and image.shape[0] in (3, 4) and image.shape[2] not in (2, 3, 4)
+            and min(image.shape[1:]) > 4):
+        return np.moveaxis(image, 0, -1)
+    return image
+
+
+def _intensity_channels(image):
+    """The channels whose values are intensities (a view): alpha dropped, channel-last."""
+    image = channels_last(image)
+    if image.ndim == 3 and image.shape[2] in (1, 2):
+        return image[:, :, 0]  # gray, or gray + alpha
+    if image.ndim == 3 and image.shape[2] == 4:
+        return image[:, :, :3]  # RGBA
     return image
 
 
@@ -144,46 +253,30 @@ def normalize_image(image, *, color="gray", normalize="range"):
     if normalize not in NORMALIZATIONS:
         raise ValueError(f"normalize must be one of {NORMALIZATIONS}, got {normalize!r}")
     image = np.asarray(image)
-    if image.dtype == bool:
-        values = image.astype(np.float64)
-    elif np.issubdtype(image.dtype, np.integer):
-        values = image.astype(np.float64)
-        if normalize == "dtype":
-            info = np.iinfo(image.dtype)
-            values = (values - info.min) / (info.max - info.min)
-    elif np.issubdtype(image.dtype, np.floating):
-        values = image.astype(np.float64)
-    else:
+    if not (image.dtype == bool or np.issubdtype(image.dtype, np.integer)
+            or np.issubdtype(image.dtype, np.floating)):
         raise TypeError(f"image dtype must be bool, integer or float, got {image.dtype}")
-    if values.ndim == 3 and values.shape[0] in (3, 4) and values.shape[2] not in (2, 3, 4) \
-            and min(values.shape[1:]) > 4:
-        values = np.moveaxis(values, 0, -1)  # a channel-first stack
-    if values.ndim == 3 and values.shape[2] in (1, 2):
-        values = values[:, :, 0]  # gray, or gray + alpha
-    if values.ndim == 3:
-        if values.shape[2] not in (3, 4):
-            raise ValueError(
-                f"a colour image must have 1 (gray), 2 (gray + alpha), 3 (RGB) or 4 (RGBA) channels, "
-                f"got shape {image.shape}"
-            )
-        values = values[:, :, :3]
-    elif values.ndim != 2:
+    channels = _intensity_channels(image)
+    if channels.ndim == 3 and channels.shape[2] != 3:
+        raise ValueError(
+            f"a colour image must have 1 (gray), 2 (gray + alpha), 3 (RGB) or 4 (RGBA) channels, "
+            f"got shape {image.shape}"
+        )
+    if channels.ndim not in (2, 3):
         raise ValueError(f"image must have shape (M, N) or (M, N, C), got shape {image.shape}")
-    if values.shape[0] < 2 or values.shape[1] < 2:
+    if channels.shape[0] < 2 or channels.shape[1] < 2:
         raise ValueError(f"image must be at least 2 x 2 pixels, got shape {image.shape}")
+    values = channels.astype(np.float64)  # this function's own copy: scaled in place below
     if not np.all(np.isfinite(values)):
         raise ValueError("image contains NaN or infinite values")
-    if normalize == "range" and image.dtype != bool:
-        low, high = values.min(), values.max()
-        with np.errstate(over="ignore"):
-            overflow = not np.isfinite(high - low)
-        if overflow:  # values spanning more than the float range: halve first
-            values *= 0.5
-            low, high = 0.5 * low, 0.5 * high
-        # ``values`` is this function's own copy (astype copies): scale it in place
-        values -= low
-        if high > low:
-            values /= high - low
+    offset, scale = _affine(values, image.dtype, normalize)
+    if not np.isfinite(scale):  # intensities spanning more than the float range: halve first
+        values *= 0.5
+        offset, scale = _affine(values, image.dtype, normalize)
+    if offset != 0.0:
+        values -= offset
+    if scale != 1.0:
+        values /= scale
     if values.ndim == 3 and color == "gray":
         values = values @ np.array([0.2125, 0.7154, 0.0721])
     if values.ndim == 2:
@@ -194,18 +287,27 @@ def normalize_image(image, *, color="gray", normalize="range"):
 def intensity_scale(image, normalize="range"):
     """``(offset, scale)`` such that an input intensity is ``offset + scale * normalised``.
 
-    The inverse of the affine map of :func:`normalize_image`, to report region constants in the
+    The inverse of the affine map of :func:`normalize_image`, computed by the same function over
+    the same channels (an alpha channel is not an intensity), to report region constants in the
     input's own units (the luminance weights sum to 1, so it holds for gray from colour too).
     """
+    if normalize not in NORMALIZATIONS:
+        raise ValueError(f"normalize must be one of {NORMALIZATIONS}, got {normalize!r}")
     image = np.asarray(image)
-    if image.dtype == bool or normalize is None:
+    return _affine(_intensity_channels(image), image.dtype, normalize)
+
+
+def _affine(channels, dtype, normalize):
+    """``(offset, scale)`` of ``normalize`` for the intensity channels of an image of ``dtype``:
+    the normalised value is ``(value - offset) / scale``."""
+    if np.dtype(dtype) == np.bool_ or normalize is None:
         return 0.0, 1.0
     if normalize == "dtype":
-        if np.issubdtype(image.dtype, np.integer):
-            info = np.iinfo(image.dtype)
+        if np.issubdtype(dtype, np.integer):
+            info = np.iinfo(dtype)
             return float(info.min), float(info.max) - float(info.min)
         return 0.0, 1.0
-    low, high = float(image.min()), float(image.max())
+    low, high = float(channels.min()), float(channels.max())
     return low, (high - low) if high > low else 1.0
 
 

@@ -15,12 +15,16 @@ import numpy as np
 from activecontour.atomic import write_atomically
 from activecontour.contour_files import curve_list
 from activecontour.curve import to_xy
-from activecontour.image import load_image, normalize_image
+from activecontour.image import MAX_PIXELS, load_image, normalize_image
 
 __all__ = [
     "COLORS",
+    "DISPLAY_PERCENTILES",
     "IMAGE_SUFFIXES",
+    "contrasting_color",
+    "display_rgb",
     "encode_mask",
+    "line_width",
     "OVERLAY_MAX_SIDE",
     "encode_overlay",
     "read_mask",
@@ -68,7 +72,7 @@ def write_mask(path, mask):
     return path
 
 
-def read_mask(path):
+def read_mask(path, *, max_pixels=MAX_PIXELS):
     """Read a mask image: nonzero pixels are inside.
 
     Parameters
@@ -77,6 +81,8 @@ def read_mask(path):
         Any image :func:`activecontour.image.load_image` reads.  Gray images are used as they are; a
         gray + alpha image by its gray channel; an RGB or RGBA image is inside where any of R, G, B
         is nonzero (the alpha channel is ignored).
+    max_pixels : int or None
+        As in :func:`~activecontour.image.load_image`.
 
     Returns
     -------
@@ -89,7 +95,7 @@ def read_mask(path):
     ValueError
         For an unreadable file or one that is not a 2-D image after dropping the channels.
     """
-    image = load_image(path)
+    image = load_image(path, max_pixels=max_pixels)
     if image.ndim == 3:
         channels = image.shape[2]
         if channels in (1, 2):
@@ -133,22 +139,21 @@ def encode_mask(path, mask):
 OVERLAY_MAX_SIDE = 4096
 
 
-def write_overlay(path, image, contours, *, color="red", thickness=1, max_side=None):
+def write_overlay(path, image, contours, *, color="auto", thickness="auto", max_side=None):
     """Draw the contours on the image and write it as an 8-bit RGB image (PNG recommended).
 
     Parameters
     ----------
     path : str or os.PathLike
-    image : ndarray of shape (M, N) or (M, N, C)
-        Gray or colour image, normalised as by :func:`activecontour.image.normalize_image` (integer
-        dtypes by their range; floats as given, clipped to [0, 1], or stretched from their
-        min..max when they fall outside it).
+    image : ndarray of shape (M, N), (M, N, C) or (C, M, N)
+        Gray or colour image, shown by its own range (:func:`display_rgb`).
     contours : list of ndarray (K, 2), or a SegmentationResult
         Closed curves in (row, col); drawn anti-aliased at sub-pixel precision.
     color : str or (int, int, int)
-        A name from :data:`COLORS` or an RGB triple in 0..255.
-    thickness : int
-        Line width in pixels, >= 1.
+        ``"auto"`` (:func:`contrasting_color`), a name from :data:`COLORS` or an RGB triple in
+        0..255.
+    thickness : int or "auto"
+        Line width in pixels, >= 1; ``"auto"``: :func:`line_width` of the written size.
     max_side : int, optional
         Shrink an image whose longer side exceeds this (see :func:`render_overlay`); None keeps
         the full size.
@@ -162,35 +167,106 @@ def write_overlay(path, image, contours, *, color="red", thickness=1, max_side=N
     return path
 
 
-def render_overlay(image, contours, color="red", thickness=1, max_side=None):
+def render_overlay(image, contours, color="auto", thickness="auto", max_side=None):
     """The overlay as an (M, N, 3) uint8 RGB array (see :func:`write_overlay`).
 
     With ``max_side``, an image whose longer side exceeds it is shrunk to that side first (area
     averaging), and the contours are mapped with it: pixel centres stay pixel centres,
-    ``x' = (x + 1/2) s - 1/2``.
+    ``x' = (x + 1/2) s - 1/2``.  ``"auto"`` line widths follow the shrunk size.
     """
     import cv2
 
-    rgb = _display_rgb(image)
     curves = curve_list(contours)
-    if isinstance(thickness, bool) or not isinstance(thickness, (int, np.integer)) or thickness < 1:
-        raise ValueError(f"thickness must be an integer >= 1, got {thickness!r}")
+    if thickness != "auto" and (isinstance(thickness, bool) or not isinstance(thickness, (int, np.integer))
+                                or thickness < 1):
+        raise ValueError(f"thickness must be an integer >= 1 or 'auto', got {thickness!r}")
     if max_side is not None and not (isinstance(max_side, (int, np.integer)) and max_side >= 16):
         raise ValueError(f"max_side must be None or an integer >= 16, got {max_side!r}")
+    if not (isinstance(color, str) and color == "auto"):
+        color = _rgb_color(color)
+    rgb = display_rgb(image)
     scale = 1.0
     if max_side is not None and max(rgb.shape[:2]) > max_side:
         scale = max_side / max(rgb.shape[:2])
         size = (max(1, round(rgb.shape[1] * scale)), max(1, round(rgb.shape[0] * scale)))
         rgb = np.ascontiguousarray(cv2.resize(rgb, size, interpolation=cv2.INTER_AREA))
+    if isinstance(color, str):
+        color = contrasting_color(rgb)
+    if thickness == "auto":
+        thickness = line_width(rgb.shape)
     polylines = [
         np.round(((to_xy(curve) + 0.5) * scale - 0.5) * (1 << _DRAW_SHIFT)).astype(np.int32)
         .reshape(-1, 1, 2)
         for curve in curves
     ]
     if polylines:
-        cv2.polylines(rgb, polylines, True, _rgb_color(color), int(thickness), cv2.LINE_AA,
-                      _DRAW_SHIFT)
+        cv2.polylines(rgb, polylines, True, color, int(thickness), cv2.LINE_AA, _DRAW_SHIFT)
     return rgb
+
+
+def line_width(shape):
+    """The ``"auto"`` overlay line width for an image of ``shape``: 1 px per started 1024 px of its
+    longer side (1 up to 1024 px, 4 at 4096 px), so that a line stays visible when the whole image
+    is shown on a screen."""
+    return max(1, round(max(shape[:2]) / 1024))
+
+
+#: The colours :func:`contrasting_color` chooses from, in order of preference.
+_LINE_COLORS = ("red", "yellow", "cyan", "green", "magenta", "blue")
+
+
+def contrasting_color(rgb):
+    """The ``"auto"`` overlay colour for a display image (M, N, 3) uint8: the colour of
+    :data:`_LINE_COLORS` farthest from the image's colours.
+
+    Red on a gray image (a hue stands out on any gray); on a colour image the candidate whose
+    distance in RGB to the image's pixels is largest at its 5th percentile, so that the line stands
+    out against nearly every pixel it may cross (red on a red retina or coffee image would vanish).
+    """
+    rgb = np.asarray(rgb)
+    sample = rgb.reshape(-1, 3)[:: max(1, rgb.shape[0] * rgb.shape[1] // 65536)].astype(np.float64)
+    if np.ptp(sample, axis=1).max(initial=0) <= 8:  # gray
+        return COLORS[_LINE_COLORS[0]]
+    scores = [np.percentile(np.linalg.norm(sample - COLORS[name], axis=1), 5) for name in _LINE_COLORS]
+    return COLORS[_LINE_COLORS[int(np.argmax(scores))]]
+
+
+#: The percentiles of an image's values shown as black and white by :func:`display_rgb`: robust to
+#: a few hot or dead pixels, and equal to the minimum and maximum on most images.
+DISPLAY_PERCENTILES = (0.01, 99.99)
+
+
+def display_rgb(image):
+    """The image as (M, N, 3) uint8 RGB for display, scaled by its own range.
+
+    The one place where images are scaled for display (the overlays and the viewer): the values
+    of every channel together are mapped from their :data:`DISPLAY_PERCENTILES` onto 0..255, so a
+    uint16 image holding 0..235, a 12-bit image or floats 0..1000 are shown with their full
+    contrast, as the segmentation sees them (:func:`activecontour.image.normalize_image`).  An
+    image whose pixels are all alike is shown by its dtype's range (uint8 / 255, floats clipped to
+    [0, 1]), in its own colour.  Gray
+    images are repeated on three channels; alpha is dropped; a channel-first (3 or 4, M, N) image
+    is read as channel-last.
+    """
+    values = normalize_image(image, color="vector", normalize="dtype")  # a fresh float64 copy
+    pixels = values.reshape(-1, values.shape[2])
+    lowest, highest = pixels.min(axis=0), pixels.max(axis=0)
+    if np.any(highest > lowest):
+        sample = pixels[:: max(1, len(pixels) // 1_000_000)]
+        low, high = np.percentile(sample, DISPLAY_PERCENTILES)
+        if high <= low:  # the percentiles meet (a few pixels differ from the rest): the plain range
+            low, high = float(lowest.min()), float(highest.max())
+        values -= low
+        values *= 255.0 / (high - low)
+    else:  # every pixel alike: its value (its colour) by the dtype's range
+        values *= 255.0
+    np.clip(values, 0.0, 255.0, out=values)
+    np.rint(values, out=values)
+    display = values.astype(np.uint8)
+    del values
+    if display.shape[2] == 1:
+        display = np.repeat(display, 3, axis=2)
+    return np.ascontiguousarray(display)
 
 
 def encode_overlay(path, image, contours, color, thickness, max_side=None):
@@ -207,24 +283,6 @@ def encode_overlay(path, image, contours, color, thickness, max_side=None):
     if not ok:
         raise ValueError(f"OpenCV could not encode an overlay as {suffix}")
     return buffer.tobytes()
-
-
-def _display_rgb(image):
-    """The image as (M, N, 3) uint8 RGB, computed in place (no full-size temporaries)."""
-    values = normalize_image(image, color="vector", normalize="dtype")  # a fresh float64 copy
-    low, high = float(values.min()), float(values.max())
-    if low < 0.0 or high > 1.0:
-        # float images outside [0, 1] (e.g. 0..255 floats) are shown from their own range
-        values -= low
-        values *= 1.0 / (high - low) if high > low else 0.0
-    values *= 255.0
-    np.clip(values, 0.0, 255.0, out=values)
-    np.rint(values, out=values)
-    display = values.astype(np.uint8)
-    del values
-    if display.shape[2] == 1:
-        display = np.repeat(display, 3, axis=2)
-    return np.ascontiguousarray(display)
 
 
 def _rgb_color(color):

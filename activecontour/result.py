@@ -55,6 +55,26 @@ class SegmentationResult:
     c_in_image, c_out_image : float or ndarray (C,) or None
         ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
         normalised units the functional uses), set by :func:`activecontour.segment`.
+    labels : int32 ndarray (M, N) or None
+        0 = background, 1..n one id per object (:mod:`activecontour.objects`); with
+        ``separate=True`` touching objects have their own ids.  Set by :func:`activecontour.segment`.
+    objects : dict of str to ndarray, or None
+        Per-object measurements, one row per id (``regionprops_table`` names; see
+        :func:`activecontour.objects.measure` for which columns are exact).
+    object_contours : list of list of ndarray, or None
+        Object k (id k + 1): its outer boundary, then its holes.  Split objects share their split
+        lines; ``contours`` stays the boundary of the inside region, which the energy is of.
+    classes : int ndarray (M, N) or None
+        The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
+        by increasing mean intensity; set by :func:`activecontour.segment`.
+    constants : ndarray (K, C) or None
+        The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
+        :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
+        ``c_in`` the area-weighted mean of the others (the inside is every region but the
+        background).
+    roi : bool ndarray (M, N) or None
+        With ``segment(roi=...)``: the domain D the functional was solved on
+        (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
     """
 
     mask: np.ndarray
@@ -70,6 +90,12 @@ class SegmentationResult:
     mu: float | None = None
     c_in_image: object = None
     c_out_image: object = None
+    labels: np.ndarray | None = None
+    objects: dict | None = None
+    object_contours: list | None = None
+    classes: np.ndarray | None = None
+    constants: np.ndarray | None = None
+    roi: np.ndarray | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 
@@ -152,7 +178,7 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     """
     cleaned = [c for c in map(clean, contours) if c is not None]
     if cleaned and region_problem(cleaned) is not None:  # e.g. a ring that touches itself
-        cleaned = [c for c in map(clean, region_union(cleaned)) if c is not None]
+        cleaned = [c for c in map(clean, region_union(cleaned, signed=True)) if c is not None]
     final = _evaluate(model, params, cleaned)
     empty = _evaluate(model, params, [])
     if cleaned and (status == 3 or status in (0, 4)) and empty.energy <= final.energy:
@@ -162,8 +188,17 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     elif status == 3:  # the backend gave up on curves that are still better than nothing
         status = 1
     energies = list(energies)
-    if energies and abs(energies[-1] - final.energy) <= _SAME_ENERGY * max(abs(final.energy), 1.0):
+    if energies and _same_energy(energies[-1], final.energy):
+        # the backend's last energy is this one computed another way (the level set scores an
+        # unchained edge soup): the history ends with the common evaluator's number, and entries
+        # just below it that are the same number too (steps that left the curve in place) take it,
+        # so that a last rounding difference never shows as an increase
         energies[-1] = final.energy
+        before = len(energies) - 2
+        while (before >= 0 and energies[before] < final.energy
+               and _same_energy(energies[before], final.energy)):
+            energies[before] = final.energy
+            before -= 1
     else:
         energies.append(final.energy)
     return SegmentationResult(
@@ -171,6 +206,10 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
         energy=final.energy, energies=energies, n_iter=n_iter, status=status, backend=backend,
         phi=phi,
     )
+
+
+def _same_energy(first, second):
+    return abs(first - second) <= _SAME_ENERGY * max(abs(second), 1.0)
 
 
 def _evaluate(model, params, contours):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib
 import inspect
 import os
@@ -12,20 +13,27 @@ import numpy as np
 from activecontour.energy import ChanVeseParameters, to_frame, working_frame
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image
 from activecontour.noise import auto_mu, is_auto
-from activecontour.result import scalar_if_gray
+from activecontour.objects import clip_region, complement_region, find_objects
+from activecontour.raster import mask_to_curves
+from activecontour.result import build_result, scalar_if_gray
+from activecontour.roi import ROI_INIT_MARGIN, crop_init, init_neighbourhood, resolve_roi, restrict_values
 
-__all__ = ["BACKENDS", "segment"]
+__all__ = ["BACKENDS", "INSIDE", "segment"]
+
+#: The choices of ``inside``: which region holds the objects.
+INSIDE = ("auto", "bright", "dark")
 
 #: backend name -> "module:function" implementing it (imported on first use)
 BACKENDS = {
     "polygon": "activecontour.flow:segment_polygon",
-    "levelset": "activecontour.levelset:segment_levelset",
+    "levelset": "activecontour.backends.levelset:segment_levelset",
 }
 
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", options=None):
+            color="gray", normalize="range", n_regions=2, inside="auto", roi=None, separate=True,
+            options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -33,10 +41,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     image : ndarray of shape (M, N) or (M, N, C), or a path
         Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
         or the path of an image file (read by :func:`activecontour.image.load_image`).
-    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), or SegmentationResult
+    init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), SegmentationResult or str
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
-        starts from a centred circle of radius 3/8 of the smaller side.  The level-set backend also
-        accepts ``"checkerboard"``.
+        (default) starts from the outlines of the two-means threshold of the lightly blurred image
+        (the minimiser of (6.38) without its length term), so objects anywhere in the image are in
+        the start (:func:`activecontour.initial.default_init`).  ``"grid"``: small circles all
+        over the image; the level-set backend also accepts ``"checkerboard"``.
     backend : {"polygon", "levelset"}
         ``"polygon"``: the book's gradient flow (6.30)-(6.31) of a polygon with the H^1 velocity
         (6.39)-(6.40), sub-pixel.  ``"levelset"``: the same functional on the pixel grid.
@@ -73,13 +83,43 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         no cancellation for intensities far from 0, no overflow), and report energies and
         constants in these units; weights and constants beyond ``PARAMETER_LIMIT`` (1e8) in
         that frame are refused.
+    n_regions : int
+        The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
+        the sum of each region's fit term plus mu times the length of the interfaces between
+        regions, each counted once (:meth:`ChanVeseParameters.class_forms`).  ``result.classes``
+        holds the region of every pixel (0 = the background, the region covering most of the
+        image border; the others by increasing mean intensity), ``result.constants`` their
+        constants; the inside (``mask``, ``contours``) is every region but the background.
+        K > 2 runs on ``backend="levelset"`` only (a label field moved by threshold dynamics,
+        :mod:`activecontour.backends.labelfield`), started from the global K-means of the
+        intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+    inside : {"auto", "bright", "dark"}
+        Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
+        the class that covers less of the image border, and given curves are the inside as drawn.
+        ``"bright"``/``"dark"``: the region with the larger/smaller mean; a run that ends the
+        other way round returns the complement (the rest of the image domain), its energy
+        evaluated again.
+    roi : None, "init", bool ndarray (M, N), or (r0, c0, r1, c1)
+        Restrict the image domain D of (6.38) to a region of interest (:mod:`activecontour.roi`):
+        a box (exact, by cropping), a mask, or ``"init"``: a neighbourhood of the given curves, so
+        that drawing around one object gives that object (grown while the object reaches its
+        edge, so a curve drawn inside the object works too).  The result is in the whole image's
+        frame; ``result.roi`` is the domain used (a bool mask) and ``result.energy`` is (6.38) on
+        its bounding box.
+    separate : bool
+        Objects that touch get their own ids in ``result.labels`` (split along the necks of the
+        inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
+        piece.  ``result.mask``, ``result.contours`` and the energy do not depend on it.
     options : dict, optional
         Backend-specific settings, documented by the backend function
-        (:func:`activecontour.flow.segment_polygon`, :func:`activecontour.levelset.segment_levelset`).
+        (:func:`activecontour.flow.segment_polygon`,
+        :func:`activecontour.backends.levelset.segment_levelset`).
 
     Returns
     -------
     SegmentationResult
+        With the objects: ``labels``, ``objects`` (measurements), ``object_contours``, ``classes``
+        (:func:`activecontour.objects.find_objects`).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {backend!r}")
@@ -91,36 +131,163 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
+    if inside not in INSIDE:
+        raise ValueError(f"inside must be one of {INSIDE}, got {inside!r}")
+    if not isinstance(separate, (bool, np.bool_)):
+        raise TypeError(f"separate must be True or False, got {separate!r}")
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+    _check_regions(n_regions, backend, c_in, c_out, options, roi)
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     values = normalize_image(image, color=color, normalize=normalize)
+    shape = values.shape[:2]
+    if n_regions > 2:
+        from activecontour.backends.labelfield import segment_labels
+
+        solver = functools.partial(segment_labels, n_regions=int(n_regions))
+    else:
+        module_name, function_name = BACKENDS[backend].split(":")
+        solver = getattr(importlib.import_module(module_name), function_name)
+        _check_options(solver, backend, options or {})
+    solve = functools.partial(
+        _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
+        inside=inside, normalize=normalize, callback=callback,
+        settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
+    if isinstance(roi, str) and roi == "init":
+        # the smallest neighbourhood of the init that holds the object: grown while the result
+        # reaches the domain's edge (or is empty), e.g. when the curve was drawn inside the object
+        margin = ROI_INIT_MARGIN
+        while True:
+            neighbourhood = init_neighbourhood(init, shape, margin)
+            result, params, (offset, scale) = solve(neighbourhood)
+            if neighbourhood.all() or not _reaches_edge(result, neighbourhood):
+                break
+            margin *= 2
+    else:
+        result, params, (offset, scale) = solve(roi)
+    offset, scale = _input_units(image, normalize, offset, scale)
+    result.mu = params.mu
+    result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
+    result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
+    pixels = np.asarray(image)
+    if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
+        pixels = np.moveaxis(pixels, 0, -1)
+    result.object_contours, result.labels, result.objects = find_objects(
+        result.contours, shape, pixels, separate=bool(separate))
+    if result.classes is None:  # two regions: the inside is region 1
+        result.classes = result.mask.astype(np.int32)
+        result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
+    return result
+
+
+def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, settings):
+    """Run the backend on the image, or on the crop of a region of interest.
+
+    Returns the result in the whole image's frame, the parameters used, and the affine map
+    ``(low, span)`` of the crop's renormalisation (``(0, 1)`` without one).
+    """
+    shape = values.shape[:2]
+    box, domain = (None, None) if roi is None else resolve_roi(roi, shape, init)
+    rescale = (0.0, 1.0)
+    if box is not None:
+        values = restrict_values(values, box, domain)
+        if normalize == "range":  # the crop by its own range, as segment(image[box]) would
+            low, high = float(values.min()), float(values.max())
+            rescale = (low, high - low if high > low else 1.0)
+            values = (values - rescale[0]) / rescale[1]
+        init = crop_init(init, box, shape)
+        if callback is not None:
+            callback = _whole_image_callback(callback, box, shape)
     # the backends compute where the image spans [0, 1] (no cancellation, no overflow)
     frame_offset, frame_scale = working_frame(values)
     model = ImageModel(to_frame(values, frame_offset, frame_scale))
     del values
     square = frame_scale**2
-    params = ChanVeseParameters(auto_mu(model.values) * square if is_auto(mu) else mu, omega, lambda_in,
-                                lambda_out, c_in, c_out)
+    params = ChanVeseParameters(auto_mu(model.values) * square if is_auto(mu) else mu, *constants)
     working = params.in_frame(frame_offset, frame_scale)
-    module_name, function_name = BACKENDS[backend].split(":")
-    solver = getattr(importlib.import_module(module_name), function_name)
-    _check_options(solver, backend, options or {})
     if callback is not None and working is not params:
         callback = _in_caller_units(callback, frame_offset, frame_scale)
-    result = solver(model, init, working, max_num_iter=int(max_num_iter), tol=float(tol),
-                    callback=callback, **(options or {}))
+    result = solver(model, init, working, callback=callback, **settings)
+    result = _make_inside(result, inside, model, working)
+    if domain is not None:
+        domain_curves = mask_to_curves(domain)
+        result = _rebuilt(result, clip_region(result.contours, domain_curves), model, working,
+                          phi=None if result.phi is None else np.where(domain, result.phi, -1.0))
+    if box is not None:
+        result = _in_whole_image(result, box, domain, shape)
     if working is not params:
         result.energy *= square
         result.energies = result.energies * square
         result.c_in = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_in))
         result.c_out = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_out))
+        if getattr(result, "constants", None) is not None:
+            result.constants = frame_offset + frame_scale * np.asarray(result.constants)
+    return result, params, rescale
+
+
+def _reaches_edge(result, domain):
+    """Whether a result is empty or has pixels on the edge of its domain (not the image's)."""
+    import scipy.ndimage
+
+    edge = domain & ~scipy.ndimage.binary_erosion(domain, border_value=1)
+    return result.status == 3 or bool((result.mask & edge).any())
+
+
+def _input_units(image, normalize, low, span):
+    """``(offset, scale)`` from the functional's units to the input's, after a crop's renormalisation
+    ``(values - low) / span``."""
     offset, scale = intensity_scale(image, normalize)
-    result.mu = params.mu
-    result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
-    result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
+    return offset + scale * low, scale * span
+
+
+def _make_inside(result, inside, model, params):
+    """The result, or its complement when the inside is not the class ``inside`` asks for."""
+    if inside == "auto" or not result.contours or result.classes is not None:  # N regions: as found
+        return result
+    brighter = np.mean(np.asarray(result.c_in)) > np.mean(np.asarray(result.c_out))
+    if brighter == (inside == "bright"):
+        return result
+    return _rebuilt(result, complement_region(result.contours, model.shape), model, params,
+                    phi=None if result.phi is None else -result.phi)
+
+
+def _rebuilt(result, contours, model, params, phi):
+    """A result with other contours, made by :func:`build_result` (so the invariants hold)."""
+    return build_result(model, params, contours, energies=result.energies, n_iter=result.n_iter,
+                        status=result.status, backend=result.backend, phi=phi)
+
+
+def _in_whole_image(result, box, domain, shape):
+    """A result on a crop, moved into the whole image's frame (the energy stays the crop's)."""
+    r0, c0, r1, c1 = box
+    offset = np.array([r0, c0], dtype=np.float64)
+    result.contours = [c + offset for c in result.contours]
+    mask = np.zeros(shape, dtype=bool)
+    mask[r0:r1, c0:c1] = result.mask
+    result.mask = mask
+    if result.phi is not None:
+        phi = np.full(shape, min(float(result.phi.min()), -1.0))
+        phi[r0:r1, c0:c1] = result.phi
+        result.phi = phi
+    result.roi = np.zeros(shape, dtype=bool)
+    result.roi[r0:r1, c0:c1] = True if domain is None else domain
     return result
+
+
+def _whole_image_callback(callback, box, shape):
+    """The callback, shown states in the whole image's frame (a viewer draws them on the image)."""
+    offset = np.array(box[:2], dtype=np.float64)
+
+    def shifted(state):
+        phi = state.phi
+        if phi is not None:
+            phi = np.full(shape, min(float(phi.min()), -1.0))
+            phi[box[0]:box[2], box[1]:box[3]] = state.phi
+        return callback(dataclasses.replace(state, contours=[c + offset for c in state.contours],
+                                            shape=tuple(shape), phi=phi))
+
+    return shifted
 
 
 def _in_caller_units(callback, offset, scale):
@@ -144,3 +311,24 @@ def _check_options(solver, backend, options):
     if unknown:
         raise TypeError(f"unknown option(s) {', '.join(map(repr, unknown))} for backend {backend!r}; "
                         f"the valid options are {', '.join(valid)}")
+
+
+def _check_regions(n_regions, backend, c_in, c_out, options, roi):
+    if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
+        raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
+    if n_regions < 2:
+        raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
+    if n_regions == 2:
+        return
+    if backend != "levelset":
+        raise ValueError(f"n_regions={n_regions} needs backend='levelset' (backend={backend!r} "
+                         f"segments two regions)")
+    if c_in is not None or c_out is not None:
+        raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
+                         f"n_regions={n_regions}")
+    if roi is not None:
+        raise ValueError(f"roi restricts the two-region model; it is not available with "
+                         f"n_regions={n_regions}")
+    if options:
+        raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
+                        "takes none")

@@ -210,14 +210,17 @@ def region_problem(curves):
     return None
 
 
-def region_union(curves):
+def region_union(curves, *, signed=False):
     """The boundary of the region that nested, overlapping or duplicated curves outline.
 
     Each curve's polygon (made valid: a self-crossing curve is the union of its loops) is added
     to the region when it lies inside an even number of the others and cut out of it when inside
     an odd number, in order of nesting depth: overlapping outlines merge, a curve given twice
-    counts once, nested curves alternate between object and hole.  The result obeys
-    :func:`region_problem`: outer boundaries positive, holes negative, each vertex once.
+    counts once, nested curves alternate between object and hole.  With ``signed`` the curves'
+    own orientation says which is which instead (positive added, negative cut out, the larger
+    first): the region {w > 0} of curves whose winding number is 0 or 1 but which touch
+    themselves or each other, as a backend's may.  The result obeys :func:`region_problem`:
+    outer boundaries positive, holes negative, each vertex once.
 
     Returns
     -------
@@ -227,13 +230,17 @@ def region_union(curves):
     from shapely.geometry.polygon import orient
 
     polygons = [shapely.make_valid(shapely.Polygon(np.asarray(c, dtype=np.float64))) for c in curves]
-    tree = shapely.STRtree(polygons)
-    inner, outer = tree.query(polygons, predicate="within")
-    strictly = (inner != outer) & ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
-    depth = np.bincount(inner[strictly], minlength=len(polygons))
+    if signed:
+        areas = np.array([signed_area(np.asarray(c, dtype=np.float64)) for c in curves])
+        order, adds = np.argsort(-np.abs(areas), kind="stable"), areas > 0
+    else:
+        inner, outer = shapely.STRtree(polygons).query(polygons, predicate="within")
+        strictly = (inner != outer) & ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
+        depth = np.bincount(inner[strictly], minlength=len(polygons))
+        order, adds = np.argsort(depth, kind="stable"), depth % 2 == 0
     region = shapely.Polygon()
-    for i in np.argsort(depth, kind="stable"):
-        region = region.union(polygons[i]) if depth[i] % 2 == 0 else region.difference(polygons[i])
+    for i in order:
+        region = region.union(polygons[i]) if adds[i] else region.difference(polygons[i])
     out = []
     for polygon in shapely.get_parts(region):
         if isinstance(polygon, shapely.Polygon) and polygon.area > 0:
@@ -294,40 +301,41 @@ def _link(kept, nodes, n_points):
     return curves
 
 
-def nucleation_sites(values, inside, params, c_in, c_out, radius):
+def nucleation_sites(values, inside, form, mu, radius):
     """Where a small disk should change sides: the topological derivative of (6.38).
 
     Moving a disk B of radius ``radius`` from Omega_i to Omega_o changes J by about
-    ``int_B g - 2 pi radius mu``, with ``g = omega + lambda_in sum (I - c_in)^2 - lambda_out sum
-    (I - c_out)^2`` (the integrand of (6.41)); from Omega_o to Omega_i by ``-int_B g + 2 pi radius
-    mu``.  So a hole pays where the mean of g over the disk exceeds ``2 mu / radius`` inside, and a
-    new component where it is below ``-2 mu / radius`` outside.  Returns one centre (row, col) per
-    connected candidate region, with a flag telling whether it is a hole, best candidates first.
+    ``int_B g - 2 pi radius mu``, with ``g = g_i - g_o`` the integrand of (6.41), the difference of
+    the two regions' quadratic forms (:meth:`ChanVeseParameters.load_form`); from Omega_o to Omega_i
+    by ``-int_B g + 2 pi radius mu``.  So a hole pays where the mean of g over the disk exceeds
+    ``2 mu / radius`` inside, and a new component where it is below ``-2 mu / radius`` outside.
+    Returns one centre (row, col) per connected candidate region, with a flag telling whether it
+    is a hole, best candidates first.
 
     Parameters
     ----------
     values : ndarray (M, N, C)
+        The model's feature channels.
     inside : ndarray (M, N) bool
         The current Omega_i.
-    params : ChanVeseParameters
-    c_in, c_out : ndarray (C,)
+    form : QuadraticForm
+        ``g = g_i - g_o``.
+    mu : float
+        The length weight.
     radius : float
     """
     import cv2
 
-    lambda_in, lambda_out = params.weights(values.shape[2])
-    # mean_B g = omega + sum_ch [(l_in - l_out) mean_B I^2 - 2 (l_in c_in - l_out c_out) mean_B I]
-    #            + sum_ch (l_in c_in^2 - l_out c_out^2): local means of I (and I^2), in float32
-    # (a mean of a few tens of values in [0, 1]: float32 is exact to ~1e-7, far below any threshold)
-    square = lambda_in - lambda_out
-    linear = -2.0 * (lambda_in * c_in - lambda_out * c_out)
-    constant = params.omega + float(np.sum(lambda_in * c_in**2 - lambda_out * c_out**2))
+    # mean_B g = constant + sum_ch [linear mean_B I + square mean_B I^2]: local means of I (and
+    # I^2), in float32 (a mean of a few tens of values in [0, 1]: float32 is exact to ~1e-7, far
+    # below any threshold)
+    square, linear, constant = form.square, form.linear, form.constant
     size = int(np.ceil(radius))
     yy, xx = np.mgrid[-size: size + 1, -size: size + 1]
     disk = (yy**2 + xx**2) <= radius**2
     kernel = (disk / disk.sum()).astype(np.float32)
     footprint = disk.astype(np.uint8)
-    threshold = 2.0 * params.mu / radius
+    threshold = 2.0 * mu / radius
     m, n = inside.shape
     inside_u8 = np.ascontiguousarray(inside, dtype=bool).view(np.uint8)
     found = {True: ([], []), False: ([], [])}  # flat index and gain of every candidate pixel

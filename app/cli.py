@@ -75,6 +75,7 @@ _PARAMETER_OPTIONS = {
     "c_in": "--c-in",
     "c_out": "--c-out",
     "color": "--color",
+    "inside": "--inside",
 }
 
 
@@ -158,18 +159,9 @@ def build_parser():
         "(default: every core)",
     )
     segment.add_argument(
-        "--format", dest="formats", type=_formats, default=["json"], metavar="FMT[,FMT...]",
-        help="contour file formats, a comma-separated list of json, geojson, svg, csv, npz "
-        "(default: json)",
-    )
-    segment.add_argument(
-        "--overlay-color", default="red", metavar="COLOR",
-        help="colour of the contour in the overlay: a name (red, green, blue, yellow, cyan, "
-        "magenta, white, black) or R,G,B in 0..255 (default: red)",
-    )
-    segment.add_argument(
         "-q", "--quiet", action="store_true", help="no progress bar and no summary lines"
     )
+    _add_options(segment.add_argument_group("outputs and limits"), _output_options())
     _add_parameter_options(segment)
     segment.add_argument(
         "--option", dest="options", action="append", type=_option, default=None, metavar="KEY=VALUE",
@@ -188,9 +180,55 @@ def build_parser():
         "--format", dest="formats", type=_formats, default=None, metavar="FMT[,FMT...]",
         help="contour file formats the viewer's Save writes (default: the viewer's)",
     )
+    _add_options(view, [(flags, kwargs) for flags, kwargs in _output_options() if "--max-pixels" in flags])
     _add_parameter_options(view)
     view.set_defaults(run=_run_view)
     return parser
+
+
+def _output_options():
+    """The options of ``segment``'s outputs and limits, as ``(flags, add_argument keywords)``: a new
+    output option is one row here (a new contour format is one entry of io.CONTOUR_FORMATS)."""
+    from activecontour.image import MAX_PIXELS
+    from activecontour.io import COLORS, CONTOUR_FORMATS
+
+    return [
+        (("--format",), {
+            "dest": "formats", "type": _formats, "default": ["json"], "metavar": "FMT[,FMT...]",
+            "help": f"contour file formats, a comma-separated list of {', '.join(CONTOUR_FORMATS)} "
+                    "(default: json)"}),
+        (("--objects",), {
+            "dest": "objects", "type": _object_formats, "default": [], "metavar": "FMT[,FMT...]",
+            "help": "object files, one id per object: labels (16-bit PNG label image), labels-tif, "
+                    "geojson (a Feature per object with its measurements), roi (ImageJ/Fiji ROI "
+                    "set .zip), csv (the measurements) (default: none)"}),
+        (("--line-color", "--overlay-color"), {
+            "dest": "line_color", "default": "auto", "metavar": "COLOR",
+            "help": "colour of the contour in the overlay: auto (one that stands out from the "
+                    f"image: red on gray), a name ({', '.join(COLORS)}) or R,G,B in 0..255 "
+                    "(default: auto)"}),
+        (("--line-width",), {
+            "type": _line_width, "default": "auto", "metavar": "PX",
+            "help": "width of the contour in the overlay, in pixels of the overlay, or auto: 1 px "
+                    "per 1024 px of its longer side (default: auto)"}),
+        (("--max-pixels",), {
+            "type": _int_at_least(1), "default": MAX_PIXELS, "metavar": "N",
+            "help": "refuse images of more than N pixels (by the size the file declares, before "
+                    "decoding it) and contour files of more than N vertices (default: "
+                    "%(default)s = 2**27, about 4 GB of memory to segment)"}),
+    ]
+
+
+def _line_width(text):
+    if text == "auto":
+        return text
+    return _int_at_least(1)(text)
+
+
+def _add_options(parser, table):
+    """Add the options of a table of ``(flags, keyword arguments of add_argument)``."""
+    for flags, kwargs in table:
+        parser.add_argument(*flags, **kwargs)
 
 
 def _add_parameter_options(parser):
@@ -222,8 +260,14 @@ def _add_parameter_options(parser):
     group.add_argument("--color", choices=("gray", "vector"), default=defaults["color"],
                        help="colour images: convert to gray or use every channel "
                        "(default: %(default)s)")
+    group.add_argument("--inside", choices=_inside_choices(), default=defaults["inside"],
+                       help="which region is the objects: auto (the class covering less of the "
+                       "image border), bright or dark (default: %(default)s)")
     init = parser.add_argument_group(
-        "initial curve (default: a centred circle of radius 3/8 of the smaller side)"
+        "initial curve",
+        "default: the outlines of the two-means (6.38 without its length term) threshold of the "
+        "lightly blurred image, so objects anywhere in the image are in the start "
+        "(activecontour.initial.default_init)",
     ).add_mutually_exclusive_group()
     init.add_argument("--init-circle", nargs=3, type=float, metavar=("ROW", "COL", "RADIUS"),
                       help="a circle, in pixels (row, col of its centre)")
@@ -249,12 +293,20 @@ def _run_segment(args):
 
     settings = _settings(args)
     init, init_description = _load_init(args)
-    images = find_images(*args.images)  # folders and patterns expanded; a missing file stops here
-    plans = _plan_outputs(images, args.output, args.formats)
-    color = _overlay_color(args.overlay_color)
+    left_out = []
+    # folders and patterns expanded; a missing file stops here
+    images = find_images(*args.images, left_out=left_out)
+    plans = _plan_outputs(images, args.output, args.formats, args.objects)
+    overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
-    batch = _Batch(init, init_description, settings, args.formats, color,
-                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet)
+    if left_out and not args.quiet:
+        more = f" and {len(left_out) - 1} more" if len(left_out) > 1 else ""
+        print(f"{PROG}: note: left out {_shown(left_out[0])}{more}, named like this tool's outputs "
+              "next to their image; name a file on its own to segment it", file=sys.stderr)
+    _sweep_temporaries(plans)
+    batch = _Batch(init, init_description, settings, args.formats, overlay,
+                   protect=[p for p, _ in plans], output=args.output, quiet=args.quiet,
+                   max_pixels=args.max_pixels, objects=args.objects)
     jobs = min(args.jobs or default_jobs(), len(plans))
     show_progress = not args.quiet and _is_terminal(sys.stderr)
     try:
@@ -306,6 +358,14 @@ def _segment_in_parallel(plans, batch, jobs, show_progress):
     )
 
 
+def _sweep_temporaries(plans):
+    """Remove the temporaries that a run killed mid-write left in the output directories."""
+    from activecontour.io import sweep_temporaries
+
+    for directory in dict.fromkeys(Path(stem).parent for _, stem in plans):
+        sweep_temporaries(directory)
+
+
 def _report_failure(progress, image_path, exc):
     _report(progress, f"{PROG}: error: {_naming(image_path, exc)}", sys.stderr)
 
@@ -313,15 +373,19 @@ def _report_failure(progress, image_path, exc):
 class _Batch:
     """What every image of a ``segment`` run shares: the init, the settings and the outputs."""
 
-    def __init__(self, init, init_description, settings, formats, color, *, protect, output, quiet):
+    def __init__(self, init, init_description, settings, formats, overlay, *, protect, output, quiet,
+                 max_pixels, objects=()):
         self.init = init
         self.init_description = init_description
         self.settings = settings
         self.formats = formats
-        self.color = color
+        self.overlay = overlay  # keyword arguments of io.save_result: color, thickness
+        #: object file formats (:data:`activecontour.object_formats.OBJECT_FORMATS`)
+        self.objects = objects
         self.protect = protect
         self.output = output
         self.quiet = quiet
+        self.max_pixels = max_pixels
         #: (leaf, topmost) of every output directory this run created
         self.created = []
 
@@ -335,7 +399,7 @@ def _segment_one(image_path, stem, batch, progress=None):
     from activecontour import io
 
     with _interrupt_at_once():
-        image = activecontour.load_image(image_path)
+        image = _load_image(image_path, batch.max_pixels)
         if progress is not None:
             progress.note(f"setting up ({' x '.join(map(str, image.shape))})")
         _check_image(image_path, batch.init, batch.settings, image=image)
@@ -343,16 +407,36 @@ def _segment_one(image_path, stem, batch, progress=None):
         started = time.perf_counter()
         result = activecontour.segment(image, init, callback=progress, **batch.settings)
         elapsed = time.perf_counter() - started
+    # no timing in the files: the same run writes the same bytes, whatever the jobs or the load
     metadata = {
         "image": os.fspath(image_path),
         "init": batch.init_description,
         "parameters": batch.settings,
-        "wall_time_s": elapsed,
     }
     _make_directory(Path(stem).parent, batch.created)
     written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
-                             color=batch.color, protect=batch.protect)
+                             protect=batch.protect, objects=batch.objects,
+                             **batch.overlay)
     return _summary(Path(image_path).name, result, elapsed, written)
+
+
+def _load_image(image_path, max_pixels):
+    """The image, or a UsageError naming --max-pixels for one over the limit."""
+    import activecontour
+    from activecontour.io import SizeLimitError
+
+    try:
+        return activecontour.load_image(image_path, max_pixels=max_pixels)
+    except SizeLimitError as exc:
+        raise UsageError(_over_limit(exc)) from None
+
+
+def _over_limit(exc):
+    """The library's SizeLimitError with the option that raises the limit."""
+    text = _one_line(exc)
+    for name in ("(max_pixels)", "(max_points)"):
+        text = text.replace(name, "(raise it with --max-pixels)")
+    return text
 
 
 @contextlib.contextmanager
@@ -380,7 +464,8 @@ def _interrupt_at_once():
 def _naming(image_path, exc):
     """The error's one line, prefixed by the image's path unless it already names it."""
     text = _one_line(exc)
-    return text if os.fspath(image_path) in text else f"{os.fspath(image_path)}: {text}"
+    name = _shown(image_path)
+    return text if name in text or repr(os.fspath(image_path)) in text else f"{name}: {text}"
 
 
 def _report(progress, line, stream):
@@ -499,7 +584,9 @@ def _load_init(args):
                 f"rectangle {row0:g} {col0:g} {row1:g} {col1:g}")
     if args.init_mask is not None:
         try:
-            mask = io.read_mask(args.init_mask)
+            mask = io.read_mask(args.init_mask, max_pixels=args.max_pixels)
+        except io.SizeLimitError as exc:
+            raise UsageError(f"--init-mask: {_over_limit(exc)}") from None
         except (FileNotFoundError, ValueError) as exc:
             raise UsageError(f"--init-mask: {_one_line(exc)}") from None
         if not mask.any():
@@ -507,8 +594,10 @@ def _load_init(args):
         return mask, f"mask {os.fspath(args.init_mask)}"
     if args.init_contours is not None:
         try:
-            curves = io.read_contours(args.init_contours)
-            shape = io.read_metadata(args.init_contours).get("image_shape")
+            curves = io.read_contours(args.init_contours, max_points=args.max_pixels)
+            shape = io.read_metadata(args.init_contours, max_points=args.max_pixels).get("image_shape")
+        except io.SizeLimitError as exc:
+            raise UsageError(f"--init-contours: {_over_limit(exc)}") from None
         except (FileNotFoundError, ValueError) as exc:
             raise UsageError(f"--init-contours: {_one_line(exc)}") from None
         if not curves:
@@ -532,9 +621,13 @@ class _ContourInit(list):
         self.image_shape = tuple(shape) if shape is not None else None
 
 
-def _plan_outputs(images, output, formats):
-    """[(image path, output stem)], after checking no output overwrites an input or another one."""
-    from activecontour.io import output_paths
+def _plan_outputs(images, output, formats, objects=()):
+    """[(image path, output stem)], after checking no output overwrites an input or another one.
+
+    The stems come from :func:`activecontour.io.output_stem`: inside the output directory,
+    whatever the images are called.
+    """
+    from activecontour.io import output_paths, output_stem
 
     if output is not None and os.path.exists(output) and not os.path.isdir(output):
         raise UsageError(f"output path {os.fspath(output)!r} exists and is not a directory")
@@ -546,8 +639,8 @@ def _plan_outputs(images, output, formats):
         directory = Path(output) if output is not None else Path(image_path).parent
         if directory.is_dir() and not os.access(directory, os.W_OK | os.X_OK):
             raise UsageError(f"the output directory {os.fspath(directory)!r} is not writable")
-        stem = directory / Path(image_path).stem
-        for path in output_paths(stem, formats):
+        stem = output_stem(directory, image_path)
+        for path in output_paths(stem, formats, objects):
             key = os.path.realpath(path)
             if key in inputs:
                 raise UsageError(
@@ -626,15 +719,24 @@ def _make_directory(directory, created):
     if os.path.isdir(directory):
         return
     leaf = Path(os.path.abspath(directory))
-    topmost = leaf
-    while not topmost.parent.exists():
-        topmost = topmost.parent
-    try:
-        os.makedirs(directory)
-    except OSError as exc:
-        raise UsageError(f"cannot create the output directory {os.fspath(directory)!r}: "
-                         f"{exc.strerror or exc}") from None
-    created.append((leaf, topmost))
+    missing = [leaf]
+    while not missing[-1].parent.exists():
+        missing.append(missing[-1].parent)
+    topmost = None  # the first directory this run made (another run may make some at once)
+    for path in reversed(missing):
+        try:
+            os.mkdir(path)
+        except FileExistsError:
+            if not os.path.isdir(path):
+                raise UsageError(f"cannot create the output directory {os.fspath(directory)!r}: "
+                                 f"{_shown(path)!r} is not a directory") from None
+        except OSError as exc:
+            raise UsageError(f"cannot create the output directory {os.fspath(directory)!r}: "
+                             f"{exc.strerror or exc}") from None
+        else:
+            topmost = path if topmost is None else topmost
+    if topmost is not None:
+        created.append((leaf, topmost))
 
 
 def _remove_if_empty(created):
@@ -649,10 +751,11 @@ def _remove_if_empty(created):
                 break
 
 
-def _overlay_color(text):
+def _line_color(text):
+    """``--line-color``: "auto", a colour name or R,G,B in 0..255."""
     from activecontour.io import COLORS
 
-    if text.lower() in COLORS:
+    if text.lower() in ("auto", *COLORS):
         return text.lower()
     try:
         values = tuple(int(v) for v in text.split(","))
@@ -660,7 +763,8 @@ def _overlay_color(text):
         values = ()
     if len(values) != 3 or not all(0 <= v <= 255 for v in values):
         raise UsageError(
-            f"--overlay-color must be one of {', '.join(COLORS)} or R,G,B in 0..255, got {text!r}"
+            f"--line-color (--overlay-color) must be auto, one of {', '.join(COLORS)} or R,G,B in "
+            f"0..255, got {text!r}"
         )
     return values
 
@@ -669,7 +773,7 @@ def _summary(name, result, elapsed, written):
     """One line per image; a result that did not converge says why."""
     stem = os.path.commonprefix([os.fspath(p) for p in written])
     why = "" if result.success else f" ({result.message.rstrip('.')})"
-    return (
+    return _shown(
         f"{name}: iterations={result.n_iter} energy={result.energy:.6g} mu={result.mu:.4g} "
         f"c_in={_format_constant(result.c_in)} c_out={_format_constant(result.c_out)} "
         f"time={elapsed:.2f}s success={result.success}{why} output={stem}*"
@@ -714,7 +818,7 @@ class _Progress(StatusLine):
         now = self.clock()
         if self.number:
             self.finished += 1
-        self.number, self.name, self.image_started = number, Path(path).name, now
+        self.number, self.name, self.image_started = number, _shown(Path(path).name), now
         self._rate = None
         try:
             size = f" ({os.path.getsize(path) / 1e6:.1f} MB)"
@@ -761,12 +865,11 @@ class _Progress(StatusLine):
 
 
 def _run_view(args):
-    import activecontour
     from activecontour.initial import initial_curves
 
     settings = _settings(args)
     init, _ = _load_init(args)
-    image = activecontour.load_image(args.image)
+    image = _load_image(args.image, args.max_pixels)
     shape = image.shape[:2]
     if isinstance(init, _ContourInit):
         init = list(init)
@@ -832,6 +935,23 @@ def _formats(text):
     return list(dict.fromkeys(formats))
 
 
+def _object_formats(text):
+    from activecontour.object_formats import OBJECT_FORMATS
+
+    formats = [f.strip().lower() for f in text.split(",") if f.strip()]
+    unknown = [f for f in formats if f not in OBJECT_FORMATS]
+    if not formats or unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown object format {(unknown or [text])[0]!r}; choose from {', '.join(OBJECT_FORMATS)}")
+    return list(dict.fromkeys(formats))
+
+
+def _inside_choices():
+    from activecontour.segment import INSIDE
+
+    return INSIDE
+
+
 def _int_at_least(low):
     """An argparse type: an integer >= ``low``."""
     def parse(text):
@@ -875,7 +995,14 @@ def _one_line(exc):
         text = str(exc.args[0])
     if isinstance(exc, OSError) and exc.strerror and exc.filename:
         text = f"{exc.strerror}: {exc.filename!r}"
-    return " ".join(text.split()) or type(exc).__name__
+    return _shown(" ".join(text.split()) or type(exc).__name__)
+
+
+def _shown(text):
+    """``text`` (a line, a path) with every character that is not printable escaped as Python
+    would (a newline as ``\\n``), so a file name never splits or forges a line of output."""
+    text = os.fspath(text)
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in text)
 
 
 def _is_terminal(stream):

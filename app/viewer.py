@@ -57,6 +57,7 @@ import numpy as np
 
 from activecontour.curve import length, to_xy
 from activecontour.image import load_image, normalize_image
+from activecontour.image_files import display_rgb
 from activecontour.initial import initial_curves
 from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
@@ -135,6 +136,10 @@ class Viewer:
         Draw during runs and after each action; by default True on an interactive canvas and
         False on a non-interactive one (Agg), where nothing is drawn until the figure is drawn or
         saved (``savefig``).
+    inside : {"auto", "bright", "dark"}
+        Which region is the objects (see :func:`activecontour.segment`).  A run started from
+        drawn curves is restricted to their neighbourhood (``segment(roi="init")``, see
+        :mod:`activecontour.roi`): drawing around one object gives that object.
 
     Attributes
     ----------
@@ -164,7 +169,7 @@ class Viewer:
 
     def __init__(self, image, *, image_path=None, backend=None, mu=None, omega=None, lambda_in=None,
                  lambda_out=None, max_num_iter=None, tol=None, init=None, c_in=None, c_out=None,
-                 color="gray", formats=("json",), redraw_every=2, live=None):
+                 color="gray", formats=("json",), redraw_every=2, live=None, inside="auto"):
         settings = _settings(backend=backend, mu=mu, omega=omega, lambda_in=lambda_in,
                              lambda_out=lambda_out, max_num_iter=max_num_iter, tol=tol)
         if isinstance(redraw_every, bool) or not isinstance(redraw_every, (int, np.integer)) \
@@ -181,7 +186,8 @@ class Viewer:
         self.image = np.asarray(image)
         self.color = color
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
-        display = normalize_image(self.image, color="vector")  # validates the image, too
+        self.inside = inside  # checked by the library on the first run
+        display = display_rgb(self.image)  # validates the image, too
         self.shape = display.shape[:2]
         # mu="auto": the slider shows the value segment(mu="auto") would use, until it is moved
         self._mu_auto = is_auto(settings["mu"])
@@ -260,7 +266,7 @@ class Viewer:
         backend = self.backend_radio.value_selected
         params = {name: float(self.sliders[name].val) for name, *_ in SLIDERS}
         params.update(backend=backend, max_num_iter=self._max_num_iter, tol=self._tol,
-                      color=self.color, **self.fixed_constants)
+                      color=self.color, inside=self.inside, **self.fixed_constants)
         if backend in self.step_sliders:
             option = STEP_OPTIONS[backend][0]
             value = float(self.step_sliders[backend].val)
@@ -386,7 +392,7 @@ class Viewer:
             return False
         try:
             image = load_image(Path(path).expanduser())
-            display = normalize_image(image, color="vector")
+            display = display_rgb(image)
         except (OSError, ValueError, TypeError) as exc:
             self._set_message(f"image not opened: {_one_line(exc)}")
             return False
@@ -490,6 +496,10 @@ class Viewer:
         else:  # a fresh start from the init (also after a collapse): exactly the library's
             self._clear_run()
             start = self.init
+            if not (self.init is None or isinstance(self.init, str)):
+                params["roi"] = "init"  # drawing around one object gives that object
+        if self.contours and self.result is not None and self.result.roi is not None:
+            params["roi"] = self.result.roi  # a continued run stays on its domain
         self.drawer.cancel()
         self.running, self._stop, self._after_run = True, False, None
         self._run_offset = self.iteration
@@ -838,14 +848,14 @@ class Viewer:
 
 def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lambda_out=None,
            max_num_iter=None, tol=None, init=None, c_in=None, c_out=None, color="gray",
-           formats=("json",)):
+           formats=("json",), inside="auto"):
     """Open the viewer's window on an image and return an exit code when it is closed.
 
     Parameters
     ----------
     image_path : str or os.PathLike
         Any image :func:`activecontour.load_image` reads.
-    backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats
+    backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats, inside
         See :class:`Viewer` (None: the library's default); ``init`` may also be a name from
         :data:`NAMED_INITS` (``"grid"``, ``"checkerboard"``) or a mask file's path.
 
@@ -861,7 +871,8 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
         image = load_image(image_path)
         viewer = Viewer(image, image_path=image_path, backend=backend, mu=mu, omega=omega,
                         lambda_in=lambda_in, lambda_out=lambda_out, max_num_iter=max_num_iter,
-                        tol=tol, init=init, c_in=c_in, c_out=c_out, color=color, formats=formats)
+                        tol=tol, init=init, c_in=c_in, c_out=c_out, color=color, formats=formats,
+                        inside=inside)
     except (OSError, ValueError, TypeError) as exc:
         print(f"activecontour view: {exc}", file=sys.stderr)
         return 2

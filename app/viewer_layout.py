@@ -39,18 +39,20 @@ CONTOUR_COLOR = (1.0, 0.0, 0.0)
 INIT_COLOR = (0.0, 0.85, 1.0)
 PREVIEW_COLOR = (1.0, 0.85, 0.0)
 
-#: (parameter, slider label, lowest, highest) for the functional's weights; the range widens to
-#: include a starting value outside it.
+#: (parameter, slider label, lowest, highest, scale) for the functional's weights; the range widens
+#: to include a starting value outside it.  mu is logarithmic: its useful values span 1e-3 (a clean
+#: image) to a few units (heavy noise), and the automatic value is often near 0.01; on a log scale
+#: every decade gets the same room (mu = 0 shows as the lowest value, 1e-4).
 SLIDERS = (
-    ("mu", "mu (length)", 0.0, 5.0),
-    ("omega", "omega (area)", -1.0, 1.0),
-    ("lambda_in", "lambda_in", 0.05, 5.0),
-    ("lambda_out", "lambda_out", 0.05, 5.0),
+    ("mu", "mu (length)", 1e-4, 10.0, "log"),
+    ("omega", "omega (area)", -1.0, 1.0, "linear"),
+    ("lambda_in", "lambda_in", 0.05, 5.0, "linear"),
+    ("lambda_out", "lambda_out", 0.05, 5.0, "linear"),
 )
 
 #: backend -> (option, label, lowest, highest) of the "step" slider: the polygon flow's largest
 #: first trial displacement in pixels (:func:`activecontour.flow.segment_polygon`), the level set's
-#: initial time step (:func:`activecontour.levelset.segment_levelset`).  Its starting value is the
+#: initial time step (:func:`activecontour.backends.levelset.segment_levelset`).  Its starting value is the
 #: backend's own default.
 STEP_OPTIONS = {
     "polygon": ("max_step", "step (px)", 0.25, 10.0),
@@ -131,8 +133,8 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-    display : ndarray (M, N, C)
-        The normalised image (:func:`activecontour.image.normalize_image` with ``color="vector"``).
+    display : ndarray (M, N, 3) of uint8
+        The image as shown (:func:`activecontour.image_files.display_rgb`).
     backends : sequence of str
         The backend choices; ``backend`` is selected.
     values : dict
@@ -217,20 +219,12 @@ def _cut(line, keep):
 
 
 def show_image(ax, display):
-    """Show the normalised image (M, N, C) on the image axes, replacing the one shown, and reset
-    the view to the whole image."""
+    """Show the display image (M, N, 3) uint8 (:func:`activecontour.image_files.display_rgb`, as
+    the CLI's overlay shows it) on the image axes, replacing the one shown, and reset the view to
+    the whole image."""
     for old in list(ax.images):
         old.remove()
-    if display.shape[2] == 1:
-        values = display[:, :, 0]
-        # as the CLI's overlay shows it: [0, 1], widened to the image's range when it exceeds it
-        image = ax.imshow(values, cmap="gray", interpolation="nearest",
-                          vmin=min(0.0, values.min()), vmax=max(1.0, values.max()))
-    else:
-        low, high = display.min(), display.max()
-        if low < 0.0 or high > 1.0:
-            display = (display - low) / (high - low) if high > low else display * 0.0
-        image = ax.imshow(np.clip(display, 0.0, 1.0), interpolation="nearest")
+    image = ax.imshow(display, interpolation="nearest")
     image.set_mouseover(False)  # the toolbar shows the viewer's format_coord (row, col, value) only
     m, n = display.shape[:2]
     ax.set_xlim(-0.5, n - 0.5)
@@ -292,15 +286,19 @@ def _energy_axes(fig, x0):
 def _sliders(fig, x0, values, step_values):
     from matplotlib.widgets import Slider
 
-    rows = [(name, label, low, high, values[name]) for name, label, low, high in SLIDERS]
-    rows += [(backend, label, low, high, step_values[backend])
+    rows = [(name, label, low, high, scale, values[name]) for name, label, low, high, scale in SLIDERS]
+    rows += [(backend, label, low, high, "linear", step_values[backend])
              for backend, (_option, label, low, high) in STEP_OPTIONS.items() if backend in step_values]
     sliders, step_sliders, labels = {}, {}, {}
-    for row, (name, label, low, high, value) in enumerate(rows):
+    for row, (name, label, low, high, scale, value) in enumerate(rows):
         y = 0.655 - 0.042 * min(row, len(SLIDERS))  # the step sliders share one row
+        if scale == "log":
+            value = max(value, low)
         low, high = min(low, value), max(high, value)
-        slider = Slider(fig.add_axes((x0 + 0.105, y, 0.165, 0.03)), "", low, high, valinit=value,
-                        valfmt="%.3g")
+        ax = fig.add_axes((x0 + 0.105, y, 0.165, 0.03))
+        ax.set_xscale(scale)  # a click's data coordinate is then the value itself
+        slider = Slider(ax, "", low, high, valinit=value, valfmt="%.3g")
+        ax.set_xlim(low, high)
         slider.valtext.set_fontsize(_LABEL_SIZE)
         text = fig.text(x0, y + 0.015, label, fontsize=_LABEL_SIZE, va="center")
         (step_sliders if name in STEP_OPTIONS else sliders)[name] = slider
@@ -309,7 +307,10 @@ def _sliders(fig, x0, values, step_values):
 
 
 def set_slider_value(slider, value):
-    """Move a slider to ``value``, widening its range to include it."""
+    """Move a slider to ``value``, widening its range to include it (a log slider's lowest value
+    stands for the values below it, 0 included)."""
+    if slider.ax.get_xscale() == "log":
+        value = max(value, slider.valmin)
     if value > slider.valmax or value < slider.valmin:
         slider.valmin, slider.valmax = min(slider.valmin, value), max(slider.valmax, value)
         slider.ax.set_xlim(slider.valmin, slider.valmax)

@@ -60,8 +60,8 @@ import numpy as np
 
 import activecontour as ac
 from activecontour import synthetic as sy
+from activecontour.backends.levelset import checkerboard_level_set, curves_level_set, level_set_contours
 from activecontour.initial import default_init
-from activecontour.levelset import checkerboard_level_set, curves_level_set, level_set_contours
 from activecontour.raster import mask_to_curves, rasterize
 
 MU = 0.2

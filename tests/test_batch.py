@@ -4,6 +4,10 @@ import dataclasses
 import functools
 import os
 import pickle
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import cv2
@@ -127,6 +131,24 @@ def _exit_on_three(x):
     return x
 
 
+def _exit_on_one(x):
+    if x == 0:
+        time.sleep(1.0)  # in flight when item 1's worker dies
+    if x == 1:
+        os._exit(1)
+    return x
+
+
+def test_a_dead_worker_fails_only_the_items_in_flight_and_the_rest_go_to_a_new_pool():
+    from concurrent.futures.process import BrokenProcessPool
+
+    outcomes = dict(batch.map_unordered(_exit_on_one, range(6), jobs=2))
+    assert sorted(outcomes) == list(range(6))
+    assert isinstance(outcomes[1][1], BrokenProcessPool)
+    assert outcomes[0][1] is None or isinstance(outcomes[0][1], BrokenProcessPool)  # in flight
+    assert [outcomes[k] for k in range(2, 6)] == [(k, None) for k in range(2, 6)]
+
+
 def test_a_dead_worker_fails_items_but_not_the_iteration():
     from concurrent.futures.process import BrokenProcessPool
 
@@ -193,13 +215,13 @@ def test_a_process_with_threads_is_not_forked():
 
     if multiprocessing.get_start_method() != "fork":
         pytest.skip("the platform does not fork by default")
-    assert batch._start_context(None).get_start_method() == (
+    assert batch.pool._start_context(None).get_start_method() == (
         "fork" if threading.active_count() == 1 else "forkserver")
     stop = threading.Event()
     thread = threading.Thread(target=stop.wait)
     thread.start()
     try:
-        assert batch._start_context(None).get_start_method() == "forkserver"
+        assert batch.pool._start_context(None).get_start_method() == "forkserver"
     finally:
         stop.set()
         thread.join()
@@ -219,6 +241,7 @@ if __name__ == "__main__":
     image, _ = synthetic.render(synthetic.disk((22.0, 27.0), 11.0), (48, 56), inside=0.75, outside=0.25)
     images = [synthetic.add_noise(image, 0.05, seed=k) for k in range(4)]  # tol 0: never converge
     started = time.monotonic()
+    print("started", flush=True)
     try:
         list(ac.segment_many(images, jobs=2, context="spawn", max_num_iter=10**6, tol=0))
     except KeyboardInterrupt:
@@ -240,7 +263,8 @@ def test_ctrl_c_while_spawned_workers_start_stops_them_quietly(tmp_path):
                                env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
-        time.sleep(2.0)  # the parent has started the pool; the workers are still importing
+        assert process.stdout.readline() == "started\n"  # imports done (slow on a loaded machine)
+        time.sleep(0.5)  # the parent has started the pool; the workers are still importing
         os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: every process of the group
         stdout, stderr = process.communicate(timeout=60)  # an image alone would take minutes
     finally:
@@ -249,3 +273,83 @@ def test_ctrl_c_while_spawned_workers_start_stops_them_quietly(tmp_path):
             process.wait()
     assert stdout.startswith("interrupted"), (stdout, stderr)
     assert "Traceback" not in stderr, stderr
+
+
+SLEEPING_BATCH = """
+import os, sys, time
+from activecontour import batch
+
+def sleep_long(item):
+    open(os.path.join(sys.argv[1], str(os.getpid())), "w").close()
+    time.sleep(60)
+    return item
+
+if __name__ == "__main__":
+    started = time.monotonic()
+    print("started", flush=True)
+    try:
+        list(batch.map_unordered(sleep_long, range(4), jobs=2))
+    except KeyboardInterrupt:
+        print(f"interrupted {time.monotonic() - started:.1f}", flush=True)
+"""
+
+
+def _start_sleeping_batch(tmp_path):
+    """A batch whose two workers sleep a minute per item; returns the process and the worker pids."""
+    script, pids = tmp_path / "sleeping.py", tmp_path / "pids"
+    script.write_text(SLEEPING_BATCH)
+    pids.mkdir()
+    root = Path(__file__).resolve().parents[1]
+    process = subprocess.Popen([sys.executable, str(script), str(pids)], cwd=root,
+                               env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+    assert process.stdout.readline() == "started\n"
+    deadline = time.monotonic() + 30
+    while len(list(pids.iterdir())) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return process, [int(p.name) for p in pids.iterdir()]
+
+
+def _running(pid):
+    """True while the process exists and is not a zombie."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="reads /proc")
+def test_sigint_to_the_parent_alone_stops_the_workers_promptly(tmp_path):
+    process, workers = _start_sleeping_batch(tmp_path)
+    try:
+        assert len(workers) == 2
+        sent = time.monotonic()
+        os.kill(process.pid, signal.SIGINT)  # the parent only, not its group: the workers sleep on
+        stdout, stderr = process.communicate(timeout=30)  # before: 60 s, the images in flight
+        waited = time.monotonic() - sent
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert stdout.startswith("interrupted"), (stdout, stderr)
+    assert waited < 10, waited
+    assert not any(_running(pid) for pid in workers)
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="reads /proc")
+def test_workers_die_with_their_parent_killed_by_sigkill(tmp_path):
+    process, workers = _start_sleeping_batch(tmp_path)
+    try:
+        assert len(workers) == 2
+        process.kill()  # kill -9: no cleanup in the parent at all
+        process.wait()
+        deadline = time.monotonic() + 10
+        while any(_running(pid) for pid in workers) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not any(_running(pid) for pid in workers)  # before: a minute, holding the pipes
+        assert process.stdout.read() == ""  # the pipe closes: no worker holds it open
+    finally:
+        for pid in workers:
+            if _running(pid):
+                os.kill(pid, signal.SIGKILL)

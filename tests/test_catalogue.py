@@ -14,9 +14,14 @@ fix lands, and the mark is then removed.
 """
 
 import json
+import os
 import resource
+import struct
 import subprocess
 import sys
+import zipfile
+import zlib
+from io import BytesIO
 from pathlib import Path
 
 import cv2
@@ -301,7 +306,48 @@ CLI_REFUSED = {
     "--format xml": (["--format", "xml"], ["unknown format", "xml"]),
     "output dir under a file": (lambda t, png: ["segment", png, "-o", _make(t / "f", b"") / "out"],
                                 ["not a directory"]),
+    # resource bombs: refused from the sizes the files declare, before decoding them
+    "PNG declaring 20000 x 20000 px": (lambda t, png: ["segment", _png_bomb(t / "bomb.png"), "-o",
+                                                       t / "out"],
+                                       ["bomb.png", "20000 x 20000", "--max-pixels"]),
+    "image over --max-pixels": (["--max-pixels", "3000"], ["disk.png", "3,072", "--max-pixels"]),
+    "--init-mask declaring 20000 x 20000 px": (
+        lambda t, png: ["segment", png, "-o", t / "out", "--init-mask", _png_bomb(t / "mask.png")],
+        ["--init-mask", "20000 x 20000", "--max-pixels"]),
+    "--init-contours NPZ declaring 1.5e9 vertices": (
+        lambda t, png: ["segment", png, "-o", t / "out", "--init-contours", _npz_bomb(t / "c.npz")],
+        ["--init-contours", "1,500,000,000 vertices", "--max-pixels"]),
+    "--init-contours JSON nested 100000 deep": (
+        lambda t, png: ["segment", png, "-o", t / "out", "--init-contours",
+                        _make(t / "deep.json", b"[" * 100_000 + b"]" * 100_000)],
+        ["--init-contours", "nested too deeply"]),
+    "--max-pixels 0": (["--max-pixels", "0"], ["--max-pixels", ">= 1"]),
+    "--line-width 0": (["--line-width", "0"], ["--line-width", ">= 1"]),
+    "--line-color 0,0": (["--line-color", "0,0"], ["--line-color", "R,G,B"]),
 }
+
+
+def _png_chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+def _png_bomb(path, side=20000):
+    """A 8-bit gray PNG that declares side x side pixels and holds a few rows of them."""
+    header = struct.pack(">IIBBBBB", side, side, 8, 0, 0, 0, 0)
+    rows = zlib.compress(b"\x00" * (side + 1) * 4)
+    return _make(path, b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", header) + _png_chunk(b"IDAT", rows)
+                 + _png_chunk(b"IEND", b""))
+
+
+def _npz_bomb(path, vertices=1_500_000_000):
+    """An NPZ whose one contour declares (vertices, 2) float64 (24 GB) and holds 16 bytes of it."""
+    header = np.lib.format.header_data_from_array_1_0(np.zeros((1, 2)))
+    header["shape"] = (vertices, 2)
+    member = BytesIO()
+    np.lib.format.write_array_header_1_0(member, header)
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("contour_0.npy", member.getvalue() + bytes(16))
+    return path
 
 
 def _make(path, content):
@@ -409,3 +455,136 @@ def test_speckle_mask_init_on_coins_finishes_in_seconds(tmp_path):
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     assert cpu <= 15.0, f"a speckle init on a 303 x 384 image took {cpu:.1f} s of CPU"
+
+
+# ------------------------------------------------------- CLI: names, displays, faults of a run
+
+
+HOSTILE_NAMES = ["..png", "...png", ".hidden.png", "a\nactivecontour: error: forged.png",
+                 "tab\tand\x1b[31mescape.png", "back\\slash.png"]
+
+
+def test_hostile_file_names_never_write_outside_the_output_folder(tmp_path, capsys):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in HOSTILE_NAMES:
+        write_png(folder / name, IMAGE)
+    before = set(tmp_path.rglob("*"))
+    status, stdout, stderr = run_cli(capsys, "segment", folder, "-o", tmp_path / "out", "-j", "1")
+    assert (status, stderr) == (0, ""), stderr
+    written = set(tmp_path.rglob("*")) - before
+    out = tmp_path / "out"
+    assert written - {out} and all(path.parent == out for path in written - {out}), written
+    assert not any(path.name.startswith(".") for path in out.iterdir())  # nothing hidden
+    # one summary line per image: a newline in a name is escaped, it cannot forge an error line
+    lines = stdout.splitlines()
+    assert len(lines) == len(HOSTILE_NAMES) and not any(line.startswith("activecontour") for line in lines)
+    assert any(line.startswith("a\\nactivecontour: error: forged.png: ") for line in lines)
+    assert len(list(out.glob("*_mask.png"))) == len(HOSTILE_NAMES)
+
+
+def test_a_failing_image_with_a_newline_in_its_name_gives_one_error_line(tmp_path, capsys):
+    bad = _make(tmp_path / "bad\nactivecontour: error: forged.png", b"")
+    status, stdout, stderr = run_cli(capsys, "segment", bad, "-o", tmp_path / "out")
+    assert status == 2 and stdout == ""
+    (line,) = stderr.splitlines()
+    assert line.startswith("activecontour: error: ") and "bad\\nactivecontour" in line
+
+
+def test_an_input_left_out_as_an_output_is_named_on_stderr(tmp_path, capsys):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    write_png(folder / "x.png", IMAGE)
+    write_png(folder / "x_mask.png", IMAGE[::-1])  # an image that looks like x.png's mask
+    status, stdout, stderr = run_cli(capsys, "segment", folder, "-o", tmp_path / "out")
+    assert status == 0 and stdout.startswith("x.png: ")
+    (note,) = stderr.splitlines()
+    assert note.startswith("activecontour: note: ") and "x_mask.png" in note
+    # named on its own, it is segmented
+    status, stdout, stderr = run_cli(capsys, "segment", folder / "x_mask.png", "-o", tmp_path / "own")
+    assert (status, stderr) == (0, "") and stdout.startswith("x_mask.png: ")
+
+
+def test_a_truncated_png_gives_our_one_line_and_not_libpng_s(tmp_path):
+    noise = write_png(tmp_path / "noise.png", np.random.default_rng(0).random((200, 200)))
+    cut = _make(tmp_path / "cut.png", noise.read_bytes()[:20_000])  # cut in the pixel data
+    process = subprocess.run([sys.executable, "-m", "app", "segment", str(cut), "-o", str(tmp_path / "o")],
+                             cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert process.returncode == 2
+    (line,) = process.stderr.splitlines()  # before: libpng's own "libpng error: ..." line too
+    assert line.startswith("activecontour: error: ") and "damaged or truncated" in line
+
+
+def test_the_overlay_of_a_uint16_fluorescence_image_shows_its_range(tmp_path, capsys):
+    nuclei = ROOT / "sample_images" / "nuclei.png"
+    image = ac.load_image(nuclei)
+    assert image.dtype == np.uint16 and image.max() == 235  # 0..235: black by the dtype's range
+    status, _, stderr = run_cli(capsys, "segment", nuclei, "-o", tmp_path, "--line-color", "red")
+    assert (status, stderr) == (0, ""), stderr
+    overlay = cv2.imread(str(tmp_path / "nuclei_overlay.png"), cv2.IMREAD_COLOR)[:, :, ::-1]
+    gray = overlay[(overlay[:, :, 0] == overlay[:, :, 1]) & (overlay[:, :, 1] == overlay[:, :, 2])]
+    assert len(np.unique(gray)) > 150 and gray.max() >= 250  # before: 2 levels, 0 and 1
+    # the levels are the image's own: the brightest pixels white, the darkest black
+    expected = np.round(np.clip((image - np.percentile(image, 0.01))
+                                / (np.percentile(image, 99.99) - np.percentile(image, 0.01)), 0, 1) * 255)
+    same = (overlay[:, :, 0] == overlay[:, :, 1]) & (overlay[:, :, 1] == overlay[:, :, 2])
+    assert np.abs(overlay[:, :, 0][same].astype(int) - expected[same]).max() <= 1
+
+
+def test_the_line_options_reach_the_overlay(tmp_path, disk_png, capsys):
+    status, _, stderr = run_cli(capsys, "segment", disk_png, "-o", tmp_path / "out",
+                                "--line-color", "cyan", "--line-width", "3")
+    assert (status, stderr) == (0, ""), stderr
+    overlay = cv2.imread(str(tmp_path / "out" / "disk_overlay.png"), cv2.IMREAD_COLOR)[:, :, ::-1]
+    cyan = np.all(overlay == (0, 255, 255), axis=2)
+    # a 3 px line along the disk's outline of length 2 pi r: about 3 * 2 pi r fully cyan pixels
+    assert cyan.sum() > 1.5 * 2 * np.pi * RADIUS
+    assert not np.any((overlay[:, :, 0] > 200) & (overlay[:, :, 1] < 50))  # no red
+
+
+def test_stale_temporaries_of_a_killed_run_are_swept_and_others_kept(tmp_path, disk_png, capsys):
+    from activecontour import atomic
+
+    out = tmp_path / "out"
+    out.mkdir()
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True, check=True).stdout.strip()
+    stale = _make(out / f".disk_mask.png.{dead}-{atomic._host()}.k3j_x9ab.part", b"half")
+    live = _make(out / f".disk_mask.png.{os.getpid()}-{atomic._host()}.abcdefgh.part", b"writing")
+    other = _make(out / ".notes.part", b"not ours")
+    status, _, stderr = run_cli(capsys, "segment", disk_png, "-o", out)
+    assert (status, stderr) == (0, ""), stderr
+    assert not stale.exists() and live.exists() and other.exists()
+
+
+def test_two_runs_creating_the_same_output_folder_do_not_race(tmp_path, monkeypatch):
+    target = tmp_path / "new" / "out"
+    real_mkdir = os.mkdir
+
+    def other_run_first(path, *args, **kwargs):  # another run makes each folder just before us
+        real_mkdir(path, *args, **kwargs)
+        raise FileExistsError(17, "File exists", str(path))
+
+    monkeypatch.setattr(os, "mkdir", other_run_first)
+    created = []
+    cli._make_directory(target, created)  # before: "cannot create ... File exists"
+    assert target.is_dir() and created == []  # made by the other run: not ours to remove
+
+
+def test_a_gray_and_alpha_image_reports_c_in_in_the_gray_units():
+    gray = np.where(TRUTH, 80, 20).astype(np.uint8)
+    image = np.dstack([gray, np.full_like(gray, 255)])  # the alpha channel is not an intensity
+    result = ac.segment(image)
+    # the gray channel spans 20..80: an intensity is 20 + 60 * its normalised value (before: the
+    # range 20..255 of the whole array, alpha included, so c_in_image was 20 + 235 c_in ~ 205)
+    assert result.c_in_image == pytest.approx(20 + 60 * result.c_in, rel=1e-12)
+    assert result.c_out_image == pytest.approx(20 + 60 * result.c_out, rel=1e-12)
+    assert 70 < result.c_in_image <= 80 and 20 <= result.c_out_image < 30
+
+
+def test_save_result_takes_a_channel_first_image_as_segment_does(tmp_path):
+    rgb = np.dstack([IMAGE, IMAGE[::-1], 1 - IMAGE])
+    result = ac.segment(np.moveaxis(rgb, -1, 0))
+    first = io.save_result(result, np.moveaxis(rgb, -1, 0), tmp_path / "first")
+    last = io.save_result(result, rgb, tmp_path / "last")
+    assert [p.read_bytes() for p in first[:2]] == [p.read_bytes() for p in last[:2]]

@@ -465,3 +465,14 @@ def test_ctrl_c_during_a_compiled_kernel_ends_the_run_within_a_second(small, tmp
     assert process.returncode in (-signal.SIGINT, 130)
     assert answered < 1.0
     assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["segment", "view"])
+def test_help_says_what_the_default_start_is(command, capsys):
+    import activecontour as ac
+
+    status, out, _ = run(capsys, command, "--help")
+    assert status == 0
+    text = " ".join(out.split())
+    assert "centred circle" not in text and "default_init" in text and "two-means" in text
+    assert "centred circle" not in ac.segment.__doc__ and "default_init" in ac.segment.__doc__

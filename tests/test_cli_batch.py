@@ -35,12 +35,6 @@ def folder(tmp_path):
     return path, truths
 
 
-def contour_metadata(path):
-    meta = io.read_metadata(path)
-    meta.pop("wall_time_s")  # the only entry that may differ from run to run
-    return meta
-
-
 @pytest.mark.parametrize("backend", ["polygon", "levelset"])
 def test_jobs_2_writes_the_same_files_as_jobs_1(folder, tmp_path, capsys, backend):
     path, truths = folder
@@ -58,16 +52,10 @@ def test_jobs_2_writes_the_same_files_as_jobs_1(folder, tmp_path, capsys, backen
     assert names == sorted(os.listdir(outputs[2]))
     assert names == sorted(f"disk{k}_{kind}" for k in range(4)
                            for kind in ("mask.png", "overlay.png", "contours.json", "contours.npz"))
+    for name in names:  # the same bytes, contour files included (no timing, no timestamps)
+        assert (outputs[1] / name).read_bytes() == (outputs[2] / name).read_bytes(), name
     for stem, truth in truths.items():
-        one, two = outputs[1] / stem, outputs[2] / stem
-        for suffix in ("_mask.png", "_overlay.png"):
-            assert Path(f"{one}{suffix}").read_bytes() == Path(f"{two}{suffix}").read_bytes()
-        for suffix in ("_contours.json", "_contours.npz"):
-            first, second = io.read_contours(f"{one}{suffix}"), io.read_contours(f"{two}{suffix}")
-            assert len(first) == len(second)
-            assert all(np.array_equal(a, b) for a, b in zip(first, second, strict=True))
-            assert contour_metadata(f"{one}{suffix}") == contour_metadata(f"{two}{suffix}")
-        assert synthetic.dice(io.read_mask(f"{one}_mask.png"), truth) > 0.95
+        assert synthetic.dice(io.read_mask(outputs[1] / f"{stem}_mask.png"), truth) > 0.95
 
 
 def test_a_glob_is_expanded_sorted_and_a_second_run_skips_the_outputs(folder, capsys):

@@ -262,3 +262,82 @@ def test_a_large_overlay_is_shrunk_with_its_contours():
     assert rgb[150, 100, 0] == rgb[150, 100, 1] == 128  # the gray image, shrunk, unchanged
     full = render_overlay(image, [circle], color="red")
     assert full.shape == (600, 400, 3)
+
+
+@pytest.mark.parametrize("name, stem", [
+    ("x.png", "x"), ("my image.tif", "my image"), ("a.b.png", "a.b"),
+    ("..png", "__png"), ("...png", "___png"), (".hidden.png", "_hidden"), (".hidden", "_hidden"),
+    ("a/../../x.png", "x"), ("../..", "__"), ("", "image"), ("new\nline.png", "new_line"),
+    ("\x1b[31mred.png", "_[31mred"), ("back\\slash.png", "slash"),
+])
+def test_output_stem_stays_in_the_folder_whatever_the_name(tmp_path, name, stem):
+    path = io.output_stem(tmp_path / "out", name)
+    assert path == tmp_path / "out" / stem
+    for output in io.output_paths(path, io.CONTOUR_FORMATS):
+        assert output.parent == tmp_path / "out" and not output.name.startswith(".")
+        assert os.path.realpath(output).startswith(os.path.realpath(tmp_path / "out") + os.sep)
+
+
+def test_sweep_removes_only_orphaned_temporaries(tmp_path):
+    import subprocess
+    import sys
+
+    from activecontour import atomic
+
+    io.save_result(ac.segment(np.pad(np.ones((8, 8)), 8)), np.pad(np.ones((8, 8)), 8), tmp_path / "a")
+    assert not list(tmp_path.glob(".*"))  # a finished write leaves no temporary
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    orphan = tmp_path / f".a_mask.png.{dead}-{atomic._host()}.x1y2z3w4.part"
+    mine = tmp_path / f".a_mask.png.{os.getpid()}-{atomic._host()}.x1y2z3w4.part"
+    elsewhere = tmp_path / f".a_mask.png.{dead}-00000000.x1y2z3w4.part"  # another machine's
+    old = tmp_path / f".a_mask.png.{dead}-00000000.q1y2z3w4.part"
+    for path in (orphan, mine, elsewhere, old):
+        path.write_bytes(b"half")
+    os.utime(old, (0, 0))  # 1970: older than STALE_AFTER_S
+    assert sorted(io.sweep_temporaries(tmp_path)) == sorted([orphan, old])
+    assert mine.exists() and elsewhere.exists()
+
+
+def test_display_uses_the_image_s_own_range():
+    from activecontour.image_files import display_rgb
+
+    image = np.where(np.add.outer(np.arange(32), np.arange(32)) > 31, 200, 20).astype(np.uint16)
+    shown = display_rgb(image)
+    assert shown.shape == (32, 32, 3) and shown.dtype == np.uint8
+    # 20 -> black, 200 -> white (by the dtype's range both would be 0: 200 / 65535 * 255 < 1)
+    np.testing.assert_array_equal(shown[:, :, 0], np.where(image == 200, 255, 0))
+    # a few hot pixels do not darken the image (the percentiles 0.01, 99.99 of the values)
+    hot = np.random.default_rng(1).integers(0, 60000, (512, 512)).astype(np.uint16) // 1000
+    hot[0, :2] = 65535
+    assert display_rgb(hot).max() == 255 and np.median(display_rgb(hot)) > 100
+
+
+def test_auto_line_width_follows_the_saved_size():
+    from activecontour.image_files import line_width
+
+    assert [line_width((m, m)) for m in (256, 1024, 2048, 4096)] == [1, 1, 2, 4]
+    image = np.full((2048, 1024), 0.5)
+    circle = ac.circle((1023.5, 511.5), 400.0)
+    thick = render_overlay(image, [circle], color="red")
+    thin = render_overlay(image, [circle], color="red", thickness=1)
+    red = lambda rgb: int(((rgb[:, :, 0] > 200) & (rgb[:, :, 1] < 100)).sum())  # noqa: E731
+    assert red(thick) > 1.6 * red(thin)  # a 2 px line where the saved image is 2048 px high
+    shrunk = render_overlay(image, [circle], color="red", max_side=512)
+    assert line_width(shrunk.shape) == 1  # the width follows the size written, not the input's
+
+
+@pytest.mark.parametrize("name", ["coffee", "retina"])
+def test_auto_colour_stands_out_from_a_red_image(name, tmp_path):
+    import skimage.data
+
+    from activecontour.image_files import COLORS, contrasting_color, display_rgb
+
+    image = getattr(skimage.data, name)()
+    shown = display_rgb(image)
+    chosen = contrasting_color(shown)
+    assert chosen != COLORS["red"]
+    sample = shown.reshape(-1, 3)[::5].astype(float)
+    distance = lambda color: np.percentile(np.linalg.norm(sample - color, axis=1), 5)  # noqa: E731
+    assert distance(chosen) > 1.5 * distance(COLORS["red"])
+    assert contrasting_color(display_rgb(np.full((8, 8), 0.3))) == COLORS["red"]  # gray: red

@@ -48,3 +48,21 @@ def test_readme_batch_examples_run(restore_environ):
     assert sorted(namespace["masks"]) == [0, 1, 2, 3]
     for index, mask in namespace["masks"].items():
         assert synthetic.dice(mask, namespace["scenes"][index][1]) >= 0.98
+
+
+def test_readme_summary_line_is_what_the_first_command_prints(tmp_path, monkeypatch, capsys):
+    import shutil
+
+    from app import cli
+
+    text = README.read_text()
+    (command,) = re.findall(r"&& (activecontour segment \S+ -o \S+)\n", text)
+    (line,) = [ln for ln in re.findall(r"```text\n(.*?)```", text, flags=re.S)[1].splitlines() if ln]
+    (tmp_path / "sample_images").mkdir()
+    shutil.copy(README.parent / "sample_images" / "disk_noisy.png", tmp_path / "sample_images")
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(command.split()[1:]) == 0
+    printed = capsys.readouterr().out.strip()
+    timing = r"time=\d+\.\d\ds"
+    assert re.sub(timing, "time=", printed) == re.sub(timing, "time=", line), (
+        f"README's summary line should read:\n{printed}")

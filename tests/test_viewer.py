@@ -19,6 +19,7 @@ from matplotlib.backend_bases import CloseEvent, KeyEvent, MouseEvent, ResizeEve
 import activecontour as ac  # noqa: E402
 from activecontour import synthetic  # noqa: E402
 from activecontour.curve import length, signed_area  # noqa: E402
+from activecontour.image_files import display_rgb  # noqa: E402
 from activecontour.io import read_contours, read_mask, write_mask  # noqa: E402
 from activecontour.raster import mask_to_curves  # noqa: E402
 from app import viewer as viewer_module  # noqa: E402
@@ -165,7 +166,9 @@ def test_drag_circle_run_matches_library_and_truth(disk_image, make_viewer):
     key(viewer, " ")
     result = viewer.result
     assert result is not None and result.success
-    expected = ac.segment(image, viewer.init_curves)  # the viewer starts at the library's defaults
+    # the viewer starts at the library's defaults; a drawn curve restricts the run to its
+    # neighbourhood (roi="init": drawing around one object gives that object)
+    expected = ac.segment(image, viewer.init_curves, roi="init", mu=viewer.parameters()["mu"])
     assert result.n_iter == expected.n_iter
     assert_same_contours(viewer.contours, expected.contours)
     np.testing.assert_array_equal(result.mask, expected.mask)
@@ -447,7 +450,7 @@ def test_backend_radio_selects_the_backend(disk_image, make_viewer):
     assert viewer.parameters()["backend"] == "levelset"
     key(viewer, " ")
     try:
-        from activecontour.levelset import DEFAULT_OPTIONS
+        from activecontour.backends.levelset import DEFAULT_OPTIONS
     except ImportError:
         assert viewer.result is None and "run failed" in viewer.message
         return
@@ -642,7 +645,7 @@ def test_open_another_image_resets_and_runs_on_it(disk_image, star_image, make_v
     assert viewer.init is None  # the drawn circle belonged to the old image
     assert len(viewer.energy_history) == 0 and np.size(viewer.energy_line.get_xdata()) == 0
     assert viewer.ax_image.get_xlim() == (-0.5, wide.shape[1] - 0.5)
-    np.testing.assert_array_equal(viewer.ax_image.images[0].get_array(), second / 255.0)
+    np.testing.assert_array_equal(viewer.ax_image.images[0].get_array(), display_rgb(second))
     assert "star_mask.png" in viewer.message
     key(viewer, " ")
     assert_same_contours(viewer.contours, ac.segment(second, None, max_num_iter=30).contours)
@@ -885,3 +888,15 @@ def test_the_shown_start_follows_mu_as_the_librarys_does(coins_image, make_viewe
     after = ac.segment(image, max_num_iter=0, mu=viewer.parameters()["mu"]).contours
     assert len(after) != len(before)  # on this image the start depends on mu
     assert_same_contours(viewer.init_curves, after)
+
+
+def test_the_mu_slider_is_logarithmic_and_the_default_sits_inside_it(disk_image, make_viewer):
+    viewer = make_viewer(disk_image[0])
+    mu = viewer.sliders["mu"]
+    assert mu.ax.get_xscale() == "log"
+    # the automatic mu (~0.01-0.5) sits well inside, not at the far left of a linear 0..5 scale
+    position = (np.log(mu.val) - np.log(mu.valmin)) / (np.log(mu.valmax) - np.log(mu.valmin))
+    assert 0.2 < position < 0.9
+    for value in (0.003, 0.05, 2.0):  # a click anywhere gives the value under the pointer
+        set_slider(viewer, mu, value)
+        assert viewer.parameters()["mu"] == pytest.approx(value, rel=1e-6)

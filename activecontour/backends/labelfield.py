@@ -1,0 +1,257 @@
+"""N regions on the pixel grid: a label field, started from the global K-means and descended exactly.
+
+The functional is the N-region form of (6.38) (:meth:`ChanVeseParameters.class_forms`,
+:func:`activecontour.energy.evaluate_partition`):
+
+    J = mu L + sum_k int_{Omega_k} g_k,   g_k = lambda_k mean_ch (I - c_k)^2 (+ omega, k >= 1),
+
+with L the length of the interfaces, each counted once, and of the image border where a region
+other than the background lies on it.
+
+Why a label field
+-----------------
+A label per pixel partitions the image by construction: no vacuum, no overlap, junctions wherever
+three regions meet, topology free, and the cost of a sweep grows with K, not with the pairs of
+regions (Vese-Chan's log2 K level sets couple every region through products of Heavisides; K level
+sets need a projection back onto the partition after every step).  The label image stands for a
+sub-pixel partition (:mod:`activecontour.partition`: boundaries through the midpoints between
+pixels of different regions, junctions at cell centres) whose length is a sum over grid cells, so
+the exact change of L when one pixel changes region is local: the four cells around it.
+
+The scheme
+----------
+1. Start: the global K-means of the intensities of the image smoothed by a Gaussian of 1 px
+   (:func:`initial_classes`, exact by dynamic programming on the histogram): a partition that
+   finds every class anywhere in the image, whatever its size.
+2. Alternate, until no pixel changes (or they move less than ``tol`` px per sweep):
+   the constants c_k (6.42), the region means; then one sweep of iterated conditional modes
+   (Besag 1986): every pixel takes the region of least ``g_k(pixel) + mu (length in the four
+   cells around it)`` (+ mu per image side for a border pixel outside the background), four
+   interleaved phases of pixels that share no cell, so each phase is exact coordinate descent
+   on J with the fit term as a pixel sum.  Both half-steps lower that J.
+
+Threshold dynamics (Esedoglu and Otto 2015), the obvious faster-moving alternative, was measured
+and dropped: its heat-content length is exact for straight interfaces but charges a one-pixel
+speck sqrt(2 pi)/sigma (1 - 1/(2 pi sigma^2)) ~ 1.6 px of length at sigma = 1.5 px instead of its
+2.8, so on noisy images it keeps specks that (6.38) removes (three nested classes at SNR 3: J 419.5
+against 413.8 for this scheme, the ground truth's 413.9).
+
+The energy of every iterate, the result's ``energy`` and ``energies`` are the common evaluator's
+(exact bilinear integrals over the partition), which is also what
+``chan_vese_energy(image, classes=result.classes)`` returns.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from activecontour.energy import evaluate_partition
+from activecontour.models.kmeans import histogram_kmeans
+from activecontour.partition import chain, class_boundary
+from activecontour.result import FlowState, SegmentationResult
+
+__all__ = ["initial_classes", "segment_labels"]
+
+_INIT_SMOOTHING = 1.0  # Gaussian sigma (px) of the image the K-means start classifies
+_BINS = 256
+
+
+def initial_classes(values, n_classes):
+    """The global K-means of the lightly smoothed intensities (:func:`histogram_kmeans`), as labels.
+
+    Colour images are classified by their mean channel.  Labels are in increasing intensity.
+    """
+    import cv2
+
+    gray = values.mean(axis=2).astype(np.float32)
+    smooth = cv2.GaussianBlur(gray, (0, 0), _INIT_SMOOTHING, borderType=cv2.BORDER_REPLICATE)
+    thresholds, _ = histogram_kmeans(smooth, n_classes, bins=_BINS)
+    return np.digitize(smooth, thresholds, right=True).astype(np.int32)
+
+
+def order_classes(classes, values, n_classes):
+    """Relabel: 0 = the region covering most of the image border (the background), the others by
+    increasing mean intensity (of the mean channel).  Returns the new labels."""
+    border = np.concatenate([classes[0], classes[-1], classes[1:-1, 0], classes[1:-1, -1]])
+    background = int(np.argmax(np.bincount(border, minlength=n_classes)))
+    gray = values.mean(axis=2)
+    count = np.bincount(classes.ravel(), minlength=n_classes)
+    mean = np.bincount(classes.ravel(), weights=gray.ravel(), minlength=n_classes) / np.maximum(count, 1)
+    others = [k for k in np.argsort(mean, kind="stable") if k != background]
+    mapping = np.empty(n_classes, dtype=np.int32)
+    mapping[[background] + others] = np.arange(n_classes)
+    return mapping[classes]
+
+
+def _pixel_constants(classes, values, n_classes):
+    count = np.bincount(classes.ravel(), minlength=n_classes).astype(np.float64)
+    flat = values.reshape(-1, values.shape[2])
+    mean = flat.mean(axis=0)
+    out = np.empty((n_classes, values.shape[2]))
+    for ch in range(values.shape[2]):
+        sums = np.bincount(classes.ravel(), weights=flat[:, ch], minlength=n_classes)
+        out[:, ch] = np.where(count > 0, sums / np.maximum(count, 1), mean[ch])
+    return out
+
+
+def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callback):
+    """Minimise the N-region functional on a label field (module docstring).
+
+    Parameters
+    ----------
+    model : ImageModel
+    init : None, int ndarray (M, N), or SegmentationResult
+        None: the global K-means of the lightly smoothed image (:func:`initial_classes`).  A label
+        image with values in 0..n_regions-1, or a result with ``classes``.
+    params : ChanVeseParameters
+    n_regions : int
+    max_num_iter : int
+        Sweeps over the image.
+    tol : float
+        Pixels: the run has converged when the regions move less than this per sweep (changed
+        pixels over the interface length); a discrete field reaches that when no pixel changes.
+    callback : callable or None
+        Called with a :class:`~activecontour.result.FlowState` after every sweep (its ``mask``
+        is the inside, every region but the background); return True to stop.
+
+    Returns
+    -------
+    SegmentationResult
+        With ``classes`` (0 = background, the others by mean intensity) and ``constants``.
+    """
+    values = model.values
+    shape = tuple(model.shape)
+    classes = order_classes(_initial(init, values, n_regions, shape), values, n_regions)
+    wall = np.zeros(shape, dtype=np.float32)
+    if params.mu > 0:  # a region other than the background pays for the image border it covers
+        for edge in (wall[0], wall[-1], wall[:, 0], wall[:, -1]):
+            edge += np.float32(params.mu)
+    current = evaluate_partition(model, class_boundary(classes), params, n_regions)
+    energies, status = [current.energy], 1
+    for n_iter in range(1, max_num_iter + 1):
+        cost = np.empty((n_regions,) + shape, dtype=np.float32)
+        for k, form in enumerate(params.class_forms(_pixel_constants(classes, values, n_regions))):
+            cost[k] = form.density(values)
+            if k > 0:
+                cost[k] += wall
+        new, changed = _sweep(classes, cost, params.mu)
+        if changed == 0:
+            n_iter -= 1
+            status = 0
+            break
+        classes = new
+        current = evaluate_partition(model, class_boundary(classes), params, n_regions)
+        energies.append(current.energy)
+        if callback is not None and callback(FlowState(n_iter, [], current.energy, None, None, shape,
+                                                       max_num_iter, phi=np.where(classes > 0, 1.0, -1.0))):
+            status = 2
+            break
+        if changed <= tol * max(current.length, 1.0):
+            status = 0
+            break
+    else:
+        n_iter = max_num_iter
+    return _result(model, params, classes, n_regions, energies, n_iter, status)
+
+
+def _initial(init, values, n_regions, shape):
+    if init is None:
+        return initial_classes(values, n_regions)
+    classes = getattr(init, "classes", init)
+    classes = np.asarray(classes)
+    if classes.shape != shape or not np.issubdtype(classes.dtype, np.integer):
+        raise ValueError(f"init for n_regions={n_regions} must be None, a label image of shape {shape} "
+                         f"or a result with classes, got {type(init).__name__}")
+    if classes.min() < 0 or classes.max() >= n_regions:
+        raise ValueError(f"init labels must lie in 0..{n_regions - 1}")
+    return classes.astype(np.int32)
+
+
+def _result(model, params, classes, n_regions, energies, n_iter, status):
+    classes = order_classes(classes, model.values, n_regions)
+    boundary = class_boundary(classes)
+    final = evaluate_partition(model, boundary, params, n_regions)
+    energies = list(energies)
+    if not np.isclose(energies[-1], final.energy, rtol=1e-9, atol=0.0):
+        energies.append(final.energy)
+    energies[-1] = final.energy
+    # the inside: every region but the background; its boundary, positively oriented
+    foreground = (boundary.inner > 0) & (boundary.outer <= 0)
+    background = (boundary.inner == 0) & (boundary.outer > 0)
+    contours = chain(np.vstack([boundary.start[foreground], boundary.end[background]]),
+                     np.vstack([boundary.end[foreground], boundary.start[background]]))
+    mask = classes > 0
+    areas = final.areas
+    inside = areas[1:].sum()
+    c_in = (areas[1:, None] * final.constants[1:]).sum(axis=0) / inside if inside > 0 else final.constants[0]
+    return SegmentationResult(mask=mask, contours=contours, c_in=c_in, c_out=final.constants[0],
+                              energy=final.energy, energies=energies, n_iter=n_iter,
+                              status=3 if not mask.any() else status, backend="levelset",
+                              classes=classes, constants=final.constants)
+
+
+_HALF = np.sqrt(0.5)
+
+
+def _cell_length(tl, tr, br, bl):
+    """Boundary length inside grid cells with these corner classes, by the rule of
+    :mod:`activecontour.partition`: a straight cut 1, a corner cut sqrt(1/2), a saddle two corner
+    cuts, a junction 1/2 per cell edge whose ends differ."""
+    top, right, bottom, left = tl != tr, tr != br, bl != br, tl != bl
+    count = top.astype(np.int8) + right + bottom + left
+    straight = (top & bottom) | (left & right)
+    length = np.where(count == 2, np.where(straight, 1.0, _HALF), 0.5 * count)
+    saddle = (count == 4) & (tl == br) & (tr == bl)
+    return np.where(saddle, 2.0 * _HALF, length)
+
+
+def _sweep(classes, cost, mu):
+    """One sweep of iterated conditional modes on the exact boundary length of the partition.
+
+    Pixels two apart in both directions share no cell, so each of the four phases moves all its
+    pixels at once, each to the region of least ``cost_k + mu * (length in the four cells around
+    it)``: with the fit term as a pixel sum this is exact coordinate descent on J.  Only pixels
+    that can change are visited: those on a boundary and those whose data prefer another region
+    (an interior pixel of its data's region would only add length).  Returns the new labels and
+    the number of pixels that changed.
+    """
+    m, n = classes.shape
+    classes = classes.copy()
+    prefers_other = np.argmin(cost, axis=0) != classes
+    changed = 0
+    for pi in range(2):
+        for pj in range(2):
+            padded = np.pad(classes, 1, mode="edge")
+            centre = padded[1:-1, 1:-1]
+            boundary = np.zeros((m, n), dtype=bool)
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    if di or dj:
+                        boundary |= padded[1 + di: 1 + di + m, 1 + dj: 1 + dj + n] != centre
+            active = boundary | prefers_other
+            mask = np.zeros((m, n), dtype=bool)
+            mask[pi::2, pj::2] = True
+            rows, cols = np.nonzero(active & mask)
+            if rows.size == 0:
+                continue
+            nb = {(di, dj): padded[rows + 1 + di, cols + 1 + dj] for di in (-1, 0, 1) for dj in (-1, 0, 1)}
+            margin = [((rows == 0) | (cols == 0)), ((rows == 0) | (cols == n - 1)),
+                      ((rows == m - 1) | (cols == 0)), ((rows == m - 1) | (cols == n - 1))]
+            factor = [np.where(edge, 0.5, 1.0) for edge in margin]
+            best = choice = None
+            for k in range(cost.shape[0]):
+                length = (factor[0] * _cell_length(nb[-1, -1], nb[-1, 0], k, nb[0, -1])
+                          + factor[1] * _cell_length(nb[-1, 0], nb[-1, 1], nb[0, 1], k)
+                          + factor[2] * _cell_length(nb[0, -1], k, nb[1, 0], nb[1, -1])
+                          + factor[3] * _cell_length(k, nb[0, 1], nb[1, 1], nb[1, 0]))
+                total = cost[k, rows, cols] + mu * length
+                if best is None:
+                    best, choice = total, np.zeros(rows.size, dtype=classes.dtype)
+                else:
+                    better = total < best
+                    best = np.where(better, total, best)
+                    choice[better] = k
+            moved = choice != classes[rows, cols]
+            changed += int(np.count_nonzero(moved))
+            classes[rows, cols] = choice
+    return classes, changed

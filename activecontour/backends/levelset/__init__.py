@@ -1,0 +1,125 @@
+"""The level-set backend: the Chan-Vese functional (6.38) on a function phi over the pixel grid.
+
+The inside region is ``Omega_i = {phi > 0}`` and Gamma is the zero level set of phi.  The backend
+minimises the same functional as the polygon backend, with the same parameters and units,
+
+    J = mu |Gamma| + omega |Omega_i| + lambda_in  int_{Omega_i} mean_ch (I - c_in)^2
+                                     + lambda_out int_{Omega_o} mean_ch (I - c_out)^2         (6.38)
+
+but Gamma may split, merge, open holes and grow new components.  The zero level set is returned
+as sub-pixel contours (marching squares) in the polygon backend's convention, so either backend
+can start from the other's result (level set for the topology, polygon for a sub-pixel finish).
+
+One iteration
+-------------
+1. ``c_in, c_out`` by (6.42) for the current zero set, from the common evaluator (below), unless
+   they are fixed.
+2. A semi-implicit step of the level-set form of the gradient flow of (6.38).  Every level line
+   moves with the normal velocity ``-(mu kappa + f)``, where ``f = omega + lambda_in mean (I -
+   c_in)^2 - lambda_out mean (I - c_out)^2`` is the integrand of (6.41); in level-set form
+   ``phi_t = |grad phi| (mu div(grad phi / |grad phi|) - f)``, and as phi is kept a signed
+   distance (``|grad phi| = 1``) this is ``phi_t = mu Laplace(phi) - f``.  (With delta(phi) in place
+   of |grad phi| it would be the equation of Chan & Vese 2001; |grad phi| makes it the level-set
+   motion of Osher & Sethian 1988, which moves every level line, not only those near Gamma.)  The
+   pixels on the image border carry ``mu`` more per border side in f: a region that covers them
+   closes along the domain edge, and (6.38) of the returned contours counts that length, as the
+   polygon backend does.  Two forms of the step, with ``S = (1 - tau mu Laplace)^{-1}``:
+
+   (a) smoothed force: ``phi^{k+1} = S (phi^k - tau f)``, i.e. the velocity
+       ``S (mu Laplace(phi) - f)``: a Sobolev (H^1-type) gradient with smoothing length
+       ``l = sqrt(tau mu)``, the level-set counterpart of the polygon's H^1 velocity (6.39).
+       It moves whole regions at once and, with large tau, flips regions far from Gamma (see
+       below); but its fixed point is biased by the smoothing, so it is only the first stage;
+   (b) unsmoothed force: ``phi^{k+1} = S phi^k - tau f``: implicit curvature, explicit force, the
+       L^2 flow (6.25) whose fixed point is ``mu kappa + f = 0`` on Gamma, i.e. (6.41) = 0.
+
+   ``S`` has constant coefficients: one pair of discrete cosine transforms applies it exactly
+   (Neumann boundary), unconditionally stable.
+3. Reinitialisation: phi is replaced by the signed distance to its zero level set, computed in a
+   narrow band ``|phi| < band`` only and clipped to ``+-band`` beyond (:func:`signed_distance`).
+4. The step is accepted if (6.38) of the new zero set, by the common evaluator, is not larger;
+   otherwise tau is halved and the step retried (backtracking).
+
+Steps in pixels
+---------------
+A step is given as ``step`` pixels of travel: ``tau = step / |f|_typ`` with ``|f|_typ`` the mean
+``|f|`` over the pixels (about ``(c_in - c_out)^2`` once the regions have formed), so that a front
+at a pixel of typical force moves ``step`` pixels whatever the image's contrast or the parameters'
+scale; the smoothing length ``sqrt(tau mu)`` is kept below ``step`` (that binds only where the
+force is weak against the length term, as on a checkerboard start).  The first step is ``dt``,
+but at most half the width (area over length) of the start's regions; it doubles after every
+accepted step until the first rejection, then grows by 1.25 after two first-try acceptances in a
+row.  Coarse to fine, like the polygon's smoothing length: a smoothed-force stage runs with steps
+up to a ceiling (first ``dt_max``) and has settled when Gamma moves less than 2 % of the step (or
+10 tol) per iteration, averaged over 3 iterations, or when two halvings of its step find no
+descent; the ceiling is then divided by 4, and below ``dt_min`` stage (b) follows, with steps
+``<= dt_min`` and the force applied within the band only, so that no pixel far from Gamma (at
+``+-band``) flips on its own.
+Stage (b) converges (status 0) when Gamma moves less than ``tol`` pixels per iteration on average
+over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find no descent.  Its
+steps are explicit on the band when ``tau mu <= 1/4`` (stable, no DCT).  The unsmoothed flow can
+stop in a pixel-scale local minimum that a smoothed step leaves (a continued run would then move
+on), so when it ends a smoothed stage of the first step size is tried, up to twice: if its first
+step finds no descent the end stands, otherwise the stages run on from there.
+
+How far Gamma moved is measured geometrically, in pixels: the area between the old and the new
+zero set, ``sum_px |H_eps(d_new) - H_eps(d_old)|`` over the band, divided by the length of Gamma,
+i.e. the mean normal displacement.  ``H_eps`` is the cosine-regularised Heaviside of Zhao, Chan,
+Merriman & Osher (1996),
+
+    H_eps(s) = (1 + s/eps + sin(pi s/eps)/pi) / 2  for |s| < eps (0 and 1 beyond),  eps = 1,
+
+whose integer translates sum to the exact length of a half-line at any sub-pixel offset (its
+derivative's Fourier transform vanishes at every non-zero multiple of 2 pi): the swept area is exact
+for straight fronts and second-order accurate for curved ones.  Unlike a relative energy decrease
+(the energy holds the noise energy sigma^2 |D|, which grows with the pixel count) this means the
+same on every image size.
+
+Why large steps are safe and useful: ``S`` is stable for every tau, and the backtracking keeps every
+accepted step a descent step.  Far from Gamma phi sits at ``+-band``, and a step (a) moves it by
+about ``-tau f`` smoothed over ``l``: where a whole region inside Gamma looks like the outside (the
+hole of an annulus) phi crosses zero and a hole opens without a seed, while single noisy pixels
+are held by the smoothing; the energy test accepts such a change only when it pays, length
+included.
+
+Cost: an iteration is one DCT pair over the image (O(MN log MN), float32), a few vectorised passes
+over the image, and the reinitialisation on the pixels of the narrow band only.
+
+The energy
+----------
+The energy of every iterate, the acceptance test and ``res.energy`` are one number: (6.38) of the
+zero set by the common evaluator :func:`activecontour.energy.evaluate`, exact for the bilinear
+image.  The zero set is taken as the marching-squares segments of phi padded by ``-|phi|``
+(:func:`zero_set_edges`, the segments of :func:`level_set_contours`, closed along the domain edge
+where a region touches it), scored as an unchained soup of oriented edges: Green's theorem makes
+region and length integrals sums over edges, so this costs O(|Gamma|) after the O(MN) sign test.
+A reinitialisation changes the energy only through the O(h^2 kappa) chord error of re-deriving
+Gamma from a distance function, and every acceptance test compares energies after it: the history
+is non-increasing at every iteration, reinitialisations included.
+
+Modules
+-------
+redistancing  the signed distance to the zero set (or to curves) in a narrow band
+zeroset       the zero set as marching-squares contours and as an oriented edge soup
+initial       the level set of a start (curves, masks, results, a checkerboard)
+scheme        the energy of an iterate, the force f of (6.41), the steps (a), (b), the swept area
+driver        :func:`segment_levelset`: options, the step schedule, stages and the result
+"""
+
+from activecontour.backends.levelset.driver import DEFAULT_OPTIONS, segment_levelset
+from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
+from activecontour.backends.levelset.redistancing import curves_level_set, signed_distance
+from activecontour.backends.levelset.scheme import heaviside
+from activecontour.backends.levelset.zeroset import level_set_contours, zero_set_edges
+
+__all__ = [
+    "DEFAULT_OPTIONS",
+    "checkerboard_level_set",
+    "curves_level_set",
+    "heaviside",
+    "initial_level_set",
+    "level_set_contours",
+    "segment_levelset",
+    "signed_distance",
+    "zero_set_edges",
+]

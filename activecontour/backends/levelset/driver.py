@@ -1,0 +1,256 @@
+"""The driver: :func:`segment_levelset`, its options, the step schedule, the stages and the result."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
+from activecontour.backends.levelset.scheme import _Problem, _swept_area
+from activecontour.backends.levelset.zeroset import level_set_contours
+from activecontour.result import FlowState, build_result
+
+#: The backend-specific keywords of :func:`segment_levelset` and their defaults.
+DEFAULT_OPTIONS = {
+    "dt": 16.0,
+    "dt_min": 1.0,
+    "dt_max": 64.0,
+    "band": 4.0,
+    "checkerboard_period": 16.0,
+    "max_backtracks": 3,
+}
+
+_STAGE_TOL = 10.0  # a smoothed-force stage ends at 10 tol: the next, finer one moves faster
+_WINDOW = 3  # stages end when Gamma's mean displacement over this many iterations is small
+_SETTLED = 0.02  # a smoothed-force stage has settled when Gamma moves < 2% of the step per iteration
+_RECHECKS = 2  # smoothed steps tried after the unsmoothed stage ends (see segment_levelset)
+
+
+def _parse_options(options):
+    unknown = sorted(set(options) - set(DEFAULT_OPTIONS))
+    if unknown:
+        raise TypeError(
+            f"unknown option(s) {', '.join(map(repr, unknown))} for backend 'levelset'; "
+            f"the valid options are {', '.join(sorted(DEFAULT_OPTIONS))}"
+        )
+    settings = {**DEFAULT_OPTIONS, **options}
+    for name in ("dt", "dt_min", "dt_max", "band", "checkerboard_period"):
+        value = settings[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f"option {name!r} must be a number, got {type(value).__name__}")
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"option {name!r} must be a positive finite number, got {value!r}")
+        settings[name] = float(value)
+    value = settings["max_backtracks"]
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"option 'max_backtracks' must be an integer >= 0, got {value!r}")
+    settings["max_backtracks"] = int(value)
+    # a first step outside the default range widens it (a viewer's step slider, say); only
+    # bounds given explicitly must hold
+    if "dt_min" not in options:
+        settings["dt_min"] = min(settings["dt_min"], settings["dt"])
+    if "dt_max" not in options:
+        settings["dt_max"] = max(settings["dt_max"], settings["dt"])
+    if not settings["dt_min"] <= settings["dt"] <= settings["dt_max"]:
+        raise ValueError(
+            f"options must satisfy dt_min <= dt <= dt_max, got dt_min={settings['dt_min']}, "
+            f"dt={settings['dt']}, dt_max={settings['dt_max']}"
+        )
+    if settings["band"] < 2.0:
+        raise ValueError(f"option 'band' must be at least 2 (pixels), got {settings['band']}")
+    return settings
+
+
+# --------------------------------------------------------------------------------------------
+# The backend
+
+
+def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **options):
+    """Minimise the Chan-Vese functional (6.38) with a level set over the pixel grid.
+
+    Called by :func:`activecontour.segment` with ``backend="levelset"``; the keywords under
+    Other Parameters are passed there as ``options={...}``.  The scheme, the step schedule and the
+    energy are described in :mod:`activecontour.backends.levelset`.
+
+    Parameters
+    ----------
+    model : activecontour.image.ImageModel
+    init : None, ndarray (K, 2), list of them, bool ndarray (M, N), SegmentationResult, or str
+        None: the default start (:func:`activecontour.initial.initial_curves`).  Curves, masks
+        and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are
+        inside).  A result of either backend: its ``phi`` when it has one, else its contours.
+        ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels,
+        at most a quarter of the image's smaller side (:func:`checkerboard_level_set`); it has no
+        preferred phase, so when the functional is symmetric (omega = 0, lambda_in = lambda_out,
+        c free) the phase of lower energy is returned (phi or -phi: they differ by the length
+        along the image border, which the inside pays), i.e. the one whose inside touches the
+        border less.
+    params : activecontour.energy.ChanVeseParameters
+        mu, omega, lambda_in, lambda_out and optional fixed c_in, c_out of (6.38), as for the
+        polygon backend.
+    max_num_iter : int
+        Largest number of step attempts (accepted iterations, and stage changes without one).
+    tol : float
+        Pixels: the flow has converged (status 0) when the zero level set moves less than
+        ``tol`` pixels per iteration (swept area over length, the mean normal displacement),
+        averaged over the last three iterations of the final, unsmoothed stage.  The run also ends
+        when no step, down to the current one halved ``max_backtracks`` times, decreases the
+        energy (status 4: stationary to working precision).  Either way, continuing with a
+        smaller tol changes neither the energy nor the mask measurably.
+    callback : callable or None
+        Called with a :class:`~activecontour.result.FlowState` (contours and ``phi``) after every
+        accepted iteration; returning True stops the flow (status 2).
+
+    Other Parameters
+    ----------------
+    dt : float, default 16.0
+        First step, pixels of travel at the typical force (module docstring), at most half the
+        width of the start's regions (but not below ``dt_min``).
+    dt_min : float, default 1.0
+        Below this ceiling the smoothed-force stages end and the unsmoothed stage (b) runs, with
+        steps up to ``dt_min`` and the force within the band only (no single pixel far from
+        Gamma flips).
+    dt_max : float, default 64.0
+        Largest step (pixels), the ceiling of the first stage.  A ``dt`` outside
+        ``[dt_min, dt_max]`` widens the defaults; bounds given explicitly must satisfy
+        ``dt_min <= dt <= dt_max``.
+    band : float, default 4.0
+        Narrow band: phi is the signed distance up to ``band`` pixels from Gamma and is clipped to
+        ``+-band`` beyond.  At least 2.
+    checkerboard_period : float, default 16.0
+        Side (pixels) of the squares of the ``"checkerboard"`` start.
+    max_backtracks : int, default 3
+        Halvings of the step of the final stage before an iteration counts as stationary.
+
+    Returns
+    -------
+    SegmentationResult
+        Built by :func:`activecontour.result.build_result`: ``contours`` the zero level set
+        (marching squares, outer boundaries positive, holes negative), ``mask`` their inside,
+        ``energy`` (6.38) of the contours by the common evaluator, ``energies`` the same energy
+        before the first and after every iteration (not increasing), and ``phi`` the final
+        signed distance (clipped to the band; ``-band`` everywhere when the result is empty).
+
+    Raises
+    ------
+    TypeError
+        For an unknown option (the message lists the valid ones) or an option of the wrong type.
+    ValueError
+        For an unknown ``init`` string, a mask of the wrong shape, an init with nothing inside,
+        or an option out of range.  (An init that covers the whole image is a valid start.)
+    """
+    settings = _parse_options(options)
+    shape = tuple(model.shape)
+    problem = _Problem(model, params, settings)
+    if isinstance(init, str) and init == "checkerboard":
+        # squares of at most a quarter of the smaller side: a small image gets several of them
+        period = min(settings["checkerboard_period"], max(2.0, min(shape) / 4.0))
+        phi = checkerboard_level_set(shape, period)  # redistanced below
+    else:
+        phi = initial_level_set(init, shape, band=settings["band"], values=model.values,
+                                dtype=np.float32)
+    state = problem.redistance(phi)
+    current = problem.evaluate(state)
+    energies, moves = [current.energy], []
+    # step: pixels of travel at the typical force; ceiling: the largest step of this stage.  The
+    # first step is at most the width of the start's regions (the smaller area over the length):
+    # a larger one jumps past the start's own shapes into whatever basin it lands in.
+    width = min(current.area, model.totals[0] - current.area) / max(current.length, 1.0)
+    step = min(settings["dt"], max(0.5 * width, settings["dt_min"]))
+    first_step, ceiling, grow, smooth_force = step, settings["dt_max"], True, True
+    status, n_iter, stage_start, streak = 1, 0, 0, 0
+    # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):
+    # the unsmoothed flow stops at pixel-scale local minima that a smoothed step can leave.
+    rechecks, pending = 0, None  # pending: the end status while a recheck runs
+    for _ in range(max_num_iter):
+        if not state.positive.any():
+            status = 3
+            break
+        force, scale = problem.force(current.c_in, current.c_out)
+        tau = problem.time_step(step, scale)
+        # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
+        tries = 3 if smooth_force else settings["max_backtracks"] + 1
+        for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
+            trial = problem.redistance(problem.step(state, force, tau, smooth_force))
+            evaluation = problem.evaluate(trial)
+            # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
+            # does it has flattened phi rather than followed the force.
+            degenerate = smooth_force and (not trial.positive.any() or trial.positive.all())
+            if evaluation.energy <= current.energy and not degenerate:
+                break
+            step, tau, grow = 0.5 * step, 0.5 * tau, False
+        else:
+            if not smooth_force:
+                if rechecks < _RECHECKS:
+                    rechecks, pending, smooth_force = rechecks + 1, 4, True
+                    step = ceiling = first_step
+                    stage_start, streak = len(moves), 0
+                    continue
+                status = 4
+                break
+            if pending is not None and len(moves) == stage_start:
+                status = pending  # the recheck found no descent: the end stands
+                break
+            evaluation = None
+        if evaluation is not None:
+            n_iter += 1
+            # mean normal displacement of Gamma in this iteration, pixels: swept area over length
+            moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+            state, current = trial, evaluation
+            energies.append(current.energy)
+            streak = streak + 1 if attempt == 0 else 0
+            if callback is not None:
+                flow_state = FlowState(
+                    iteration=n_iter, contours=level_set_contours(state.phi), energy=current.energy,
+                    c_in=current.c_in, c_out=current.c_out, shape=shape, max_num_iter=max_num_iter,
+                    phi=state.phi,
+                )
+                if callback(flow_state):
+                    status = 2
+                    break
+        window = moves[stage_start:][-_WINDOW:]
+        if smooth_force:
+            # a smoothed-force stage has settled when Gamma moves by less than a small fraction
+            # of the step (or 10 tol) per iteration; its fixed point is biased by the smoothing
+            # of width sqrt(tau mu), so go on with a 4x smaller step, then unsmoothed
+            settled = evaluation is None or (
+                len(window) == _WINDOW and np.mean(window) < max(_STAGE_TOL * tol, _SETTLED * step))
+            if settled:
+                pending = None  # a recheck that moved on is a new descent, ended as usual
+                ceiling = 0.25 * min(ceiling, 2.0 * step)
+                if ceiling < settings["dt_min"]:
+                    smooth_force, step = False, settings["dt_min"]
+                else:
+                    step = min(step, ceiling)
+                stage_start, streak = len(moves), 0
+            elif grow or streak >= 2:
+                # accepted at once: speed up, doubling until the first rejection
+                step = min(step * (2.0 if grow else 1.25), ceiling)
+        elif len(window) == _WINDOW and np.mean(window) < tol:
+            if rechecks < _RECHECKS:
+                rechecks, pending, smooth_force = rechecks + 1, 0, True
+                step = ceiling = first_step
+                stage_start, streak = len(moves), 0
+                continue
+            status = 0
+            break
+        elif streak >= 2:
+            step = min(1.25 * step, settings["dt_min"])
+    phi = state.phi
+    if isinstance(init, str) and init == "checkerboard" and _symmetric(params):
+        # The checkerboard has no preferred phase and the symmetric functional prefers one only
+        # through the length along the image border, which the inside pays: take the phase of
+        # lower energy (-phi is stationary too, but for that border term).
+        flipped = problem.evaluate(problem.redistance(-phi))
+        if flipped.energy < current.energy:
+            phi = -phi
+            energies.append(flipped.energy)
+    result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
+                          status=status, backend="levelset", phi=phi)
+    if not result.mask.any():  # collapsed, or the empty set is lower: phi says the same
+        result.phi = np.full(shape, -settings["band"], dtype=np.float32)
+    return result
+
+
+def _symmetric(params):
+    return (params.omega == 0 and params.lambda_in == params.lambda_out
+            and params.c_in is None and params.c_out is None)

@@ -1,0 +1,186 @@
+"""The scheme: the energy of an iterate, the force f of (6.41), the steps (a) and (b), the swept area."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.fft
+
+from activecontour.backends.levelset.redistancing import _redistance, _Scratch
+from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
+from activecontour.energy import evaluate
+
+
+def heaviside(phi, epsilon=1.0):
+    """The cosine-regularised Heaviside ``H_eps``: 0 below -eps, 1 above eps, smooth between."""
+    s = np.asarray(phi, dtype=np.float64) / epsilon
+    ramp = 0.5 * (1.0 + s + np.sin(np.pi * np.clip(s, -1.0, 1.0)) / np.pi)
+    return np.where(s >= 1.0, 1.0, np.where(s <= -1.0, 0.0, ramp))
+
+
+def _force(values, c_in, c_out, params):
+    """The integrand f of the shape derivative (6.41) at pixels of the image: the Chan-Vese density.
+
+    ``f = omega + lambda_in mean_ch (I - c_in)^2 - lambda_out mean_ch (I - c_out)^2`` for
+    ``values (..., C)``; returns ``(...)`` float64.  The level set's only view of the energy's
+    density: the region terms of (6.38) are written here once.
+    """
+    lambda_in, lambda_out = params.weights(values.shape[-1])
+    return params.omega + ((values - c_in) ** 2) @ lambda_in - ((values - c_out) ** 2) @ lambda_out
+
+
+class _Problem:
+    """Image, parameters and the pieces of the energy, the force f and the operator S.
+
+    phi is float32 (a distance of a few pixels, rounded to ~2e-7 px: far below what the energy or
+    the flow resolve) and the image-wide work is done in blocks of rows, so that no float64 copy of
+    the image is made per step; the reinitialisation reuses its work arrays (:class:`_Scratch`).
+    """
+
+    _BLOCK_ROWS = 256  # rows per block of the image-wide passes (bounded temporaries)
+
+    def __init__(self, model, params, settings):
+        self.model = model
+        self.shape = tuple(model.shape)
+        self.values = model.values
+        self.params = params
+        self.band = settings["band"]
+        m, n = self.shape
+        stride = max(1, int(np.sqrt(m * n / 2.0**16)))
+        rows = np.arange(stride // 2, m, stride)
+        cols = np.arange(stride // 2, n, stride)
+        self.sample = (rows[:, None] * n + cols[None, :]).ravel()
+        # eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis, along each axis
+        self.wave_r = (4.0 * np.sin(np.pi * np.arange(m) / (2.0 * m)) ** 2).astype(np.float32)
+        self.wave_c = (4.0 * np.sin(np.pi * np.arange(n) / (2.0 * n)) ** 2).astype(np.float32)
+        self.scratch = _Scratch(self.shape)
+
+    def redistance(self, phi):
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch)
+
+    def evaluate(self, state):
+        """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
+
+        The zero set is the segment soup of :func:`zero_set_edges`: the returned contours, closed
+        along the domain edge.  An empty region has the evaluator's value for the empty set.
+        """
+        cells = state.cells if state.cells is not None else _change_cells(state.positive)
+        points = _edge_soup(state.phi, state.positive, cells).reshape(-1, 2)
+        next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
+        return evaluate(self.model, points, next_index, self.params, empty_ok=True)
+
+    def force(self, c_in, c_out):
+        """The constants of f (6.41) for this iteration, and f's contrast scale.
+
+        f is :func:`_force` plus ``mu`` per side of the image that a pixel lies on: a region that
+        covers a border pixel closes along the domain edge there, and the evaluator counts that
+        length (the wall term).  It is evaluated where a step needs it (:meth:`force_at`,
+        :meth:`force_rows`).  The scale is the mean ``|f|`` over the pixels (a regular sample of
+        about 2^16 of them): about ``|c_in - c_out|^2`` once the regions have settled, the size
+        of the force of every pixel before that (a checkerboard start, where ``c_in ~ c_out``).
+        Time steps are measured in pixels of travel at that force.
+        """
+        constants = (np.nan_to_num(np.asarray(c_in, dtype=np.float64)),
+                     np.nan_to_num(np.asarray(c_out, dtype=np.float64)))
+        scale = float(np.mean(np.abs(self.force_at(self.sample, constants))))
+        return constants, max(scale, 1e-12)
+
+    def force_at(self, flat, constants):
+        """f (with the wall term) at the pixels of flat indices ``flat``."""
+        m, n = self.shape
+        f = _force(self.values.reshape(m * n, -1)[flat], *constants, self.params)
+        if self.params.mu > 0:
+            row, col = np.divmod(flat, n)
+            f += self.params.mu * ((row == 0) + (row == m - 1) + (col == 0) + (col == n - 1))
+        return f
+
+    def force_rows(self, start, stop, constants):
+        """f (with the wall term) on the rows ``start:stop``, (stop - start, N)."""
+        m, _ = self.shape
+        f = _force(self.values[start:stop], *constants, self.params)
+        if self.params.mu > 0:
+            f[:, 0] += self.params.mu
+            f[:, -1] += self.params.mu
+            if start == 0:
+                f[0] += self.params.mu
+            if stop == m:
+                f[-1] += self.params.mu
+        return f
+
+    def time_step(self, step, scale):
+        """tau for a step of ``step`` pixels at the force ``scale``: ``step / scale``.
+
+        A front at a pixel of typical force moves ``step`` pixels.  The smoothing length
+        ``sqrt(tau mu)`` of S is kept below ``step``: that binds where the force is weak against
+        the length term (a checkerboard start, whose constants hardly differ), where S would
+        otherwise flatten phi over the whole image at once.
+        """
+        tau = step / scale
+        return min(tau, step * step / self.params.mu) if self.params.mu > 0 else tau
+
+    def step(self, state, force, tau, smooth_force):
+        """Step (a) ``S (phi - tau f)`` with ``smooth_force``, else (b) ``S phi - tau f``.
+
+        ``S = (1 - tau mu Laplace)^{-1}`` by DCT-II in float32 (phi is a distance of a few pixels:
+        its rounding, ~1e-6 px, is far below what matters).  In step (b) the force acts within the
+        band only, so that no pixel far from Gamma (at +-band) flips on its own; and when
+        ``tau mu <= 1/4`` the explicit step ``phi + tau mu Laplace(phi) - tau f`` is stable and has
+        the same fixed point, so it is taken on the band's pixels alone (O(band) instead of a DCT
+        pair over the image).  ``force``: the constants from :meth:`force`.
+        """
+        if not smooth_force and tau * self.params.mu <= 0.25:
+            return self._explicit_step(state, force, tau)
+        m, _ = self.shape
+        if smooth_force:
+            rhs = np.empty(self.shape, dtype=np.float32)
+            for start in range(0, m, self._BLOCK_ROWS):
+                stop = min(start + self._BLOCK_ROWS, m)
+                rhs[start:stop] = state.phi[start:stop] - tau * self.force_rows(start, stop, force)
+        else:
+            rhs = state.phi.copy()
+        if self.params.mu > 0:
+            rhs = self._smooth(rhs, tau * self.params.mu)
+        if not smooth_force:
+            flat = state.near_flat
+            near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
+            rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
+        return rhs
+
+    def _smooth(self, rhs, weight):
+        """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can."""
+        m, _ = self.shape
+        spectrum = scipy.fft.dctn(rhs, norm="ortho", overwrite_x=True)
+        weight = np.float32(weight)
+        for start in range(0, m, self._BLOCK_ROWS):
+            stop = min(start + self._BLOCK_ROWS, m)
+            spectrum[start:stop] /= 1.0 + weight * (self.wave_r[start:stop, None] + self.wave_c[None, :])
+        return scipy.fft.idctn(spectrum, norm="ortho", overwrite_x=True)
+
+    def _explicit_step(self, state, force, tau):
+        """``phi + tau mu Laplace(phi) - tau f`` on the band (5-point, Neumann: a mirrored pixel)."""
+        m, n = self.shape
+        flat = state.near_flat
+        values = state.phi.ravel()
+        centre = values[flat].astype(np.float64)
+        row, col = np.divmod(flat, n)
+        laplace = (values[np.where(row > 0, flat - n, flat)] + values[np.where(row < m - 1, flat + n, flat)]
+                   + values[np.where(col > 0, flat - 1, flat)] + values[np.where(col < n - 1, flat + 1, flat)]
+                   - 4.0 * centre)
+        moved = centre + (tau * self.params.mu) * laplace
+        near = np.abs(centre) < self.band
+        moved[near] -= tau * self.force_at(flat[near], force)
+        out = state.phi.copy()
+        out.ravel()[flat] = moved
+        return out
+
+
+def _swept_area(old, new):
+    """Area between the zero sets of two redistanced states, ``sum_px |H_eps(new) - H_eps(old)|``.
+
+    With eps = 1 the integer translates of H_eps sum to the exact length of a half-line (module
+    docstring), so this is the exact area between two parallel straight fronts at any sub-pixel
+    offset, and second-order accurate for curved ones.  Only pixels in either band can differ.
+    """
+    if old.near_flat.size == 0 or new.near_flat.size == 0:
+        return float(np.count_nonzero(old.positive != new.positive))
+    flat = np.union1d(old.near_flat, new.near_flat)
+    return float(np.sum(np.abs(heaviside(new.phi.ravel()[flat]) - heaviside(old.phi.ravel()[flat]))))

@@ -1,0 +1,199 @@
+"""Drop-in replacements for scikit-image functions: change one import line, keep the call.
+
+``from activecontour.compat import chan_vese`` takes the arguments of
+``skimage.segmentation.chan_vese`` in the same order with the same defaults and returns the same
+types, computed by this package's polygon flow of (6.38) (section 6.5 of *The Shapes of Things*).
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+
+from activecontour.segment import segment
+
+__all__ = ["chan_vese"]
+
+#: Our ``tol`` (pixels per iteration) per unit of scikit-image's: its default (1e-3, the default of
+#: :func:`chan_vese` below) becomes the default of :func:`activecontour.segment`
+TOL_SCALE = inspect.signature(segment).parameters["tol"].default / 1e-3
+
+#: ``init_level_set`` presets of scikit-image, and what each becomes here (see :func:`chan_vese`)
+INIT_LEVEL_SETS = ("checkerboard", "disk", "small disk")
+
+
+def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=500, dt=0.5,
+              init_level_set="checkerboard", extended_output=False):
+    """Chan-Vese segmentation with scikit-image's signature, by the polygon flow of (6.38).
+
+    A drop-in replacement for ``skimage.segmentation.chan_vese`` (same parameters, order, defaults
+    and return types): ``from activecontour.compat import chan_vese`` is the only change a caller
+    makes.  Underneath it is :func:`activecontour.segment` with ``backend="polygon"`` and the
+    arguments mapped as below.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+        Grayscale image (bool, integer or float).  Like scikit-image, the intensities are rescaled
+        by the image's own range onto [0, 1] before the functional is set up
+        (``normalize="range"`` here), so ``mu`` means the same on every dtype and contrast.
+        Colour images are refused as scikit-image does; :func:`activecontour.segment` takes them.
+    mu : float, optional
+        Length weight, passed unchanged as ``mu``: the weight of the contour's length in pixels,
+        in (intensity in [0, 1])^2 per pixel.  scikit-image's scheme (Getreuer's semi-implicit
+        step, its eq. 22) is a time discretisation of the gradient flow of
+        ``mu * length + lambda1 * int_in (I - c1)^2 + lambda2 * int_out (I - c2)^2`` on the
+        [0, 1]-rescaled image: its stationary contours satisfy ``mu kappa = lambda2 (I - c2)^2 -
+        lambda1 (I - c1)^2``, the Euler-Lagrange equation of (6.38) with the same ``mu``.  (The
+        *energies* scikit-image reports weigh the length by ``eps / (eps^2 + phi^2)``, which is
+        pi times the regularised Dirac delta, with a smoothed Heaviside in the fit terms, so
+        they are not values of (6.38); compare results with
+        :func:`activecontour.chan_vese_energy` instead.)
+    lambda1, lambda2 : float, optional
+        Weights of the fit terms of the True and the False region: ``lambda_in`` and
+        ``lambda_out``.  Must be > 0.
+    tol : float, optional
+        Convergence tolerance (>= 0).  scikit-image stops when the RMS change of phi per iteration
+        falls below ``tol``; here the run stops when the contour's mean normal displacement per
+        iteration, in pixels, falls below ``tol * TOL_SCALE``: for a signed-distance phi the two
+        are the same quantity (phi changes at each pixel by the displacement of the nearest part
+        of the contour), and ``TOL_SCALE`` (0.5) maps scikit-image's default 1e-3 onto this
+        package's default 5e-4.  scikit-image's phi is not a distance (it grows without
+        reinitialisation), so its test usually stops it after about 50 iterations, well before
+        its contour has settled; this one stops when the contour has.
+    max_num_iter : int, optional
+        Iteration limit, passed unchanged (one iteration is one accepted step of the flow).
+    dt : float, optional
+        scikit-image's time step.  Here each step's length is chosen by a backtracking line search
+        so that (6.38) decreases at every iteration ((6.31)), so no step size is needed: ``dt``
+        is checked (a finite number > 0) and otherwise unused.
+    init_level_set : str or (M, N) ndarray, optional
+        The start:
+
+        ``"checkerboard"``
+            scikit-image's start that reaches objects anywhere in the image.  Here: the package's
+            default start (``init=None``, :func:`activecontour.initial.default_init`), the
+            global two-class split of the smoothed image traced as curves, which also starts at
+            every object at once and is much closer to the minimiser.
+        ``"disk"``
+            A circle centred at pixel ``((M - 1) // 2, (N - 1) // 2)`` with radius
+            ``min((M - 1) // 2, (N - 1) // 2)``: the zero level set of scikit-image's disk.
+        ``"small disk"``
+            The same circle with half the radius.
+        (M, N) ndarray
+            A level-set function: the start is the region ``init_level_set > 0``, as in
+            scikit-image.  An array with no positive value gives no curve to start from;
+            the default start is used then (scikit-image's flow would create the regions
+            anywhere, too).
+    extended_output : bool, optional
+        Return ``(segmentation, phi, energies)`` instead of the segmentation alone.
+
+    Returns
+    -------
+    segmentation : (M, N) ndarray, bool
+        The inside of the final contours (pixel centres inside, as ``result.mask``).
+    phi : (M, N) ndarray of floats
+        Only with ``extended_output``.  The signed Euclidean distance, in pixels, from each pixel
+        centre to the boundary of ``segmentation`` (half-way between inside and outside pixel
+        centres), positive inside: ``phi > 0`` is ``segmentation``, and ``phi`` is a valid
+        ``init_level_set`` for a restart.  float32 for float16/float32 images, float64 otherwise,
+        as scikit-image.
+    energies : list of floats
+        Only with ``extended_output``.  (6.38) by the common evaluator
+        (:func:`activecontour.chan_vese_energy` with ``mu``, ``lambda_in=lambda1``,
+        ``lambda_out=lambda2``) before the first iteration and after every iteration; unlike
+        scikit-image's list it ends with the final energy.
+
+    Raises
+    ------
+    ValueError
+        For an image that is not 2-D, an unknown ``init_level_set`` string or an array of another
+        shape, ``mu < 0``, ``lambda1``/``lambda2`` <= 0, ``tol < 0``, ``max_num_iter < 0`` or
+        ``dt`` <= 0 (non-finite numbers included).
+    TypeError
+        For a non-integer ``max_num_iter`` or an ``init_level_set`` that is neither.
+
+    Notes
+    -----
+    The contour is a polygon moved by the H^1 gradient flow (6.30)-(6.31), (6.39)-(6.41) of
+    Chan-Vese's functional (6.38) (area weight ``omega = 0``, as scikit-image); region constants by
+    (6.42) at every iteration.  ``benchmarks/bench_compat.py`` compares both functions on
+    scikit-image's sample images: the energy each result reaches, by the common evaluator, and
+    the time each takes.
+    """
+    image = np.asarray(image)
+    if image.ndim != 2:
+        raise ValueError(f"image must be a 2-D (M, N) grayscale array, got shape {image.shape}")
+    if not _is_number(dt) or dt <= 0:
+        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
+    init, arguments = _segment_arguments(image.shape, mu, lambda1, lambda2, tol, max_num_iter,
+                                         init_level_set)
+    result = segment(image, init, **arguments)
+    segmentation = result.mask
+    if not extended_output:
+        return segmentation
+    float_dtype = np.float32 if image.dtype in (np.float16, np.float32) else np.float64
+    phi = _signed_distance(segmentation).astype(float_dtype, copy=False)
+    return segmentation, phi, [float(e) for e in result.energies]
+
+
+def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_level_set):
+    """``init`` and the keywords of :func:`activecontour.segment` for scikit-image's arguments:
+    the mapping :func:`chan_vese` documents, in one place (the benchmark reuses it)."""
+    for name, value in (("lambda1", lambda1), ("lambda2", lambda2)):
+        if not _is_number(value) or value <= 0:
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    if not _is_number(tol) or tol < 0:
+        raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
+    keywords = dict(backend="polygon", mu=mu, lambda_in=lambda1, lambda_out=lambda2,
+                    max_num_iter=max_num_iter, tol=tol * TOL_SCALE, normalize="range")
+    return _initial_region(init_level_set, shape), keywords
+
+
+def _is_number(value):
+    return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+            and bool(np.isfinite(value)))
+
+
+def _initial_region(init_level_set, shape):
+    """The ``init`` of :func:`activecontour.segment` for scikit-image's ``init_level_set``."""
+    from activecontour.initial import circle
+
+    if isinstance(init_level_set, str):
+        if init_level_set not in INIT_LEVEL_SETS:
+            raise ValueError(f"init_level_set must be one of {INIT_LEVEL_SETS} or an (M, N) array, "
+                             f"got {init_level_set!r}")
+        if init_level_set == "checkerboard":
+            return None
+        center = ((shape[0] - 1) // 2, (shape[1] - 1) // 2)
+        radius = float(min(center))
+        if init_level_set == "small disk":
+            radius /= 2.0
+        if radius <= 0:  # an image of 1 or 2 pixels along a side: no disk fits
+            return None
+        return circle(center, radius)
+    if not isinstance(init_level_set, np.ndarray):
+        raise TypeError(f"init_level_set must be one of {INIT_LEVEL_SETS} or an (M, N) array, "
+                        f"got {type(init_level_set).__name__}")
+    if init_level_set.shape != tuple(shape):
+        raise ValueError(f"init_level_set has shape {init_level_set.shape}, but the image has "
+                         f"shape {tuple(shape)}")
+    inside = init_level_set > 0
+    return inside if inside.any() else None
+
+
+def _signed_distance(mask):
+    """Signed distance (pixels) from each pixel centre to the mask's boundary, positive inside.
+
+    The boundary runs half-way between inside and outside pixel centres, so the distance is the
+    Euclidean distance to the nearest pixel of the other class minus 1/2.  A mask without a
+    boundary (empty or full) is -1 or +1 everywhere.
+    """
+    import scipy.ndimage
+
+    if not mask.any() or mask.all():
+        return np.where(mask, 1.0, -1.0)
+    inside = scipy.ndimage.distance_transform_edt(mask)
+    outside = scipy.ndimage.distance_transform_edt(~mask)
+    return np.where(mask, inside - 0.5, 0.5 - outside)

@@ -1,0 +1,200 @@
+"""The sub-pixel partition of the image domain that a label image stands for.
+
+A label image ``classes`` (M, N) says which region each pixel centre belongs to.  The regions it
+stands for partition the domain ``D = [-0.5, M - 0.5] x [-0.5, N - 0.5]`` exactly (no gap, no
+overlap) along boundaries through the midpoints between pixel centres of different classes, in
+each grid cell (the square between four neighbouring pixel centres):
+
+* two classes, not diagonal (a saddle): one straight segment between the midpoints of the two
+  cell edges whose ends differ: marching squares of the class indicator at level 1/2, the rule of
+  :func:`skimage.measure.find_contours` on a binary image;
+* two classes on the diagonals (a saddle): the corners of the larger class are cut off (two
+  segments), those of the smaller one stay connected;
+* three or four classes: a junction at the cell centre, joined to the midpoint of every cell edge
+  whose ends differ.
+
+Along the domain's edge the pixel's class extends to the border (the image is extended by its
+edge pixels), so an interface meets the border at right angles, halfway between two pixels.
+
+The boundary is returned as oriented segments with the class on each side: ``inner`` on the side
+opposite the normal ``nu = (t_c, -t_r)``, ``outer`` on the normal's side, -1 outside the domain.
+That is all Green's theorem needs: the moments of region k are the edge integrals over the
+segments with ``inner == k`` plus those with ``outer == k`` reversed
+(:func:`activecontour.energy.partition_moments`).  A two-class image gives the marching-squares
+contours of its class-1 indicator, so the two-region and the N-region evaluators agree on it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["Boundary", "class_boundary", "class_soup", "chain"]
+
+
+class Boundary:
+    """Oriented segments of a partition with the class on each side.
+
+    Attributes
+    ----------
+    start, end : ndarray (S, 2)
+        Segment ends in (row, col).
+    inner, outer : ndarray (S,) int
+        The class on the inner side (opposite the normal) and the outer side; ``outer == -1`` on
+        the domain's edge.
+    """
+
+    def __init__(self, start, end, inner, outer):
+        self.start, self.end, self.inner, self.outer = start, end, inner, outer
+
+    @property
+    def length(self):
+        d = self.end - self.start
+        return np.hypot(d[:, 0], d[:, 1])
+
+
+def class_boundary(classes):
+    """The oriented boundary segments of the partition a label image stands for (module docstring).
+
+    Parameters
+    ----------
+    classes : int ndarray (M, N)
+
+    Returns
+    -------
+    Boundary
+    """
+    classes = np.asarray(classes)
+    m, n = classes.shape
+    padded = np.pad(classes.astype(np.int64), 1, mode="edge")
+    tl, tr = padded[:-1, :-1], padded[:-1, 1:]
+    bl, br = padded[1:, :-1], padded[1:, 1:]
+    changes = np.stack([tl != tr, tr != br, bl != br, tl != bl])  # top, right, bottom, left
+    count = changes.sum(axis=0)
+    rows, cols = np.nonzero(count)
+    tl, tr, br, bl = tl[rows, cols], tr[rows, cols], br[rows, cols], bl[rows, cols]
+    changes = changes[:, rows, cols]
+    count = count[rows, cols]
+    # cell (a, j) spans image rows a - 1 .. a and columns j - 1 .. j
+    top, left = rows - 1.0, cols - 1.0
+    corner = {"tl": (top, left), "tr": (top, left + 1), "br": (top + 1, left + 1), "bl": (top + 1, left)}
+    label = {"tl": tl, "tr": tr, "br": br, "bl": bl}
+    # each cell edge: its midpoint and its two corners
+    edges = [(("tl", "tr"), (top, left + 0.5)), (("tr", "br"), (top + 0.5, left + 1)),
+             (("bl", "br"), (top + 1, left + 0.5)), (("tl", "bl"), (top + 0.5, left))]
+    centre = (top + 0.5, left + 0.5)
+    pieces = []  # per group: start r, start c, end r, end c, corner r, corner c, its class, other
+
+    def add(where, start, end, first, second):
+        """Segments in cells ``where`` separating corner ``first`` from corner ``second``."""
+        p, q = corner[first]
+        pieces.append((start[0][where], start[1][where], end[0][where], end[1][where], p[where],
+                       q[where], label[first][where], label[second][where]))
+
+    saddle = (count == 4) & (tl == br) & (tr == bl)
+    junction = (count >= 3) & ~saddle
+    straight = count == 2
+    # two classes: the segment between the two changed edges' midpoints separates the corners of
+    # either changed edge
+    for i in range(4):
+        for k in range(i + 1, 4):
+            where = straight & changes[i] & changes[k]
+            add(where, edges[i][1], edges[k][1], *edges[i][0])
+    # saddles: cut off the corners of the larger class
+    cut_tl = saddle & (tl > tr)  # tl, br are cut
+    cut_tr = saddle & ~(tl > tr)
+    add(cut_tl, edges[0][1], edges[3][1], "tl", "tr")
+    add(cut_tl, edges[1][1], edges[2][1], "br", "tr")
+    add(cut_tr, edges[0][1], edges[1][1], "tr", "tl")
+    add(cut_tr, edges[3][1], edges[2][1], "bl", "tl")
+    # junctions: centre to every changed edge's midpoint, between that edge's corners
+    for i in range(4):
+        add(junction & changes[i], centre, edges[i][1], *edges[i][0])
+    start_r, start_c, end_r, end_c, corner_r, corner_c, first_label, other_label = (
+        np.concatenate(parts) for parts in zip(*pieces, strict=True))
+    start = np.column_stack([start_r, start_c])
+    end = np.column_stack([end_r, end_c])
+    tangent = end - start
+    # nu . (corner - start) > 0: the corner lies on the normal's (outer) side
+    corner_outer = tangent[:, 1] * (corner_r - start_r) - tangent[:, 0] * (corner_c - start_c) > 0
+    inner = np.where(corner_outer, other_label, first_label)
+    outer = np.where(corner_outer, first_label, other_label)
+    start, end = _clip(start, m, n), _clip(end, m, n)
+    interior = np.any(start != end, axis=1)
+    border_start, border_end, border_class = _border(classes)
+    return Boundary(np.vstack([start[interior], border_start]), np.vstack([end[interior], border_end]),
+                    np.concatenate([inner[interior], border_class]),
+                    np.concatenate([outer[interior], np.full(len(border_class), -1)]))
+
+
+def _clip(points, m, n):
+    """Onto the domain: the segments outside it are the perpendicular ends of interfaces at the
+    border (module docstring), so clipping their ends is exact."""
+    return np.column_stack([np.clip(points[:, 0], -0.5, m - 0.5), np.clip(points[:, 1], -0.5, n - 0.5)])
+
+
+def _border(classes):
+    """The domain's edge, one unit piece per border pixel side, oriented with the normal out of D."""
+    m, n = classes.shape
+    j, i = np.arange(n, dtype=np.float64), np.arange(m, dtype=np.float64)
+    starts, ends, labels = [], [], []
+    # top (normal -r): travel towards -c; bottom (+r): towards +c; left (-c): towards +r;
+    # right (+c): towards -r
+    starts.append(np.column_stack([np.full(n, -0.5), j + 0.5]))
+    ends.append(np.column_stack([np.full(n, -0.5), j - 0.5]))
+    labels.append(classes[0])
+    starts.append(np.column_stack([np.full(n, m - 0.5), j - 0.5]))
+    ends.append(np.column_stack([np.full(n, m - 0.5), j + 0.5]))
+    labels.append(classes[-1])
+    starts.append(np.column_stack([i - 0.5, np.full(m, -0.5)]))
+    ends.append(np.column_stack([i + 0.5, np.full(m, -0.5)]))
+    labels.append(classes[:, 0])
+    starts.append(np.column_stack([i + 0.5, np.full(m, n - 0.5)]))
+    ends.append(np.column_stack([i - 0.5, np.full(m, n - 0.5)]))
+    labels.append(classes[:, -1])
+    return np.vstack(starts), np.vstack(ends), np.concatenate(labels).astype(np.int64)
+
+
+def class_soup(boundary, k):
+    """Region k's boundary as oriented segments (starts, ends): its inner segments as they are,
+    its outer ones reversed."""
+    inner, outer = boundary.inner == k, boundary.outer == k
+    return (np.vstack([boundary.start[inner], boundary.end[outer]]),
+            np.vstack([boundary.end[inner], boundary.start[outer]]))
+
+
+def chain(starts, ends):
+    """Link oriented segments end to start into closed curves (list of (K, 2) arrays).
+
+    Segment ends lie on the half-pixel lattice (midpoints and cell centres), so they are matched
+    exactly.  Where a region pinches (two of its corners meet at a junction) a point has two
+    outgoing segments; either pairing gives closed curves of the same region.
+    """
+    if len(starts) == 0:
+        return []
+    key_start = _keys(starts)
+    key_end = _keys(ends)
+    order = np.argsort(key_start, kind="stable")
+    sorted_keys = key_start[order]
+    # the i-th segment ending at a point continues with the i-th segment starting there
+    end_order = np.argsort(key_end, kind="stable")
+    following = np.empty(len(starts), dtype=np.intp)
+    position = np.searchsorted(sorted_keys, key_end[end_order])
+    rank = np.arange(len(end_order)) - np.searchsorted(key_end[end_order], key_end[end_order])
+    following[end_order] = order[position + rank]
+    seen = np.zeros(len(starts), dtype=bool)
+    curves = []
+    for first in range(len(starts)):
+        if seen[first]:
+            continue
+        loop, current = [], first
+        while not seen[current]:
+            seen[current] = True
+            loop.append(current)
+            current = following[current]
+        curves.append(starts[loop])
+    return curves
+
+
+def _keys(points):
+    twice = np.rint(2.0 * points).astype(np.int64) + 2
+    return twice[:, 0] * (1 << 32) + twice[:, 1]
