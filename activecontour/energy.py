@@ -34,8 +34,11 @@ import numpy as np
 from activecontour import _kernels
 from activecontour.curve import as_curve
 from activecontour.models import ChanVeseParameters
+from activecontour.models.two_region import EMPTY_FRACTION, PARAMETER_LIMIT
 
 __all__ = [
+    "EMPTY_FRACTION",
+    "PARAMETER_LIMIT",
     "ChanVeseParameters",
     "Evaluation",
     "PartitionEvaluation",
@@ -46,7 +49,37 @@ __all__ = [
     "partition_moments",
     "region_moments",
     "stack_curves",
+    "to_frame",
+    "working_frame",
 ]
+
+
+def working_frame(values):
+    """``(offset, scale)`` with ``(values - offset) / scale`` spanning [0, 1]; (0, 1) for values
+    already within [0, 1] (every image ``normalize="range"`` gives, and integers by ``"dtype"``).
+
+    A constant image gets scale 1.
+
+    Raises
+    ------
+    ValueError
+        For intensities (``normalize=None`` or float ``"dtype"``) whose span squared overflows:
+        (6.38) of such intensities is not a float.
+    """
+    low, high = float(values.min()), float(values.max())
+    if 0.0 <= low and high <= 1.0:
+        return 0.0, 1.0
+    with np.errstate(over="ignore"):
+        span = high - low
+        if not np.isfinite(span * span * values.shape[0] * values.shape[1]):
+            raise ValueError(f"the image's intensities span {low:.3g}..{high:.3g}: (6.38) of them overflows; "
+                             "pass normalize='range' (the default) to scale them to [0, 1]")
+    return low, (span if span > 0 else 1.0)
+
+
+def to_frame(values, offset, scale):
+    """``(values - offset) / scale``: the image in the frame of :func:`working_frame`."""
+    return values if offset == 0.0 and scale == 1.0 else (values - offset) / scale
 
 
 @dataclass
@@ -110,10 +143,13 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
         Also assemble ``load`` (K, 2), the derivative of J with respect to every vertex (6.41).
     empty_ok : bool
         How to treat curves that enclose no area or the whole domain while a constant is optimised
-        (6.42 is then undefined).  False (the flow's view): ``energy`` is ``inf``, so no step is
-        accepted into that state.  True (the value of a final result): the empty region's fitting
-        term is 0 whatever its constant, so J is finite, and the undefined constant is reported
-        equal to the other one.
+        (6.42 is then undefined).  A region smaller than ``EMPTY_FRACTION`` of the domain counts
+        as empty: its mean (6.42) is a difference of domain-sized sums divided by its area, all
+        rounding (a sliver of 1e-9 px^2 outside reports a c_out far outside the image's range).
+        False (the flow's view): ``energy`` is ``inf``, so no step is accepted into that state.
+        True (the value of a final result): the empty region's fitting term is 0 whatever its
+        constant (at most its area times the image's range squared for a sliver), so J is
+        finite, and the undefined constant is reported equal to the other one.
 
     Returns
     -------
@@ -282,8 +318,10 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     from activecontour.noise import auto_mu, is_auto
 
     values = normalize_image(image, color=color, normalize=normalize)
-    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, omega, lambda_in,
-                                lambda_out, c_in, c_out)
+    offset, scale = working_frame(values)
+    values = to_frame(values, offset, scale)
+    params = ChanVeseParameters(auto_mu(values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
+                                lambda_out, c_in, c_out).in_frame(offset, scale)
     if light is None:
         model = ImageModel(values)
     else:
@@ -293,7 +331,7 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     if (contours is None) == (classes is None):
         raise TypeError("chan_vese_energy takes either contours or classes")
     if classes is not None:
-        return _classes_energy(model, classes, params)
+        return scale**2 * _classes_energy(model, classes, params)
     if isinstance(contours, np.ndarray) and contours.ndim == 2:
         contours = [contours]
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
@@ -305,7 +343,7 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     if problem is not None:
         raise ValueError(f"contours do not bound a region, (6.38) is not defined: {problem}")
     points, next_index, _ = stack_curves(curves)
-    return evaluate(model, points, next_index, params, empty_ok=True).energy
+    return scale**2 * evaluate(model, points, next_index, params, empty_ok=True).energy
 
 
 def _check_in_domain(curve, bounds, name):

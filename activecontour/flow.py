@@ -62,6 +62,8 @@ _NUCLEATION_RADIUS = 4.0
 _NUCLEATION_ROUNDS = 4
 _NUCLEATION_TRIALS = 30
 _REMESH_COOLDOWN = 10
+_BACKGROUND_SHARE = 1.5  # the global move takes the background when the given curves hold 1.5x
+                         # the share of it that they hold of the objects
 
 
 @dataclasses.dataclass(frozen=True)
@@ -163,12 +165,16 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
                              for c in initial_curves(init, shape, model.image, params.mu)])
     current = evaluate(model, *geometry[:2], params, gradient=True)
-    if not np.isfinite(current.energy):
-        raise ValueError("init encloses no area or the whole image: c_in or c_out is undefined")
-    energies = [current.energy]
+    # a start around the whole image (or nothing) has the energy of the empty set plus its
+    # length, but no constant (6.42) for the empty region: the global move can still leave it
+    energies = [evaluate(model, *geometry[:2], params, empty_ok=True).energy]
     n_iter = 0
     jumped = global_start and init is not None and not from_result and max_num_iter > 0 and (
-        moved := _global_move(model, params, geometry, current, spacing)) is not None
+        moved := _global_move(model, params, geometry, energies[0], spacing)) is not None
+    if not (jumped or np.isfinite(current.energy) or max_num_iter == 0):
+        side, constant = ("inside", "c_in") if current.area < 0.5 * model.totals[0] else ("outside", "c_out")
+        raise ValueError(f"init leaves the {side} empty ({current.area:.6g} of {model.totals[0]:.0f} px^2 "
+                         f"inside): its constant {constant} (6.42) is undefined")
     if jumped:
         (geometry, current), n_iter = moved, 1
         energies.append(current.energy)
@@ -224,29 +230,32 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
                         status=status, backend="polygon")
 
 
-def _global_move(model, params, geometry, current, spacing):
+def _global_move(model, params, geometry, energy, spacing):
     """The default start's threshold set or its complement, as (geometry, evaluation), when its
-    (6.38) is below ``current``'s; else None.
+    (6.38) is below ``energy`` (the given curves'); else None.
 
     Of the two classes, the one that has the larger share of its area inside the given curves
     is inside: a curve drawn around an object (with background around it) or inside one selects
-    the object, a curve drawn on the background the background.  (With lambda_in = lambda_out and
+    the object, a curve drawn on the background the background.  The background must hold
+    ``_BACKGROUND_SHARE`` times the objects' share: a start that selects neither (a speckle
+    mask, the whole image) gets the default start's objects.  (With lambda_in = lambda_out and
     omega = 0 a region and its complement have the same energy: the curves, not rounding, choose.)
     """
     from activecontour.initial import threshold_starts
 
     given = rasterize(_split(*geometry[::2]), model.shape)
-    best = None
-    for curves in threshold_starts(model.values, params.mu, background=True):
-        region = rasterize(curves, model.shape) if curves else None
-        share = np.count_nonzero(region & given) / max(1, np.count_nonzero(region)) if curves else -1.0
-        if best is None or share > best[0]:
-            best = (share, curves)
-    if not best[1]:
+    objects, background = threshold_starts(model.values, params.mu, background=True)
+    shares = []
+    for curves in (objects, background):
+        region = rasterize(curves, model.shape)
+        shares.append(np.count_nonzero(region & given) / max(1, np.count_nonzero(region)))
+    # the background only when the curves clearly select it: a speckle mask selects neither
+    chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
+    if not chosen:
         return None
-    moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in best[1]])
+    moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in chosen])
     new = evaluate(model, *moved[:2], params, gradient=True)
-    return (moved, new) if new.energy < current.energy else None
+    return (moved, new) if new.energy < energy else None
 
 
 class _Flow:

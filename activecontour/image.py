@@ -324,6 +324,9 @@ def normalize_image(image, *, color="gray", normalize="range"):
     if not np.all(np.isfinite(values)):
         raise ValueError("image contains NaN or infinite values")
     offset, scale = _affine(values, image.dtype, normalize)
+    if not np.isfinite(scale):  # intensities spanning more than the float range: halve first
+        values *= 0.5
+        offset, scale = _affine(values, image.dtype, normalize)
     if offset != 0.0:
         values -= offset
     if scale != 1.0:

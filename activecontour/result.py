@@ -147,8 +147,9 @@ def scalar_if_gray(value):
     return float(value.reshape(-1)[0]) if value.size == 1 else value
 
 
-#: Energies that agree to this relative tolerance are the same number computed twice.
-_SAME_ENERGY = 1e-9
+#: Energies that agree to this relative tolerance are the same number computed twice, or before and
+#: after :func:`activecontour.curve.clean` (which moves the region by ~1e-9 of its extent).
+_SAME_ENERGY = 1e-8
 
 
 def build_result(model, params, contours, *, energies, n_iter, status, backend, phi=None):
@@ -181,7 +182,7 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     """
     cleaned = [c for c in map(clean, contours) if c is not None]
     if cleaned and region_problem(cleaned) is not None:  # e.g. a ring that touches itself
-        cleaned = [c for c in map(clean, region_union(cleaned)) if c is not None]
+        cleaned = [c for c in map(clean, region_union(cleaned, signed=True)) if c is not None]
     final = _evaluate(model, params, cleaned)
     empty = _evaluate(model, params, [])
     if cleaned and (status == 3 or status in (0, 4)) and empty.energy <= final.energy:

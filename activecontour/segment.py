@@ -10,7 +10,7 @@ import numpy as np
 
 from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
-from activecontour.energy import ChanVeseParameters
+from activecontour.energy import ChanVeseParameters, to_frame, working_frame
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
 from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
@@ -82,7 +82,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         Intensity scaling before the functional is set up: the image's own range onto [0, 1]
         (default), the dtype's range, or none (see :func:`activecontour.image.normalize_image`).
         ``result.c_in``/``c_out`` are in these normalised units; ``result.c_in_image`` and
-        ``result.c_out_image`` in the input's own.
+        ``result.c_out_image`` in the input's own.  Whatever the choice, the backends compute
+        where the image spans [0, 1] (:meth:`~activecontour.energy.ChanVeseParameters.in_frame`:
+        no cancellation for intensities far from 0, no overflow), and report energies and
+        constants in these units; weights and constants beyond ``PARAMETER_LIMIT`` (1e8) in
+        that frame are refused.
     n_regions : int
         The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
         the sum of each region's fit term plus mu times the length of the interfaces between
@@ -219,23 +223,38 @@ def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callb
         init = crop_init(init, box, shape)
         if callback is not None:
             callback = _whole_image_callback(callback, box, shape)
-    params = ChanVeseParameters(auto_mu(values) if is_auto(mu) else mu, *constants)
+    # the backends compute where the image spans [0, 1] (no cancellation, no overflow)
+    frame_offset, frame_scale = working_frame(values)
+    values = to_frame(values, frame_offset, frame_scale)
+    params = ChanVeseParameters(auto_mu(values) * frame_scale**2 if is_auto(mu) else mu, *constants)
+    working = params.in_frame(frame_offset, frame_scale)
+    framed = working is not params
+    if callback is not None and framed:
+        callback = _in_caller_units(callback, frame_offset, frame_scale)
 
     def run(model, init, params, max_num_iter=settings["max_num_iter"]):
         return solver(model, init, params, callback=callback, **{**settings, "max_num_iter": max_num_iter})
 
     if fit == "smooth":
-        result, model, params = _smooth_light(values, init, params, run)
+        result, model, working = _smooth_light(values, init, working, run)
     else:
         model = ImageModel(values)
-        result = run(model, init, params)
-    result = _make_inside(result, inside, model, params)
+        result = run(model, init, working)
+    result = _make_inside(result, inside, model, working)
     if domain is not None:
         domain_curves = mask_to_curves(domain)
-        result = _rebuilt(result, clip_region(result.contours, domain_curves), model, params,
+        result = _rebuilt(result, clip_region(result.contours, domain_curves), model, working,
                           phi=None if result.phi is None else np.where(domain, result.phi, -1.0))
     if box is not None:
         result = _in_whole_image(result, box, domain, shape)
+    if framed:
+        square = frame_scale**2
+        result.energy *= square
+        result.energies = result.energies * square
+        result.c_in = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_in))
+        result.c_out = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_out))
+        if getattr(result, "constants", None) is not None:
+            result.constants = frame_offset + frame_scale * np.asarray(result.constants)
     return result, params, rescale
 
 
@@ -301,6 +320,16 @@ def _whole_image_callback(callback, box, shape):
                                             shape=tuple(shape), phi=phi))
 
     return shifted
+
+
+def _in_caller_units(callback, offset, scale):
+    """The callback, shown each state's energy and constants in the caller's intensity units."""
+    def wrapped(state):
+        return callback(dataclasses.replace(
+            state, energy=state.energy * scale**2,
+            c_in=offset + scale * np.asarray(state.c_in), c_out=offset + scale * np.asarray(state.c_out)))
+
+    return wrapped
 
 
 def _check_regions(n_regions, backend, c_in, c_out, options, roi):

@@ -210,14 +210,17 @@ def region_problem(curves):
     return None
 
 
-def region_union(curves):
+def region_union(curves, *, signed=False):
     """The boundary of the region that nested, overlapping or duplicated curves outline.
 
     Each curve's polygon (made valid: a self-crossing curve is the union of its loops) is added
     to the region when it lies inside an even number of the others and cut out of it when inside
     an odd number, in order of nesting depth: overlapping outlines merge, a curve given twice
-    counts once, nested curves alternate between object and hole.  The result obeys
-    :func:`region_problem`: outer boundaries positive, holes negative, each vertex once.
+    counts once, nested curves alternate between object and hole.  With ``signed`` the curves'
+    own orientation says which is which instead (positive added, negative cut out, the larger
+    first): the region {w > 0} of curves whose winding number is 0 or 1 but which touch
+    themselves or each other, as a backend's may.  The result obeys :func:`region_problem`:
+    outer boundaries positive, holes negative, each vertex once.
 
     Returns
     -------
@@ -227,13 +230,17 @@ def region_union(curves):
     from shapely.geometry.polygon import orient
 
     polygons = [shapely.make_valid(shapely.Polygon(np.asarray(c, dtype=np.float64))) for c in curves]
-    tree = shapely.STRtree(polygons)
-    inner, outer = tree.query(polygons, predicate="within")
-    strictly = (inner != outer) & ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
-    depth = np.bincount(inner[strictly], minlength=len(polygons))
+    if signed:
+        areas = np.array([signed_area(np.asarray(c, dtype=np.float64)) for c in curves])
+        order, adds = np.argsort(-np.abs(areas), kind="stable"), areas > 0
+    else:
+        inner, outer = shapely.STRtree(polygons).query(polygons, predicate="within")
+        strictly = (inner != outer) & ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
+        depth = np.bincount(inner[strictly], minlength=len(polygons))
+        order, adds = np.argsort(depth, kind="stable"), depth % 2 == 0
     region = shapely.Polygon()
-    for i in np.argsort(depth, kind="stable"):
-        region = region.union(polygons[i]) if depth[i] % 2 == 0 else region.difference(polygons[i])
+    for i in order:
+        region = region.union(polygons[i]) if adds[i] else region.difference(polygons[i])
     out = []
     for polygon in shapely.get_parts(region):
         if isinstance(polygon, shapely.Polygon) and polygon.area > 0:

@@ -49,12 +49,19 @@ def test_bad_arguments(image, kwargs, error, match):
         ([], "empty list"),
         (np.array([[0.0, 0.0], [np.inf, 1.0], [2.0, 3.0]]), "NaN or infinite"),
         ("checkerboard", "not understood: pass None, .grid."),
-        (np.array([[-0.5, -0.5], [39.5, -0.5], [39.5, 49.5], [-0.5, 49.5]]), "whole image"),
     ],
 )
 def test_bad_init(init, match):
     with pytest.raises(ValueError, match=match):
         ac.segment(IMAGE, init)
+
+
+def test_a_start_around_the_whole_image_needs_the_global_move():
+    # the outside is empty, c_out (6.42) undefined: the flow alone cannot start there
+    whole = np.array([[-0.5, -0.5], [39.5, -0.5], [39.5, 49.5], [-0.5, 49.5]])
+    with pytest.raises(ValueError, match="init leaves the outside empty"):
+        ac.segment(IMAGE, whole, options={"global_start": False})
+    assert ac.segment(IMAGE, whole).energies[1] < ac.segment(IMAGE, whole, max_num_iter=0).energy
 
 
 def test_init_partly_outside_is_clipped_to_the_image():

@@ -18,7 +18,16 @@ import numpy as np
 
 from activecontour.models.base import QuadraticForm
 
-__all__ = ["ChanVeseParameters"]
+__all__ = ["EMPTY_FRACTION", "PARAMETER_LIMIT", "ChanVeseParameters"]
+
+#: A region with less than this fraction of the domain's area is empty for its constant (6.42):
+#: the domain-sized sums it is the difference of round at ~1e-16 of the domain, so its mean is
+#: then exact to ~1e-7 of the image's range.
+EMPTY_FRACTION = 1e-9
+#: In the frame where the image spans [0, 1] (:meth:`ChanVeseParameters.in_frame`): the largest
+#: mu, |omega|, |c_in|, |c_out| and lambda, and 1 / this the smallest lambda.  At 1e8 a weight
+#: makes every other term of (6.38) smaller than its rounding; J stays far from overflow.
+PARAMETER_LIMIT = 1e8
 
 
 @dataclass(frozen=True)
@@ -89,6 +98,48 @@ class ChanVeseParameters:
             raise ValueError(f"{name} has {value.size} values for an image with {n_channels}")
         return np.broadcast_to(value, (n_channels,)).astype(np.float64)
 
+    def in_frame(self, offset, scale):
+        """The same functional for the intensities ``(I - offset) / scale``, range-checked.
+
+        (6.38) of the image ``offset + scale I'`` is ``scale^2`` times (6.38) of I' with
+        ``mu / scale^2``, ``omega / scale^2``, the same lambdas and constants ``(c - offset) /
+        scale``: the backends compute in this frame, where the image spans [0, 1], so that a
+        large offset does not cancel (``sum (I - c)^2 = sum I^2 - 2 c sum I + c^2 |Omega|`` loses
+        every digit when c^2 is 1e16 times the variance) and nothing overflows.  In that frame
+        every weight and constant must lie within :data:`PARAMETER_LIMIT` (lambdas within its
+        inverse, too): beyond, one term of (6.38) is below the rounding of another, or J
+        overflows.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter, its value and the valid range in the caller's units.
+        """
+        low_lambda, high = 1.0 / PARAMETER_LIMIT, PARAMETER_LIMIT
+        for name in ("lambda_in", "lambda_out"):
+            value = np.asarray(getattr(self, name), dtype=np.float64)
+            if np.any(value < low_lambda) or np.any(value > high):
+                raise ValueError(f"{name} must be between {low_lambda:g} and {high:g}, "
+                                 f"got {getattr(self, name)}")
+        square = scale * scale
+        for name, limit in (("mu", high * square), ("omega", high * square)):
+            if abs(getattr(self, name)) > limit:
+                raise ValueError(f"|{name}| must be at most {limit:.6g} ({high:g} times the image's "
+                                 f"intensity range squared), got {getattr(self, name)}")
+        constants = {}
+        for name in ("c_in", "c_out"):
+            value = getattr(self, name)
+            if value is not None:
+                scaled = (value - offset) / scale
+                if np.any(np.abs(scaled) > high):
+                    raise ValueError(f"{name} must be within {high:g} image ranges of the image's "
+                                     f"intensities, got {value}")
+                constants[name] = scaled
+        if offset == 0.0 and scale == 1.0:
+            return self
+        return ChanVeseParameters(self.mu / square, self.omega / square, self.lambda_in, self.lambda_out,
+                                  constants.get("c_in"), constants.get("c_out"))
+
     def fit_constants(self, area, first, second, totals, *, empty_ok):
         """``(c_in, c_out)`` by (6.42) from the inside moments, or None where (6.42) is undefined.
 
@@ -99,7 +150,9 @@ class ChanVeseParameters:
         totals : tuple
             The same over the domain (the outside by subtraction).
         empty_ok : bool
-            When a region whose constant is optimised is empty (6.42 is undefined): False returns
+            When a region whose constant is optimised is empty (6.42 is undefined; a region under
+            ``EMPTY_FRACTION`` of the domain counts as empty: its mean is a difference of
+            domain-sized sums divided by its area, all rounding): False returns
             None (the flow's view: no step is accepted into that state); True reports the
             constant equal to the other region's (its fitting term is 0 whatever it is).
         """
@@ -108,7 +161,8 @@ class ChanVeseParameters:
         outside = tuple(total - part for total, part in zip(totals, inside, strict=True))
         c_in = self.constant("c_in", channels)
         c_out = self.constant("c_out", channels)
-        empty_in, empty_out = area <= 1e-9, outside[0] <= 1e-9
+        tiny = EMPTY_FRACTION * totals[0]  # a sliver's mean would be rounding: empty
+        empty_in, empty_out = area <= tiny, outside[0] <= tiny
         if (empty_in and c_in is None) or (empty_out and c_out is None):
             if not empty_ok:
                 return None

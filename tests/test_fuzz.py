@@ -1,0 +1,150 @@
+"""Property-based fuzzing of ``segment``: random small images of several dtypes, every kind of
+init, random parameters, both backends; every result must obey DESIGN.md's invariants.
+
+The default run tries a few hundred cases (derandomised, so it is the same every run);
+``FUZZ_EXAMPLES=5000 python3 -m pytest tests/test_fuzz.py`` tries many more, at random.
+"""
+
+import os
+
+import numpy as np
+import pytest
+
+hypothesis = pytest.importorskip("hypothesis")
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+import activecontour as ac  # noqa: E402
+from activecontour.curve import signed_area  # noqa: E402
+from activecontour.image import normalize_image  # noqa: E402
+from activecontour.raster import rasterize  # noqa: E402
+from activecontour.topology import region_problem  # noqa: E402
+
+_MANY = int(os.environ.get("FUZZ_EXAMPLES", "0"))
+FUZZ = settings(max_examples=_MANY or 120, derandomize=not _MANY, deadline=None, database=None,
+                suppress_health_check=list(HealthCheck))
+
+DTYPES = ["uint8", "uint16", "int16", "float32", "float64", "bool"]
+SCENES = ["noise", "disk", "ramp", "constant", "squares", "stripes"]
+
+
+def make_image(scene, dtype, shape, seed):
+    rng = np.random.default_rng(seed)
+    m, n = shape
+    r, c = np.mgrid[0:m, 0:n].astype(float)
+    if scene == "noise":
+        base = rng.random(shape)
+    elif scene == "disk":
+        center, radius = rng.uniform(0, [m, n]), rng.uniform(1, max(m, n))
+        base = 0.3 + 0.4 * (np.hypot(r - center[0], c - center[1]) <= radius) + rng.normal(0, 0.1, shape)
+    elif scene == "ramp":
+        base = r + c
+    elif scene == "constant":
+        base = np.full(shape, rng.uniform(-5, 5))
+    elif scene == "squares":
+        base = ((r // 4 + c // 4) % 2).astype(float)
+    else:
+        base = np.sin(c * rng.uniform(0.2, 2.0)) + 0.2 * rng.normal(size=shape)
+    if dtype == "bool":
+        return base > np.median(base)
+    if dtype in ("uint8", "uint16", "int16"):
+        info = np.iinfo(dtype)
+        span = np.ptp(base)
+        scaled = (base - base.min()) / (span if span > 0 else 1.0)
+        top = info.min + rng.uniform(0.01, 1.0) * (float(info.max) - info.min)
+        return np.round(info.min + scaled * (top - info.min)).astype(dtype)
+    return (base * 10.0 ** rng.uniform(-3, 3)).astype(dtype)
+
+
+@st.composite
+def cases(draw):
+    m, n = draw(st.integers(4, 24)), draw(st.integers(4, 24))
+    scene, dtype = draw(st.sampled_from(SCENES)), draw(st.sampled_from(DTYPES))
+    seed = draw(st.integers(0, 2**32 - 1))
+    image = make_image(scene, dtype, (m, n), seed)
+    kind = draw(st.sampled_from(["none", "circle", "rectangle", "mask", "grid", "two"]))
+    coordinate = st.floats(-0.3, 1.3)
+    if kind == "none":
+        init = None
+    elif kind == "grid":
+        init = "grid"
+    elif kind in ("circle", "two"):
+        center = (draw(coordinate) * m, draw(coordinate) * n)
+        radius = draw(st.floats(0.6, 1.5)) * max(m, n) * draw(st.sampled_from([0.1, 0.3, 1.0, 3.0]))
+        init = ac.circle(center, radius, n=draw(st.integers(6, 64)))
+        if kind == "two":  # the same curve twice, or an overlapping one
+            init = [init, init.copy() if draw(st.booleans()) else init + [1.3, -0.7]]
+    elif kind == "rectangle":
+        a, b = (draw(coordinate) * m, draw(coordinate) * n), (draw(coordinate) * m, draw(coordinate) * n)
+        if abs(a[0] - b[0]) < 0.5 or abs(a[1] - b[1]) < 0.5:
+            b = (a[0] + 2.0, a[1] + 2.0)
+        init = ac.rectangle(a, b)
+    else:
+        init = np.random.default_rng(seed + 1).random((m, n)) < draw(st.floats(0.05, 1.0))
+        if not init.any():
+            init[0, 0] = True
+    kwargs = {
+        "mu": draw(st.sampled_from(["auto", 0.0, 1e-3, 0.05, 0.5])),
+        "omega": draw(st.sampled_from([0.0, 0.0, -0.2, 0.1])),
+        "lambda_in": draw(st.sampled_from([1.0, 1.0, 0.5, 3.0])),
+        "lambda_out": draw(st.sampled_from([1.0, 1.0, 2.0, 0.3])),
+        "normalize": draw(st.sampled_from(["range", "range", "dtype", None])),
+        "max_num_iter": draw(st.sampled_from([0, 1, 5, 25])),
+    }
+    return image, init, kwargs
+
+
+def check_invariants(image, result, kwargs):
+    weights = {k: kwargs[k] for k in ("omega", "lambda_in", "lambda_out", "normalize")}
+    # the common evaluator gives the result's energy, and refuses contours that bound no region
+    evaluated = ac.chan_vese_energy(image, result.contours, mu=result.mu, **weights)
+    assert result.energy == pytest.approx(evaluated, rel=1e-9, abs=1e-9)
+    energies = np.asarray(result.energies)
+    assert energies[-1] == result.energy
+    # never up, to rounding (cleaning a contour moves it by ~1e-9 of its extent: result._SAME_ENERGY)
+    assert np.all(np.diff(energies) <= 1e-8 * np.maximum(np.abs(energies[1:]), 1.0)), energies
+    assert np.array_equal(result.mask, rasterize(result.contours, image.shape[:2]))
+    assert region_problem(result.contours) is None
+    for curve in result.contours:
+        assert len(curve) >= 3 and abs(signed_area(curve)) > 0
+    values = normalize_image(image, normalize=kwargs["normalize"])
+    low, high = values.min(), values.max()
+    slack = 1e-6 * max(1.0, high - low)
+    for c in (result.c_in, result.c_out):
+        assert np.all(np.isfinite(c))
+        assert np.all(c >= low - slack) and np.all(c <= high + slack), (c, low, high)
+    if kwargs["omega"] == 0.0:
+        assert result.energy >= -1e-9 * max(1.0, abs(energies[0]))
+
+
+def run(image, init, kwargs, backend):
+    try:
+        # separate=False: objects.split_touching can take minutes on a speckle inside (reported)
+        return ac.segment(image, init, backend=backend, separate=False, **kwargs)
+    except ValueError as error:  # refused inputs must say why in one line
+        message = str(error)
+        assert "\n" not in message and len(message) < 300, message
+        assert any(word in message for word in ("init", "mask", "curve")), message
+        return None
+
+
+@FUZZ
+@given(cases())
+def test_polygon_results_obey_the_invariants(case):
+    image, init, kwargs = case
+    result = run(image, init, kwargs, "polygon")
+    if result is not None:
+        check_invariants(image, result, kwargs)
+
+
+@pytest.mark.xfail(strict=False, reason=(
+    "levelset.py (helper 'levelset' owns it): from a drawn start the level set's first energy is "
+    "the curve's, the result's that of phi's zero set, which can be higher (4x4 uint8, a rectangle, "
+    "max_num_iter=0: energies 5.237 -> 5.704): the result is worse than its start"))
+@FUZZ
+@given(cases())
+def test_levelset_results_obey_the_invariants(case):
+    image, init, kwargs = case
+    result = run(image, init, kwargs, "levelset")
+    if result is not None:
+        check_invariants(image, result, kwargs)
