@@ -501,6 +501,8 @@ def _contrast_split(mask, values, least, smallest):
     smooth = (scipy.ndimage.gaussian_filter(np.where(mask, values, 0.0), CONTRAST_SCALE)
               / np.maximum(weight, 1e-12))
     inside = smooth[mask]
+    # differences at the rounding of the values' magnitude (an image far from zero) are no contrast
+    least = max(least, 1e-9 * float(np.max(np.abs(inside), initial=0.0)))
     # the two classes' means differ by less than the range: a narrower range has no split
     if inside.size <= 2 * smallest or np.ptp(inside) < least:
         return None
