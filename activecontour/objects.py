@@ -408,17 +408,28 @@ def _neck_parts(region, outline, distance, neck_ratio, min_radius):
             pair = max(one_sided, key=merit.get)
         graph.merge(*pair)
     # a part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were a
-    # shape's own: it takes its neighbours back, until every part is a blob or one is left
+    # shape's own: it takes its neighbours back, until every part is a blob or has no neighbour
+    # (each merged part's shape is measured once, on its bounding box: only the merged one changes)
+    boxes = scipy.ndimage.find_objects(parts)
+    shape_of = {}  # root: (blob, solidity)
     while True:
-        merged, roots = graph.labels()
-        props = {p.label: p for p in skimage.measure.regionprops(merged)}
-        blob = {label: _is_blob(p) for label, p in props.items()}
-        if all(blob.values()) or len(blob) == 1:
-            return merged
-        worst = min((label for label in blob if not blob[label]), key=lambda k: props[k].solidity)
-        root = int(roots[worst])
+        roots = [int(r) for r in np.unique(graph.parent[1:])]
+        for root in roots:
+            if root not in shape_of:
+                members = np.flatnonzero(graph.parent == root)
+                box = tuple(slice(min(boxes[m - 1][a].start for m in members),
+                                  max(boxes[m - 1][a].stop for m in members)) for a in range(2))
+                props = skimage.measure.regionprops(np.isin(parts[box], members).astype(np.uint8))[0]
+                shape_of[root] = (_is_blob(props), props.solidity)
+        # a part with no 4-neighbour border left (pixels touching only at a corner) has none to take
+        takers = [r for r in roots if not shape_of[r][0] and graph.neighbours(r)]
+        if not takers:
+            return graph.labels()[0]
+        root = min(takers, key=lambda r: shape_of[r][1])
         for neighbour in graph.neighbours(root):
             graph.merge(root, neighbour)
+            shape_of.pop(neighbour, None)
+        shape_of.pop(root)
 
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
