@@ -520,6 +520,10 @@ def _contrast_split(mask, values, least, smallest):
     import scipy.ndimage
     import skimage.filters
 
+    # the smoothed values inside are weighted means of the values inside: their range is no wider
+    raw = values[mask]
+    if raw.size <= 2 * smallest or np.ptp(raw) < least:
+        return None
     weight = scipy.ndimage.gaussian_filter(mask.astype(float), CONTRAST_SCALE)
     smooth = (scipy.ndimage.gaussian_filter(np.where(mask, values, 0.0), CONTRAST_SCALE)
               / np.maximum(weight, 1e-12))
