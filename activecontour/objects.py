@@ -336,8 +336,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         # the outline's shape decides (holes filled): the rim around a hole is no neck
         window = np.pad(scipy.ndimage.binary_fill_holes(labels[box] == k + 1), 1)
         parts = window.astype(np.int32)
-        if _may_have_necks(window):
-            parts = _neck_parts(window, curves[0] - low, _boundary_distance(curves[:1], window, low),
+        concavity = _concavity(window, curves[0] - low)
+        if _may_have_necks(window, concavity):
+            parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
                                 neck_ratio, min_radius)
         if image is not None:
             parts = _contrast_parts(parts, _window(image, box), least, min_radius)
@@ -348,14 +349,24 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     return result
 
 
-def _may_have_necks(region):
-    """Whether the pixel distance transform has two maxima of dynamic above half a pixel: without
-    them no neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors (a cheap test that
-    spares most single objects the exact distance)."""
+def _may_have_necks(region, concavity):
+    """Whether the outline has two edge pixels ``MIN_WAIST_DEPTH`` inside its convex hull (every
+    split line ends in two such waists, :meth:`_PartGraph.is_waist`; pixels touching only at a
+    corner are parts without one) and the pixel distance
+    transform has two maxima of dynamic above half a pixel: without them no neck is
+    ``MIN_NECK_DEPTH`` deep even after its half-pixel errors (cheap tests that spare most single
+    objects the exact distance).  The h-maxima (plateaus of regional maxima) lie in the pixels
+    not below any 8-neighbour, each of whose 4-connected pieces holds at most one of them, so
+    one such piece means no two h-maxima."""
     import scipy.ndimage
     import skimage.morphology
 
+    if np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2 and scipy.ndimage.label(region)[1] == 1:
+        return False
     distance = scipy.ndimage.distance_transform_edt(region)
+    peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
+    if scipy.ndimage.label(peaks)[1] <= 1:
+        return False
     return scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
 
 
@@ -380,9 +391,10 @@ def _boundary_distance(curves, region, low):
     return np.where(region, np.maximum(distance, 0.0), 0.0)
 
 
-def _neck_parts(region, outline, distance, neck_ratio, min_radius):
+def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
     """Label the pixels of a bool region by parts separated by narrow waists (0 outside), given
-    its outer boundary (window coordinates) and each pixel's distance to it."""
+    its edge pixels' depth inside the outline's convex hull (:func:`_concavity`) and each pixel's
+    distance to the outline."""
     import scipy.ndimage
     import skimage.measure
     import skimage.morphology
@@ -392,7 +404,7 @@ def _neck_parts(region, outline, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32)
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    graph = _PartGraph(parts, distance, count, _concavity(region, outline))
+    graph = _PartGraph(parts, distance, count, concavity)
     while graph.saddle:
         # the widest neck relative to the thinner side first; a side too small to be an object
         # is merged whatever its neck
@@ -408,17 +420,28 @@ def _neck_parts(region, outline, distance, neck_ratio, min_radius):
             pair = max(one_sided, key=merit.get)
         graph.merge(*pair)
     # a part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were a
-    # shape's own: it takes its neighbours back, until every part is a blob or one is left
+    # shape's own: it takes its neighbours back, until every part is a blob or has no neighbour
+    # (each merged part's shape is measured once, on its bounding box: only the merged one changes)
+    boxes = scipy.ndimage.find_objects(parts)
+    shape_of = {}  # root: (blob, solidity)
     while True:
-        merged, roots = graph.labels()
-        props = {p.label: p for p in skimage.measure.regionprops(merged)}
-        blob = {label: _is_blob(p) for label, p in props.items()}
-        if all(blob.values()) or len(blob) == 1:
-            return merged
-        worst = min((label for label in blob if not blob[label]), key=lambda k: props[k].solidity)
-        root = int(roots[worst])
+        roots = [int(r) for r in np.unique(graph.parent[1:])]
+        for root in roots:
+            if root not in shape_of:
+                members = np.flatnonzero(graph.parent == root)
+                box = tuple(slice(min(boxes[m - 1][a].start for m in members),
+                                  max(boxes[m - 1][a].stop for m in members)) for a in range(2))
+                props = skimage.measure.regionprops(np.isin(parts[box], members).astype(np.uint8))[0]
+                shape_of[root] = (_is_blob(props), props.solidity)
+        # a part with no 4-neighbour border left (pixels touching only at a corner) has none to take
+        takers = [r for r in roots if not shape_of[r][0] and graph.neighbours(r)]
+        if not takers:
+            return graph.labels()[0]
+        root = min(takers, key=lambda r: shape_of[r][1])
         for neighbour in graph.neighbours(root):
             graph.merge(root, neighbour)
+            shape_of.pop(neighbour, None)
+        shape_of.pop(root)
 
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
@@ -497,6 +520,10 @@ def _contrast_split(mask, values, least, smallest):
     import scipy.ndimage
     import skimage.filters
 
+    # the smoothed values inside are weighted means of the values inside: their range is no wider
+    raw = values[mask]
+    if raw.size <= 2 * smallest or np.ptp(raw) < least:
+        return None
     weight = scipy.ndimage.gaussian_filter(mask.astype(float), CONTRAST_SCALE)
     smooth = (scipy.ndimage.gaussian_filter(np.where(mask, values, 0.0), CONTRAST_SCALE)
               / np.maximum(weight, 1e-12))
@@ -556,8 +583,8 @@ def _concavity(region, outline):
 
 
 class _PartGraph:
-    """Parts of a watershed as a graph: each part's peak distance, each border's neck (saddle)
-    and its pixels."""
+    """Parts of a watershed as a graph: each part's peak distance, each border's neck (saddle),
+    its pixels and whether it is a waist (cached until one of its parts merges)."""
 
     def __init__(self, parts, distance, count, concavity):
         import scipy.ndimage
@@ -567,7 +594,7 @@ class _PartGraph:
         self.peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
         self.parent = np.arange(count + 1)
         # the neck between two adjacent parts: the largest distance over their 4-neighbour pairs
-        self.saddle, self.border = {}, {}
+        self.saddle, self.border, self.waist = {}, {}, {}
         index = np.arange(parts.size).reshape(parts.shape)
         for a, b, da, db, ia, ib in ((parts[:, :-1], parts[:, 1:], distance[:, :-1], distance[:, 1:],
                                       index[:, :-1], index[:, 1:]),
@@ -585,15 +612,25 @@ class _PartGraph:
         """Whether the border of i and j ends in a concavity of the outline at two places."""
         import scipy.ndimage
 
+        if (i, j) in self.waist:
+            return self.waist[(i, j)]
         pixels = np.asarray(self.border[(i, j)])
         depth = self.concavity.ravel()[pixels]
-        ends = np.zeros(self.parts.shape, dtype=bool)
-        ends.ravel()[pixels[depth >= 0]] = True
-        pieces, count = scipy.ndimage.label(ends, structure=np.ones((3, 3)))
+        pixels, depth = pixels[depth >= 0], depth[depth >= 0]
+        # the border's pixels on the outline, in pieces (8-neighbours), on their bounding box
+        rows, cols = np.unravel_index(pixels, self.parts.shape)
+        ends = np.zeros((np.ptp(rows) + 1, np.ptp(cols) + 1), dtype=bool) if pixels.size else None
+        count = 0
+        if ends is not None:
+            ends[rows - rows.min(), cols - cols.min()] = True
+            pieces, count = scipy.ndimage.label(ends, structure=np.ones((3, 3)))
         if count < 2:
+            self.waist[(i, j)] = False
             return False
-        deepest = np.sort(scipy.ndimage.maximum(self.concavity, pieces, np.arange(1, count + 1)))
-        return deepest[-2] >= MIN_WAIST_DEPTH
+        deepest = np.full(count, -1.0)
+        np.maximum.at(deepest, pieces[rows - rows.min(), cols - cols.min()] - 1, depth)
+        self.waist[(i, j)] = bool(np.sort(deepest)[-2] >= MIN_WAIST_DEPTH)
+        return self.waist[(i, j)]
 
     def merge(self, keep, gone):
         self.parent[self.parent == gone] = keep
@@ -606,6 +643,7 @@ class _PartGraph:
                 saddle[key] = max(v, saddle.get(key, -1.0))
                 border.setdefault(key, []).extend(self.border[(i, j)])
         self.saddle, self.border = saddle, border
+        self.waist = {pair: w for pair, w in self.waist.items() if keep not in pair and gone not in pair}
 
     def neighbours(self, root):
         return [j if i == root else i for (i, j) in self.saddle if root in (i, j)]
