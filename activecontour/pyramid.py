@@ -55,7 +55,7 @@ def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, to
     max_side : int
         Longest side of the reduced copy, in pixels.
     max_num_iter, tol, **options
-        For the reduced run, as for :func:`activecontour.flow.segment_polygon` (its pixel lengths
+        For the reduced run, as for :func:`activecontour.backends.polygon.segment_polygon` (its pixel lengths
         are reduced pixels).
 
     Returns
@@ -64,7 +64,7 @@ def coarse_start(model, init, params, *, max_side=MAX_SIDE, max_num_iter=500, to
         Closed curves in full-resolution (row, col); the initial curves themselves when the image
         is no larger than ``max_side`` or a curve of ``init`` is too small for the reduced copy.
     """
-    from activecontour.flow import segment_polygon  # the flow is what this module feeds
+    from activecontour.backends.polygon import segment_polygon  # the flow is what this module feeds
 
     factor = reduction_factor(model.shape, max_side)
     if factor == 1:

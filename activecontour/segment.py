@@ -127,7 +127,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         None: the last, when it has 1-4 entries.
     options : dict, optional
         Backend-specific settings: the fields of the backend's options dataclass
-        (:class:`activecontour.flow.PolygonOptions`,
+        (:class:`activecontour.backends.polygon.PolygonOptions`,
         :class:`activecontour.backends.levelset.LevelSetOptions`; the registry
         :data:`activecontour.backends.BACKENDS`).  An unknown name is a TypeError listing the
         valid ones.

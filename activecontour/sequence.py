@@ -218,7 +218,7 @@ def _warm_kwargs(segment_kwargs):
     Both only save iterations; options the caller gives win."""
     if segment_kwargs.get("backend", "polygon") != "polygon" or segment_kwargs.get("n_regions", 2) != 2:
         return segment_kwargs
-    from activecontour.flow import PolygonOptions
+    from activecontour.backends.polygon import PolygonOptions
 
     given = dict(segment_kwargs.get("options") or {})
     finest = given.get("min_smoothing", PolygonOptions().min_smoothing)

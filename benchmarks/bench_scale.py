@@ -71,7 +71,7 @@ import sys, time, numpy as np
 import activecontour as ac
 from activecontour import pyramid, synthetic
 from activecontour.energy import ChanVeseParameters
-from activecontour.flow import segment_polygon
+from activecontour.backends.polygon import segment_polygon
 from activecontour.image import ImageModel, normalize_image
 from activecontour.noise import auto_mu
 start, cpu = time.perf_counter(), time.process_time()

@@ -23,7 +23,7 @@ def _disk_image(radius=15.0):
 
 def test_registry_lists_both_backends_with_their_options_and_functions():
     assert set(BACKENDS) == {"polygon", "levelset"}
-    from activecontour.flow import PolygonOptions, segment_polygon
+    from activecontour.backends.polygon import PolygonOptions, segment_polygon
 
     assert BACKENDS["polygon"].options is PolygonOptions
     assert BACKENDS["polygon"].run is segment_polygon
@@ -69,7 +69,7 @@ def test_levelset_reads_its_defaults_from_the_dataclass(monkeypatch):
 def test_polygon_reads_its_defaults_from_the_dataclass(monkeypatch):
     # the vertices of the result are about `spacing` apart (remeshed to it): a changed default
     # spacing moves them apart without any option given
-    from activecontour import flow
+    from activecontour.backends import polygon as flow
 
     image = _disk_image()
     init = ac.circle((32.0, 32.0), 20.0, 400)

@@ -933,7 +933,7 @@ def test_the_contour_stands_out_from_a_red_image_on_screen_too(make_viewer):
 def test_step_sliders_start_at_the_options_dataclass_defaults(disk_image, make_viewer):
     # the slider of each backend is the option its dataclass marks, starting at that field's default
     from activecontour.backends import BACKENDS
-    from activecontour.flow import PolygonOptions
+    from activecontour.backends.polygon import PolygonOptions
 
     viewer = make_viewer(disk_image[0])
     assert set(viewer.step_sliders) == set(BACKENDS)

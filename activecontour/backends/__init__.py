@@ -1,6 +1,6 @@
 """The backends: each minimises the Chan-Vese functional (6.38) over its own representation.
 
-polygon     the book's H^1 gradient flow of a polygon: :mod:`activecontour.flow` (to move here)
+polygon     the book's H^1 gradient flow of a polygon: :mod:`activecontour.backends.polygon`
 levelset    a level set over the pixel grid: redistancing, zero set, scheme and driver
 labelfield  N regions on the pixel grid: a label field from the global K-means (``n_regions > 2``)
 """
@@ -52,6 +52,6 @@ class Backend:
 
 #: backend name -> its record; a new backend is its own module and one line here.
 BACKENDS = {
-    "polygon": Backend("activecontour.flow", "segment_polygon", "PolygonOptions"),
+    "polygon": Backend("activecontour.backends.polygon", "segment_polygon", "PolygonOptions"),
     "levelset": Backend("activecontour.backends.levelset.driver", "segment_levelset", "LevelSetOptions"),
 }

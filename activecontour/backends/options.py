@@ -1,6 +1,6 @@
 """Backend options: every backend states its settings once, as a frozen dataclass.
 
-A backend's options class (:class:`activecontour.flow.PolygonOptions`,
+A backend's options class (:class:`activecontour.backends.polygon.PolygonOptions`,
 :class:`activecontour.backends.levelset.LevelSetOptions`) is the one place of each setting's name,
 type, default and documentation (``field(metadata={"help": ...})``, made by :func:`option`).  The
 backend builds it from the ``options`` of :func:`activecontour.segment` with
