@@ -93,7 +93,13 @@ def curve_areas(points, next_index, offsets):
 
 
 def repair(points, next_index, offsets, *, min_area=0.0):
-    """Rebuild the curves as the boundary of {w > 0}; None when no edges cross.
+    """Rebuild the curves as the boundary of {w > 0}; None when they already are.
+
+    They are when no edges cross and every curve has w = 0 on its right.  A step can turn a
+    whole curve over without any crossing left at its end (a sliver whose sides pass each other,
+    a small curve jumped across itself): alone it bounds a region of w = -1, inside an object
+    (positive, within another positive curve) one of w = 2; such a curve is no boundary of
+    {w > 0} and is dropped, like any chain between crossings.
 
     Parameters
     ----------
@@ -106,8 +112,6 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     list of ndarray (K, 2) or None
     """
     first, second, s, t = crossings(points, next_index)
-    if first.size == 0:
-        return None
     n_points = len(points)
     n_cross = first.size
     cross_points = points[first] + s[:, None] * (points[next_index[first]] - points[first])
@@ -124,13 +128,10 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     chains = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         chains.extend(_chains(sequence[a:b], n_points))
-    starts, seconds = nodes[[c[0] for c in chains]], nodes[[c[1] for c in chains]]
-    direction = seconds - starts
-    length = np.maximum(np.hypot(direction[:, 0], direction[:, 1]), 1e-300)
-    normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
-    probes = 0.5 * (starts + seconds) + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
-    windings = winding_number(points, next_index, probes, offsets)
+    windings = winding_number(points, next_index, _right_probes(chains, nodes), offsets)
     kept = [chain for chain, w in zip(chains, windings, strict=True) if w == 0]
+    if n_cross == 0 and len(kept) == len(chains):
+        return None
     curves = _link(kept, nodes, n_points)
     return [c for c in curves if len(c) >= 3 and abs(signed_area(c)) > min_area]
 
@@ -260,6 +261,23 @@ def _chains(sequence, n_points):
     cuts = np.append(marks - marks[0], len(rotated))
     closed = np.append(rotated, rotated[0])
     return [closed[a: b + 1] for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+
+def _right_probes(chains, nodes):
+    """A point just right of each chain: beside the middle of its longest segment, so that a
+    segment of (nearly) zero length, as clipping to the border makes, never places it on the
+    curves themselves."""
+    starts = np.concatenate([c[:-1] for c in chains])
+    ends = np.concatenate([c[1:] for c in chains])
+    owner = np.repeat(np.arange(len(chains)), [len(c) - 1 for c in chains])
+    direction = nodes[ends] - nodes[starts]
+    length = np.hypot(direction[:, 0], direction[:, 1])
+    order = np.lexsort((-length, owner))
+    longest = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]  # the first of each chain
+    direction, length = direction[longest], np.maximum(length[longest], 1e-300)
+    normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
+    middle = 0.5 * (nodes[starts[longest]] + nodes[ends[longest]])
+    return middle + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
 
 
 def _link(kept, nodes, n_points):

@@ -332,13 +332,15 @@ class _Flow:
     def _settle(self, curves):
         """Stack curves, resolving any overlap, and evaluate them."""
         geometry = stack_curves(curves)
+        # a seed clipped to the border can run along a curve's stretch of it: edges that coincide,
+        # which the repair cannot resolve (see step)
+        if topology.border_overlap(*geometry[:2], self.bounds):
+            return None
         repaired = topology.repair(*geometry, min_area=self.min_area)
         if repaired is not None:
             if not repaired:
                 return None
             geometry = stack_curves(repaired)
-        if topology.border_overlap(*geometry[:2], self.bounds):
-            return None
         new = evaluate(self.model, *geometry[:2], self.params, gradient=True)
         return (geometry, new) if np.isfinite(new.energy) else None
 
@@ -350,7 +352,10 @@ class _Flow:
         merges or opens a hole is accepted only if the repaired curves satisfy the same descent
         condition as any other step.  A trial that runs two edges along the same stretch of the
         image border (:func:`activecontour.topology.border_overlap`) is no region: it is
-        rejected as a step too long.
+        rejected as a step too long, before the repair: the repair keeps an edge by the winding
+        number on its right, taking the one on its left to be one more, which an edge that another
+        covers does not separate (such a trial once ended as a hole outside every curve, a region
+        of winding number -1 along the border).
         """
         points, next_index, offsets = geometry
         # Vertices on the image border that the force pushes out of the image cannot follow it:
@@ -375,13 +380,14 @@ class _Flow:
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
-            candidate = (trial, next_index, offsets)
-            repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
-            if repaired is not None:
-                candidate = stack_curves(repaired) if repaired else None
             # clipping can run two pieces of curve along the same stretch of the border
-            if candidate is not None and predicted < 0 and not topology.border_overlap(
-                    candidate[0], candidate[1], self.bounds):
+            candidate = None
+            if predicted < 0 and not topology.border_overlap(trial, next_index, self.bounds):
+                candidate = (trial, next_index, offsets)
+                repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
+                if repaired is not None:
+                    candidate = stack_curves(repaired) if repaired else None
+            if candidate is not None:
                 new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
                 if new.energy <= current.energy + _ARMIJO * predicted:
                     if accelerated is None:
