@@ -71,8 +71,8 @@ def test_network_force_is_the_gradient_of_the_energy_at_every_kind_of_node():
     image += np.random.default_rng(2).normal(0, 0.05, image.shape)
     model, params = _setup(image, 0.2)
     network = Network.of_classes(classes)
-    nodes = network.nodes + np.random.default_rng(3).uniform(-0.2, 0.2, network.nodes.shape) * np.column_stack(
-        network.free)  # off the lattice, border nodes still on the border
+    shift = np.random.default_rng(3).uniform(-0.2, 0.2, network.nodes.shape)
+    nodes = network.nodes + shift * np.column_stack(network.free)  # off the lattice, border nodes on it
     constants = evaluate_partition(model, network.boundary(nodes), params, 3).constants
     force = network.force(nodes, model, params, constants)
     degree = np.bincount(np.concatenate([network.start[network.interface], network.end[network.interface]]),

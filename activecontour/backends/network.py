@@ -134,7 +134,8 @@ class Network:
         on either side of the walking direction (the same all along: a region changes only at a
         junction)."""
         chosen = np.flatnonzero(self.interface)
-        degree = np.bincount(np.concatenate([self.start[chosen], self.end[chosen]]), minlength=len(self.nodes))
+        degree = np.bincount(np.concatenate([self.start[chosen], self.end[chosen]]),
+                             minlength=len(self.nodes))
         branch = (degree != 2) | ~(self.free[0] & self.free[1])
         incident = [[] for _ in self.nodes]
         for segment in chosen:
@@ -145,7 +146,9 @@ class Network:
 
         def walk(node, segment):
             forward = self.start[segment] == node
-            sides = (self.inner[segment], self.outer[segment]) if forward else (self.outer[segment], self.inner[segment])
+            sides = (self.inner[segment], self.outer[segment])
+            if not forward:
+                sides = sides[::-1]
             path = [node]
             while True:
                 used[segment] = True
@@ -187,7 +190,8 @@ class Network:
             arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
             pieces = max(3 if closed else 1, int(round(arc[-1] / spacing)))
             steps = np.arange(0 if closed else 1, pieces) * (arc[-1] / pieces)
-            new = np.column_stack([np.interp(steps, arc, polyline[:, 0]), np.interp(steps, arc, polyline[:, 1])])
+            new = np.column_stack([np.interp(steps, arc, polyline[:, 0]),
+                                   np.interp(steps, arc, polyline[:, 1])])
             ids = count + np.arange(len(new))
             count += len(new)
             points.append(new)
@@ -202,8 +206,8 @@ class Network:
             inner.append(np.full(len(start[-1]), left))
             outer.append(np.full(len(start[-1]), right))
         nodes = np.vstack(points)
-        network = Network(nodes, *(np.concatenate(part).astype(np.intp) for part in (start, end, inner, outer)),
-                          self.shape)
+        parts = (np.concatenate(part).astype(np.intp) for part in (start, end, inner, outer))
+        network = Network(nodes, *parts, self.shape)
         return network, nodes
 
     def stiffness(self, nodes, smoothing=1.0):
