@@ -250,9 +250,7 @@ def partition_load(model, boundary, params, constants):
     forms = params.class_forms(constants)
     zero = forms[0] - forms[0]
     load = np.zeros((len(boundary.start), 2, 2))
-    pairs = np.unique(np.column_stack([boundary.inner, boundary.outer]), axis=0)
-    for inner, outer in pairs:
-        chosen = np.flatnonzero((boundary.inner == inner) & (boundary.outer == outer))
+    for inner, outer, chosen in boundary.sides.pairs:
         form = forms[inner] - (forms[outer] if outer >= 0 else zero)
         mu = params.mu if (outer >= 0 or inner > 0) else 0.0
         points = np.empty((2 * chosen.size, 2))

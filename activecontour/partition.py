@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Boundary", "chain", "chain_loops", "class_boundary", "class_soup", "lattice_keys"]
+__all__ = ["Boundary", "Sides", "chain", "chain_loops", "class_boundary", "class_soup", "lattice_keys"]
 
 
 class Boundary:
@@ -41,15 +41,39 @@ class Boundary:
     inner, outer : ndarray (S,) int
         The class on the inner side (opposite the normal) and the outer side; ``outer == -1`` on
         the domain's edge.
+    sides : Sides
+        Which segments bound which class (computed once for segments that keep their classes
+        while they move: pass it to the moved boundary).
     """
 
-    def __init__(self, start, end, inner, outer):
+    def __init__(self, start, end, inner, outer, sides=None):
         self.start, self.end, self.inner, self.outer = start, end, inner, outer
+        self.sides = Sides(inner, outer) if sides is None else sides
 
     @property
     def length(self):
         d = self.end - self.start
         return np.hypot(d[:, 0], d[:, 1])
+
+
+class Sides:
+    """The segments on each class's boundary, and the segments of each (inner, outer) pair."""
+
+    def __init__(self, inner, outer):
+        order = np.lexsort((outer, inner))
+        pairs = np.column_stack([inner[order], outer[order]])
+        cuts = np.flatnonzero(np.any(np.diff(pairs, axis=0) != 0, axis=1)) + 1
+        self.pairs = [(int(group_pairs[0, 0]), int(group_pairs[0, 1]), group)
+                      for group_pairs, group in zip(np.split(pairs, cuts), np.split(order, cuts), strict=True)
+                      if len(group)]
+        self._inner, self._outer = inner, outer
+        self._soups = {}
+
+    def of_class(self, k):
+        """``(segments with inner == k, segments with outer == k)``."""
+        if k not in self._soups:
+            self._soups[k] = (np.flatnonzero(self._inner == k), np.flatnonzero(self._outer == k))
+        return self._soups[k]
 
 
 def class_boundary(classes):
@@ -157,7 +181,7 @@ def _border(classes):
 def class_soup(boundary, k):
     """Region k's boundary as oriented segments (starts, ends): its inner segments as they are,
     its outer ones reversed."""
-    inner, outer = boundary.inner == k, boundary.outer == k
+    inner, outer = boundary.sides.of_class(k)
     return (np.vstack([boundary.start[inner], boundary.end[outer]]),
             np.vstack([boundary.end[inner], boundary.start[outer]]))
 

@@ -51,7 +51,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour.energy import evaluate_partition, partition_load
-from activecontour.partition import Boundary, chain_loops, class_boundary, lattice_keys
+from activecontour.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
 from activecontour.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
 
@@ -68,6 +68,8 @@ _STILL_BLOCKS = 2
 _ARMIJO = 1e-4
 #: Target length of the interfaces' segments (px), as the two-region polygon's default spacing.
 _SPACING = 1.0
+#: Blocks before a remesh that raised J is tried again.
+_REMESH_COOLDOWN = 4
 #: Halvings of dt before the line search gives up (stationary to working precision).
 _BACKTRACKS = 30
 
@@ -90,6 +92,7 @@ class Network:
         self.nodes, self.start, self.end = nodes, start, end
         self.inner, self.outer, self.shape = inner, outer, tuple(shape)
         self.interface = outer >= 0
+        self.sides = Sides(inner, outer)
         m, n = self.shape
         moving = np.zeros(len(nodes), dtype=bool)
         moving[start[self.interface]] = moving[end[self.interface]] = True
@@ -111,7 +114,7 @@ class Network:
     def boundary(self, nodes=None):
         """The partition's :class:`~activecontour.partition.Boundary` with the vertices at ``nodes``."""
         nodes = self.nodes if nodes is None else nodes
-        return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer)
+        return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
 
     def relabelled(self, mapping):
         """The same network with region k renamed ``mapping[k]``."""
@@ -334,7 +337,9 @@ class _Flow:
         return evaluate_partition(self.model, network.boundary(nodes), self.params, self.n_regions)
 
     def remesh(self):
-        """Resample the interfaces at ``_SPACING`` px; kept only if J does not rise."""
+        """Resample the interfaces at ``_SPACING`` px; kept only if J does not rise (else not
+        tried again for ``_REMESH_COOLDOWN`` blocks)."""
+        self.cooldown = _REMESH_COOLDOWN
         network, nodes = self.network.resampled(self.nodes, _SPACING)
         trial = self.evaluate(network, nodes)
         if trial.energy <= self.current.energy:
@@ -383,7 +388,8 @@ class _Flow:
                 still = still + 1 if slow else 0
                 if still == _STILL_BLOCKS:
                     return 0, n_iter
-                if self.unhealthy():
+                self.cooldown -= 1
+                if self.cooldown <= 0 and self.unhealthy():
                     self.remesh()
                 block_start, block_network = self.nodes, self.network
         return 1, n_iter
