@@ -184,6 +184,7 @@ def test_dropping_an_island_merges_it_into_the_region_around_it():
         merged[box] = around
         dropped = network.without_island(network.nodes, loops[size])
         expected = evaluate_partition(model, class_boundary(merged), params, 3).energy
-        assert evaluate_partition(model, dropped.boundary(), params, 3).energy == pytest.approx(expected, rel=1e-12)
+        found = evaluate_partition(model, dropped.boundary(), params, 3).energy
+        assert found == pytest.approx(expected, rel=1e-12)
     # the block's outline holds the island: dropping it would need the island's regions renamed
     assert network.without_island(network.nodes, loops[38]) is None
