@@ -690,8 +690,6 @@ class _PartGraph:
             for j, border in neighbours.items():
                 if i < j:
                     self._queue(i, j, border)
-        for queue in self.queues:
-            heapq.heapify(queue)
         while (best := self._best(self.queues[0])) is not None:
             (i, j), merit = best
             thinner = min(self.peak[i], self.peak[j])
@@ -710,7 +708,6 @@ class _PartGraph:
         queue = []
         for root in self.members:
             self._queue_shape(queue, root)
-        heapq.heapify(queue)
         while queue:
             solidity, root, version = heapq.heappop(queue)
             if root not in self.members or version != self.shapes.version[root]:

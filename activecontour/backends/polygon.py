@@ -162,8 +162,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     shape = model.shape
     # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
     # exactly: resampling it would cut its corners and move it off its minimum
-    geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
-                             for c in initial_curves(init, shape, model.image, params.mu)])
+    geometry = _resampled(initial_curves(init, shape, model.image, params.mu), spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
@@ -200,7 +199,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
             break
         if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
             last_remesh = k
-            remeshed = stack_curves([resample(c, spacing) for c in _split(*new_geometry[::2])])
+            remeshed = _resampled(_split(*new_geometry[::2]), spacing, every=True)
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
@@ -253,7 +252,7 @@ def _global_move(model, params, geometry, energy, spacing):
     chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
     if not chosen:
         return None
-    moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in chosen])
+    moved = _resampled(chosen, spacing)
     new = evaluate(model, *moved[:2], params, gradient=True)
     return (moved, new) if new.energy < energy else None
 
@@ -526,6 +525,17 @@ class _Memory:
 def _dot(a, b):
     """``a . b`` of two long vectors without BLAS (its threads cost more than the product here)."""
     return float(np.einsum("i,i->", a, b))
+
+
+def _resampled(curves, spacing, every=False):
+    """Curves resampled at equal arc length ``spacing`` (with ``every``, else those whose vertices
+    are not about that far apart already), stacked.  A chord of the resampling can cut across a
+    narrow neck or a notch and cross the curve: the result is then the boundary of {w > 0}
+    (:func:`activecontour.topology.repair`), so that its energy is that of a region."""
+    geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
+                             for c in curves])
+    repaired = topology.repair(*geometry)
+    return geometry if repaired is None else stack_curves(repaired)
 
 
 def _unhealthy(geometry, spacing):
