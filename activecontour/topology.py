@@ -291,34 +291,32 @@ def _right_windings(points, next_index, offsets):
         inside[np.arange(inside.shape[0]), np.arange(start, start + inside.shape[0])] = False
         suspect[block] |= inside.any(axis=1)
     if suspect.any():
-        # beside the longest edge of each suspect curve (never a zero-length one)
         edges = np.flatnonzero(np.repeat(suspect, np.diff(offsets)))
         owner = np.repeat(np.arange(n_curves), np.diff(offsets))[edges]
-        direction = points[next_index[edges]] - points[edges]
-        length = np.hypot(direction[:, 0], direction[:, 1])
-        order = np.lexsort((-length, owner))
-        first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]
-        direction, length = direction[first], np.maximum(length[first], 1e-300)
-        normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
-        probes = points[edges[first]] + 0.5 * direction + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
+        probes = _beside_longest(points[edges], points[next_index[edges]], owner)
         out[suspect] = winding_number(points, next_index, probes, offsets)
     return out
 
 
 def _right_probes(chains, nodes):
-    """A point just right of each chain: beside the middle of its longest segment, so that a
-    segment of (nearly) zero length, as clipping to the border makes, never places it on the
-    curves themselves."""
+    """A point just right of each chain (:func:`_beside_longest`)."""
     starts = np.concatenate([c[:-1] for c in chains])
     ends = np.concatenate([c[1:] for c in chains])
     owner = np.repeat(np.arange(len(chains)), [len(c) - 1 for c in chains])
-    direction = nodes[ends] - nodes[starts]
+    return _beside_longest(nodes[starts], nodes[ends], owner)
+
+
+def _beside_longest(starts, ends, owner):
+    """For each owner (sorted ids) of segments ``starts -> ends``: a point just right of the
+    middle of its longest segment, so that a segment of (nearly) zero length, as clipping to the
+    border makes, never places it on the curves themselves."""
+    direction = ends - starts
     length = np.hypot(direction[:, 0], direction[:, 1])
     order = np.lexsort((-length, owner))
-    longest = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]  # the first of each chain
+    longest = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]  # the first of each owner
     direction, length = direction[longest], np.maximum(length[longest], 1e-300)
     normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
-    middle = 0.5 * (nodes[starts[longest]] + nodes[ends[longest]])
+    middle = starts[longest] + 0.5 * direction
     return middle + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
 
 
