@@ -95,6 +95,7 @@ class Network:
         self.inner, self.outer, self.shape = inner, outer, tuple(shape)
         self.interface = outer >= 0
         self.sides = Sides(inner, outer)
+        self._faces = None
         m, n = self.shape
         moving = np.zeros(len(nodes), dtype=bool)
         moving[start[self.interface]] = moving[end[self.interface]] = True
@@ -123,6 +124,35 @@ class Network:
         mapping = np.append(np.asarray(mapping), -1)  # -1 (outside the image) stays
         return Network(self.nodes, self.start, self.end, mapping[self.inner], mapping[self.outer],
                        self.shape)
+
+    def faces(self):
+        """The closed boundary curves of every region, as ``(face of each entry, segment, sign)``:
+        the entries of face f are its segments, traversed forward (+1) or backward (-1).  They
+        do not change while the nodes move, so each face's signed area (:meth:`face_areas`) must
+        keep its sign: a region turned inside out crosses no segment when it is a triangle."""
+        if self._faces is None:
+            face, segment, sign = [], [], []
+            for k in range(max(int(self.inner.max()), int(self.outer.max())) + 1):
+                forward = np.flatnonzero(self.inner == k)
+                backward = np.flatnonzero(self.outer == k)
+                both = np.concatenate([forward, backward])
+                starts = np.concatenate([self.start[forward], self.end[backward]])
+                ends = np.concatenate([self.end[forward], self.start[backward]])
+                signs = np.concatenate([np.ones(len(forward)), -np.ones(len(backward))])
+                for loop in chain_loops(starts, ends):
+                    face.append(np.full(len(loop), len(face)))
+                    segment.append(both[loop])
+                    sign.append(signs[loop])
+            self._faces = (np.concatenate(face).astype(np.intp), np.concatenate(segment).astype(np.intp),
+                           np.concatenate(sign))
+        return self._faces
+
+    def face_areas(self, nodes):
+        """The signed area of every face (:meth:`faces`)."""
+        face, segment, sign = self.faces()
+        a, b = nodes[self.start[segment]], nodes[self.end[segment]]
+        return 0.5 * np.bincount(face, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
+                                 minlength=int(face.max()) + 1 if face.size else 0)
 
     def region_curves(self, region):
         """Closed curves of a set of regions (bool per region): outer boundaries positive."""
@@ -193,7 +223,10 @@ class Network:
         for path, left, right, closed in lines:
             polyline = nodes[np.append(path, path[0]) if closed else path]
             arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
-            pieces = max(3 if closed else 1, int(round(arc[-1] / spacing)))
+            # an interface keeps a vertex between its ends: a region between two single segments
+            # (two interfaces joining the same junctions, or one and the border) would be a 2-gon
+            fewest = 3 if closed or path[0] == path[-1] else 2
+            pieces = max(fewest, int(round(arc[-1] / spacing)))
             steps = np.arange(0 if closed else 1, pieces) * (arc[-1] / pieces)
             new = np.column_stack([np.interp(steps, arc, polyline[:, 0]),
                                    np.interp(steps, arc, polyline[:, 1])])
@@ -379,7 +412,9 @@ class Network:
         m, n = self.shape
         inside = ((after[:, 0] >= -0.5) & (after[:, 0] <= m - 0.5)
                   & (after[:, 1] >= -0.5) & (after[:, 1] <= n - 0.5))
-        return bool(kept.all() and inside.all())
+        if not (kept.all() and inside.all()):
+            return False
+        return bool(np.all(np.sign(self.face_areas(after)) == np.sign(self.face_areas(before))))
 
 
 def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callback):
