@@ -78,6 +78,9 @@ class SegmentationResult:
     roi : bool ndarray (M, N) or None
         With ``segment(roi=...)``: the domain D the functional was solved on
         (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
+    n_regions : int or None
+        The number of regions K of the model (the one ``n_regions="auto"`` chose); ``classes``
+        takes values in 0..K-1 and ``constants`` has K rows.  Set by :func:`activecontour.segment`.
     """
 
     mask: np.ndarray
@@ -100,6 +103,7 @@ class SegmentationResult:
     constants: np.ndarray | None = None
     light: np.ndarray | None = None
     roi: np.ndarray | None = None
+    n_regions: int | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 

@@ -12,7 +12,8 @@ from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
 from activecontour.energy import ChanVeseParameters, to_frame, working_frame
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
-from activecontour.noise import auto_mu, is_auto
+from activecontour.models.modes import MAX_REGIONS, count_regions
+from activecontour.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
 from activecontour.raster import mask_to_curves
 from activecontour.result import build_result, scalar_if_gray
@@ -87,7 +88,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         no cancellation for intensities far from 0, no overflow), and report energies and
         constants in these units; weights and constants beyond ``PARAMETER_LIMIT`` (1e8) in
         that frame are refused.
-    n_regions : int
+    n_regions : int or "auto"
         The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
         the sum of each region's fit term plus mu times the length of the interfaces between
         regions, each counted once (:meth:`ChanVeseParameters.class_forms`).  ``result.classes``
@@ -97,6 +98,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         K > 2 runs on ``backend="levelset"`` only (a label field descended on the exact
         partition length, :mod:`activecontour.backends.labelfield`), started from the global
         K-means of the intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+        ``"auto"``: K in 2..6 (:data:`~activecontour.models.modes.MAX_REGIONS`), the number of
+        significant modes of the intensities of the image's flat pixels, at the noise level that
+        ``mu`` assumes (:mod:`activecontour.models.modes`, which says why not a penalised
+        likelihood); it costs a histogram, milliseconds.  It takes the settings of K > 2 (no
+        ``c_in``/``c_out``, ``roi`` or ``options``).  ``result.n_regions`` is the K used.
     fit : {"constant", "smooth"}
         ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
         is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
@@ -162,6 +168,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     image = single_image(image, channel_axis)
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
+    if is_auto(n_regions):
+        n_regions = _auto_regions(values, mu)
     if n_regions > 2:
         from activecontour.backends.labelfield import segment_labels
 
@@ -202,6 +210,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if result.classes is None:  # two regions: the inside is region 1
         result.classes = result.mask.astype(np.int32)
         result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
+    result.n_regions = int(n_regions)
     return result
 
 
@@ -333,12 +342,17 @@ def _in_caller_units(callback, offset, scale):
 
 
 def _check_regions(n_regions, backend, c_in, c_out, options, roi):
-    if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
-        raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
-    if n_regions < 2:
-        raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
-    if n_regions == 2:
-        return
+    """Refuse what ``n_regions`` cannot do; ``"auto"`` is checked as a K > 2 (it may choose one)."""
+    choices = "an integer >= 2 or 'auto'"
+    if isinstance(n_regions, str) and not is_auto(n_regions):
+        raise ValueError(f"n_regions must be {choices}, got {n_regions!r}")
+    if not is_auto(n_regions):
+        if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
+            raise TypeError(f"n_regions must be {choices}, got {n_regions!r}")
+        if n_regions < 2:
+            raise ValueError(f"n_regions must be {choices}, got {n_regions}")
+        if n_regions == 2:
+            return
     if backend != "levelset":
         raise ValueError(f"n_regions={n_regions} needs backend='levelset' (backend={backend!r} "
                          f"segments two regions)")
@@ -351,6 +365,22 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
     if options:
         raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
                         "takes none")
+
+
+def _auto_regions(values, mu):
+    """``n_regions="auto"``: the number of regions by :func:`activecontour.models.modes.count_regions`,
+    at the noise level the length weight assumes.
+
+    In the working frame (the image spanning [0, 1]), sigma is ``sqrt(mu / MU_PER_NOISE_VARIANCE)``
+    for the larger of ``mu`` and :func:`auto_mu`'s (the image's noise, at least
+    ``sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)`` = 0.03 of its range): regions are told apart at the
+    resolution the functional resolves.
+    """
+    offset, scale = working_frame(values)
+    values = to_frame(values, offset, scale)
+    floor = auto_mu(values)
+    mu = floor if is_auto(mu) else max(floor, mu / scale**2)
+    return count_regions(values, np.sqrt(mu / MU_PER_NOISE_VARIANCE), max_regions=MAX_REGIONS)
 
 
 def _smooth_light(values, init, params, run):
