@@ -12,8 +12,8 @@ from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
 from activecontour.energy import ChanVeseParameters, to_frame, working_frame
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
-from activecontour.models.modes import MAX_REGIONS, count_regions
-from activecontour.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
+from activecontour.models.modes import choose_regions
+from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
 from activecontour.raster import mask_to_curves
 from activecontour.result import build_result, scalar_if_gray
@@ -169,7 +169,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
     if is_auto(n_regions):
-        n_regions = _auto_regions(values, mu)
+        n_regions = choose_regions(values, mu)
     if n_regions > 2:
         from activecontour.backends.labelfield import segment_labels
 
@@ -365,22 +365,6 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
     if options:
         raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
                         "takes none")
-
-
-def _auto_regions(values, mu):
-    """``n_regions="auto"``: the number of regions by :func:`activecontour.models.modes.count_regions`,
-    at the noise level the length weight assumes.
-
-    In the working frame (the image spanning [0, 1]), sigma is ``sqrt(mu / MU_PER_NOISE_VARIANCE)``
-    for the larger of ``mu`` and :func:`auto_mu`'s (the image's noise, at least
-    ``sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)`` = 0.03 of its range): regions are told apart at the
-    resolution the functional resolves.
-    """
-    offset, scale = working_frame(values)
-    values = to_frame(values, offset, scale)
-    floor = auto_mu(values)
-    mu = floor if is_auto(mu) else max(floor, mu / scale**2)
-    return count_regions(values, np.sqrt(mu / MU_PER_NOISE_VARIANCE), max_regions=MAX_REGIONS)
 
 
 def _smooth_light(values, init, params, run):

@@ -140,3 +140,17 @@ def test_bad_regions_list_the_choices(kwargs, error):
 def test_auto_takes_the_settings_of_more_than_two_regions(kwargs, match):
     with pytest.raises(ValueError, match=match):
         ac.segment(np.zeros((10, 10)), **{"backend": "levelset", "n_regions": "auto", **kwargs})
+
+
+@pytest.mark.parametrize("convert", [
+    lambda im: im * 1000.0 + 5.0,
+    lambda im: im.astype(np.float32),
+    lambda im: np.round(255 * (im - im.min()) / np.ptp(im)).astype(np.uint8),
+])
+def test_the_count_does_not_depend_on_scale_or_dtype(convert):
+    m = 128
+    rows, cols = np.mgrid[:m, :m]
+    radius = np.hypot(rows - m / 2, cols - m / 2)
+    truth = (radius < 50).astype(int) + (radius < 25)
+    image = truth / 2.0 + np.random.default_rng(20).normal(0, 0.5 / 3, truth.shape)
+    assert _auto(convert(image), max_num_iter=0).n_regions == 3

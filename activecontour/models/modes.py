@@ -67,7 +67,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["MAX_REGIONS", "count_regions", "intensity_modes"]
+__all__ = ["MAX_REGIONS", "choose_regions", "count_regions", "intensity_modes"]
 
 #: ``n_regions="auto"`` chooses at most this many regions.
 MAX_REGIONS = 6
@@ -77,6 +77,38 @@ _BINS = 256
 _FLAT_QUANTILE = np.sqrt(-2.0 * np.log(0.01))  # chi^2_2's 99% quantile, as a gradient over tau
 _PROMINENCE = 0.5  # a mode's rise above its saddle, over its height
 _SIGNIFICANCE = 3.0  # ... and over the standard deviation of the counts' noise
+
+
+def choose_regions(values, mu="auto", *, max_regions=MAX_REGIONS):
+    """``n_regions="auto"`` of :func:`activecontour.segment`: :func:`count_regions` at the noise
+    level the length weight assumes.
+
+    In the working frame (the image spanning [0, 1], :func:`activecontour.energy.working_frame`),
+    sigma is ``sqrt(mu / MU_PER_NOISE_VARIANCE)`` for the larger of ``mu`` and
+    :func:`~activecontour.noise.auto_mu`'s (the image's noise, at least
+    ``sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)`` = 0.03 of its range): regions are told apart at the
+    resolution the functional resolves.
+
+    Parameters
+    ----------
+    values : ndarray (M, N, C)
+        Normalised intensities (:func:`activecontour.image.normalize_image`).
+    mu : float or "auto"
+        The length weight of the run, in the units of ``values``.
+    max_regions : int
+
+    Returns
+    -------
+    int
+    """
+    from activecontour.energy import to_frame, working_frame
+    from activecontour.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
+
+    offset, scale = working_frame(values)
+    values = to_frame(values, offset, scale)
+    floor = auto_mu(values)
+    mu = floor if is_auto(mu) else max(floor, mu / scale**2)
+    return count_regions(values, np.sqrt(mu / MU_PER_NOISE_VARIANCE), max_regions=max_regions)
 
 
 def count_regions(values, sigma, *, max_regions=MAX_REGIONS):
