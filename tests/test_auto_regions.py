@@ -154,3 +154,18 @@ def test_the_count_does_not_depend_on_scale_or_dtype(convert):
     truth = (radius < 50).astype(int) + (radius < 25)
     image = truth / 2.0 + np.random.default_rng(20).normal(0, 0.5 / 3, truth.shape)
     assert _auto(convert(image), max_num_iter=0).n_regions == 3
+
+
+def test_a_sequence_chooses_once_and_follows_the_classes():
+    m = 96
+    rows, cols = np.mgrid[:m, :m]
+    truths, frames = [], []
+    for t in range(4):  # the inner disc moves 3 px per frame inside the ring's disc
+        disc = np.hypot(rows - 48, cols - 40 - 3 * t) < 15
+        truth = (np.hypot(rows - 48, cols - 48) < 38).astype(int) + disc
+        truths.append(truth)
+        frames.append(truth / 2.0 + np.random.default_rng(21 + t).normal(0, 0.5 / 3, truth.shape))
+    seq = ac.segment_sequence(np.array(frames), n_regions="auto", backend="levelset")
+    for res, truth in zip(seq.results, truths, strict=True):
+        assert res.n_regions == 3
+        assert np.all(_dice(res.classes, truth, 3) > 0.97)
