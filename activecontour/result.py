@@ -81,6 +81,10 @@ class SegmentationResult:
     n_regions : int or None
         The number of regions K of the model (the one ``n_regions="auto"`` chose); ``classes``
         takes values in 0..K-1 and ``constants`` has K rows.  Set by :func:`activecontour.segment`.
+    class_contours : list of list of ndarray, or None
+        With ``n_regions > 2``: the closed curves of every region k (outer boundaries positive,
+        holes negative; region 0 the background), the sub-pixel partition whose functional is
+        ``energy``: ``chan_vese_energy(image, regions=result.class_contours)`` scores it.
     """
 
     mask: np.ndarray
@@ -104,6 +108,7 @@ class SegmentationResult:
     light: np.ndarray | None = None
     roi: np.ndarray | None = None
     n_regions: int | None = None
+    class_contours: list | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 

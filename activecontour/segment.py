@@ -95,9 +95,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         holds the region of every pixel (0 = the background, the region covering most of the
         image border; the others by increasing mean intensity), ``result.constants`` their
         constants; the inside (``mask``, ``contours``) is every region but the background.
-        K > 2 runs on ``backend="levelset"`` only (a label field descended on the exact
-        partition length, :mod:`activecontour.backends.labelfield`), started from the global
-        K-means of the intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+        For K > 2 both backends start from the global K-means of the intensities and find the
+        regions on a label field descended on the exact partition length
+        (:mod:`activecontour.backends.labelfield`, the ``"levelset"`` result); ``"polygon"``
+        then moves every interface and junction to sub-pixel position by the H^1 flow of the
+        boundary network (:mod:`activecontour.backends.network`).  ``result.class_contours``
+        are the regions' curves.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
         ``"auto"``: K in 2..6 (:data:`~activecontour.models.modes.MAX_REGIONS`), the number of
         significant modes of the intensities of the image's flat pixels, at the noise level that
         ``mu`` assumes (:mod:`activecontour.models.modes`, which says why not a penalised
@@ -171,9 +174,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if is_auto(n_regions):
         n_regions = choose_regions(values, mu)
     if n_regions > 2:
-        from activecontour.backends.labelfield import segment_labels
-
-        solver = functools.partial(segment_labels, n_regions=int(n_regions))
+        if backend == "polygon":
+            from activecontour.backends.network import segment_network as solver
+        else:
+            from activecontour.backends.labelfield import segment_labels as solver
+        solver = functools.partial(solver, n_regions=int(n_regions))
     else:
         chosen = BACKENDS[backend]
         parse_options(chosen.options, backend, options or {})  # before any work: bad keys, types
@@ -353,9 +358,6 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
             raise ValueError(f"n_regions must be {choices}, got {n_regions}")
         if n_regions == 2:
             return
-    if backend != "levelset":
-        raise ValueError(f"n_regions={n_regions} needs backend='levelset' (backend={backend!r} "
-                         f"segments two regions)")
     if c_in is not None or c_out is not None:
         raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
                          f"n_regions={n_regions}")

@@ -278,9 +278,9 @@ def _add_parameter_options(parser):
     group.add_argument("--regions", dest="n_regions", type=_regions, default=defaults["n_regions"],
                        metavar="K|auto",
                        help="number of regions K >= 2 of the piecewise model, or auto: chosen in "
-                       "2..6 from the image's intensities; more than 2 needs --backend levelset "
-                       "and writes <name>_classes.png, the region of each pixel (0 = background, "
-                       "the others by mean intensity) (default: %(default)s)")
+                       "2..6 from the image's intensities; not 2: <name>_classes.png is written "
+                       "too, the region of each pixel (0 = background, the others by mean "
+                       "intensity) (default: %(default)s)")
     group.add_argument("--fit", choices=_fit_choices(), default=defaults["fit"],
                        help="the regions' intensities: constant, or smooth (each region's constant "
                        "times a smooth light field shared by all, for uneven light) "

@@ -5,7 +5,7 @@ levels, two of them under 250 px) with noise 0.02; three colour regions of one g
 faint blobs (contrast 0.15) under a gradient and a vignette of amplitude 0.5 (384^2); real nuclei of
 different brightness (DSB 2018 from the stardist wheel, if ``--nuclei DIR`` holds img2d.tif and
 mask2d.tif).  Every method runs on every scene it applies to, in one run: ours with
-``n_regions=K`` (``backend="levelset"``; for two regions also the polygon), ``fit="constant"`` and
+``n_regions=K`` on both backends, ``fit="constant"`` and
 ``"smooth"``; scikit-image's ``threshold_multiotsu`` (on the image smoothed by a Gaussian of 1 px,
 K classes), ``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese`` (35
 iterations) with their defaults.  Dice: for two regions the object's, strict (the inside must be
@@ -123,8 +123,7 @@ def methods(n_classes, colour):
 
     color = {"color": "vector"} if colour else {}
     out = []
-    backends = ["levelset"] if n_classes > 2 else ["polygon", "levelset"]
-    for backend in backends:
+    for backend in ("polygon", "levelset"):
         for fit in ("constant", "smooth"):
             def ours(image, backend=backend, fit=fit):
                 res = ac.segment(image, backend=backend, fit=fit, n_regions=n_classes, separate=False,

@@ -135,8 +135,7 @@ def test_bad_regions_list_the_choices(kwargs, error):
         ac.segment(np.zeros((10, 10)), backend="levelset", **kwargs)
 
 
-@pytest.mark.parametrize("kwargs, match", [({"c_in": 0.5}, "c_in"), ({"roi": (0, 0, 5, 5)}, "roi"),
-                                           ({"backend": "polygon"}, "backend='levelset'")])
+@pytest.mark.parametrize("kwargs, match", [({"c_in": 0.5}, "c_in"), ({"roi": (0, 0, 5, 5)}, "roi")])
 def test_auto_takes_the_settings_of_more_than_two_regions(kwargs, match):
     with pytest.raises(ValueError, match=match):
         ac.segment(np.zeros((10, 10)), **{"backend": "levelset", "n_regions": "auto", **kwargs})
@@ -169,3 +168,14 @@ def test_a_sequence_chooses_once_and_follows_the_classes():
     for res, truth in zip(seq.results, truths, strict=True):
         assert res.n_regions == 3
         assert np.all(_dice(res.classes, truth, 3) > 0.97)
+
+
+def test_auto_on_the_polygon_backend():
+    m = 128
+    rows, cols = np.mgrid[:m, :m]
+    radius = np.hypot(rows - m / 2, cols - m / 2)
+    truth = (radius < 50).astype(int) + (radius < 25)
+    image = truth / 2.0 + np.random.default_rng(22).normal(0, 0.5 / 3, truth.shape)
+    res = ac.segment(image, n_regions="auto", separate=False)
+    assert res.n_regions == 3 and res.backend == "polygon"
+    assert np.all(_dice(res.classes, truth, 3) > 0.98)
