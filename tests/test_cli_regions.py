@@ -101,3 +101,28 @@ def test_help_lists_regions_and_fit(capsys):
     status, stdout, _ = run(capsys, "segment", "--help")
     assert status == 0
     assert "--regions K|auto" in stdout and "--fit {constant,smooth}" in stdout
+
+
+def test_the_overlay_draws_each_region_in_its_own_colour(nested, tmp_path, capsys):
+    from activecontour.image_files import COLORS, REGION_COLORS
+
+    path, truth = nested
+    out = tmp_path / "out"
+    status, _, stderr = run(capsys, "segment", path, "-o", out, "--regions", "3")
+    assert status == 0, stderr
+    overlay = cv2.imread(str(out / "rings_overlay.png"))[:, :, ::-1].astype(int)
+
+    def colour_near(row, col, name):
+        """Whether a pixel next to (row, col) has the hue of the colour (its full channels 100
+        above its empty ones: a gray image's pixel has none, an anti-aliased line's does)."""
+        patch = overlay[row - 1:row + 2, col - 1:col + 2].reshape(-1, 3)
+        full = np.array(COLORS[name]) == 255
+        return bool(np.any(patch[:, full].min(axis=1) - patch[:, ~full].max(axis=1) > 100))
+
+    # the background/ring interface (radius 38) in region 1's colour, the ring/disc one (radius 20)
+    # in region 2's, on the four axes through the centre (48, 48); the middle of the ring has none
+    for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0)):
+        assert colour_near(48 + round(37.5 * dr), 48 + round(37.5 * dc), REGION_COLORS[0])
+        assert colour_near(48 + round(19.5 * dr), 48 + round(19.5 * dc), REGION_COLORS[1])
+        assert not colour_near(48 + 29 * dr, 48 + 29 * dc, REGION_COLORS[0])
+        assert not colour_near(48 + 29 * dr, 48 + 29 * dc, REGION_COLORS[1])
