@@ -206,12 +206,17 @@ def partition_moments(model, boundary, n_classes):
     areas = np.zeros(n_classes)
     first = np.zeros((n_classes, model.n_channels))
     second = np.zeros((n_classes, model.n_channels))
-    for k in range(n_classes):
+    for k in range(1, n_classes):
         starts, ends = class_soup(boundary, k)
         points = np.empty((2 * len(starts), 2))
         points[0::2], points[1::2] = starts, ends
         next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
         areas[k], _, first[k], second[k] = _moments(model, points, next_index)
+    # the background: the domain's totals minus the others (as the two-region outside)
+    total_area, total_first, total_second = model.totals
+    areas[0] = total_area - areas[1:].sum()
+    first[0] = total_first - first[1:].sum(axis=0)
+    second[0] = total_second - second[1:].sum(axis=0)
     return areas, first, second
 
 

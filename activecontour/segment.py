@@ -207,9 +207,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
     # objects are the connected pieces of each non-background region (N regions: of each class,
-    # traced on the label field's own pixel grid)
-    by_class = result.contours if result.classes is None else [
-        mask_to_curves(result.classes == k) for k in range(1, int(n_regions))]
+    # its sub-pixel curves)
+    by_class = result.contours if result.class_contours is None else result.class_contours[1:]
     result.object_contours, result.labels, result.objects = find_objects(
         by_class, shape, pixels, separate=bool(separate))
     if result.classes is None:  # two regions: the inside is region 1

@@ -238,8 +238,8 @@ def contact_sheets(folder):
 
     os.makedirs(folder, exist_ok=True)
     runs = [("constant (polygon)", {}), ("smooth (polygon)", {"fit": "smooth"}),
-            ("3 regions (levelset)", {"backend": "levelset", "n_regions": 3}),
-            ("3 regions, smooth", {"backend": "levelset", "n_regions": 3, "fit": "smooth"})]
+            ("3 regions (polygon)", {"n_regions": 3}),
+            ("3 regions, smooth (polygon)", {"n_regions": 3, "fit": "smooth"})]
     for name in ("coins", "clock", "page", "text"):
         image = getattr(skimage.data, name)()
         figure, axes = plt.subplots(1, len(runs) + 1, figsize=(4 * (len(runs) + 1), 4.4))
@@ -249,12 +249,12 @@ def contact_sheets(folder):
             t = time.perf_counter()
             res = ac.segment(image, separate=False, **kwargs)
             elapsed = time.perf_counter() - t
-            if res.classes.max() > 1:
-                axis.imshow(res.classes, cmap="viridis", interpolation="nearest")
-            else:
-                axis.imshow(image, cmap="gray")
-                for contour in res.contours:
-                    axis.plot(contour[:, 1], contour[:, 0], "r-", lw=0.8)
+            axis.imshow(image, cmap="gray")
+            # each region's boundary in its own colour (two regions: the contours in red)
+            regions = res.class_contours[1:] if res.class_contours is not None else [res.contours]
+            for curves, colour in zip(regions, ("r", "c", "y", "m", "g"), strict=False):
+                for contour in curves:
+                    axis.plot(contour[:, 1], contour[:, 0], "-", color=colour, lw=0.8)
             axis.set_title(f"{title}\n{elapsed:.2f} s")
         for axis in axes:
             axis.set_axis_off()

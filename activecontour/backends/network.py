@@ -227,17 +227,30 @@ class Network:
         return scipy.sparse.csc_matrix((np.concatenate([diagonal, diagonal, off, off]), (rows, cols)),
                                        shape=(size, size))
 
-    def velocity(self, nodes, force):
-        """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component."""
+    def factors(self, nodes):
+        """The sparse LU factors of ``M + K`` (6.39) restricted to each component's free nodes,
+        for :meth:`velocity`."""
         from scipy.sparse.linalg import splu
 
         matrix = self.stiffness(nodes)
-        velocity = np.zeros_like(nodes)
-        for component, free in enumerate(self.free):
+        factors = []
+        for free in self.free:
             index = np.flatnonzero(free)
-            if index.size:
-                block = matrix[index][:, index]
-                velocity[index, component] = splu(block.tocsc()).solve(-force[index, component])
+            factors.append((index, splu(matrix[index][:, index].tocsc()) if index.size else None))
+        return factors
+
+    def velocity(self, nodes, force, factors=None):
+        """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component.
+
+        ``factors`` of :meth:`factors` at nearby nodes may be reused: the metric of a mesh whose
+        edges changed a little is still an inner product, so V is still a descent direction
+        (``delta J(V) = -b(V, V) < 0``, (6.27)).
+        """
+        factors = self.factors(nodes) if factors is None else factors
+        velocity = np.zeros_like(nodes)
+        for component, (index, factor) in enumerate(factors):
+            if factor is not None:
+                velocity[index, component] = factor.solve(-force[index, component])
         return velocity
 
     def normal_part(self, nodes, velocity):
@@ -357,10 +370,13 @@ class _Flow:
         """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step)
         and the iteration count."""
         dt_last, block_start, block_network, still = None, self.nodes, self.network, 0
+        factors = None
         for iteration in range(1, max_num_iter + 1):
             network, nodes, current = self.network, self.nodes, self.current
             force = network.force(nodes, self.model, self.params, current.constants)
-            velocity = network.velocity(nodes, force)
+            if factors is None:  # the metric of the block's first mesh, for the whole block
+                factors = network.factors(nodes)
+            velocity = network.velocity(nodes, force, factors)
             normal = network.normal_part(nodes, velocity)
             if np.sum(force * normal) < 0:  # still a descent direction (it nearly always is)
                 velocity = normal
@@ -391,7 +407,7 @@ class _Flow:
                 self.cooldown -= 1
                 if self.cooldown <= 0 and self.unhealthy():
                     self.remesh()
-                block_start, block_network = self.nodes, self.network
+                block_start, block_network, factors = self.nodes, self.network, None
         return 1, n_iter
 
 
