@@ -181,32 +181,42 @@ def auto_table():
     from activecontour.models.modes import choose_regions
 
     rng = np.random.default_rng(4)
-    halves = np.zeros((256, 256))
-    halves[:, 128:] = 1.0
-    scenes = [("nested 3, SNR 3, 384^2", 3, nested_scene()[0], "gray"),
-              ("Shepp-Logan 6 levels, noise 0.02", 6, phantom_scene()[0], "gray"),
-              ("colour 3 regions, one gray (vector)", 3, colour_scene()[0], "vector"),
-              ("20 faint blobs, light 0.5", 2, blobs_scene()[0], "gray"),
-              ("pure noise 256^2", 1, rng.normal(0.5, 0.1, (256, 256)), "gray"),
-              ("two flat halves, SNR 3", 2, halves + rng.normal(0, 1 / 3, halves.shape), "gray"),
-              ("ramp 0..1, 256^2", "-", np.tile(np.linspace(0, 1, 256), (256, 1)), "gray")]
-    scenes += [(f"skimage {name}", "-", getattr(skimage.data, name)(), "gray")
+    halves = np.zeros((256, 256), dtype=int)
+    halves[:, 128:] = 1
+    scenes = [("nested 3, SNR 3, 384^2", *nested_scene(), "gray"),
+              ("Shepp-Logan 6 levels, noise 0.02", *phantom_scene(), "gray"),
+              ("colour 3 regions, one gray (vector)", *colour_scene(), "vector"),
+              ("20 faint blobs, light 0.5", *blobs_scene(), "gray"),
+              ("pure noise 256^2", rng.normal(0.5, 0.1, (256, 256)), None, "gray"),
+              ("two flat halves, SNR 3", halves + rng.normal(0, 1 / 3, halves.shape), halves, "gray"),
+              ("ramp 0..1, 256^2", np.tile(np.linspace(0, 1, 256), (256, 1)), None, "gray")]
+    scenes += [(f"skimage {name}", getattr(skimage.data, name)(), None, "gray")
                for name in ("coins", "camera", "page", "text", "clock")]
-    print("\nscene | true K | K chosen | choice ms | segment auto s | segment K=2 (levelset) s | "
-          "choice / K=2 run")
-    for name, truth, image, color in scenes:
+    print("\nscene | true K | K chosen | choice ms | auto: levelset s, Dice | auto: polygon s, Dice | "
+          "K=2 levelset s | choice / K=2 run")
+    for name, image, truth, color in scenes:
+        n_true = "-" if truth is None else int(truth.max()) + 1
         t = time.perf_counter()
         chosen = choose_regions(normalize_image(image, color=color))
         choice = time.perf_counter() - t
-        t = time.perf_counter()
-        res = ac.segment(image, n_regions="auto", backend="levelset", color=color, separate=False)
-        auto = time.perf_counter() - t
-        assert res.n_regions == chosen
+        cells = []
+        for backend in ("levelset", "polygon"):
+            t = time.perf_counter()
+            try:
+                res = ac.segment(image, n_regions="auto", backend=backend, color=color, separate=False)
+            except (RuntimeError, ValueError) as exc:  # a failing backend is a row of the table
+                cells.append(f"{type(exc).__name__}: {exc}")
+                continue
+            elapsed = time.perf_counter() - t
+            assert res.n_regions == chosen
+            dice = (class_dice(res.classes, truth, chosen).mean()
+                    if truth is not None and chosen == n_true else None)
+            cells.append(f"{elapsed:.2f}, {'-' if dice is None else f'{dice:.4f}'}")
         t = time.perf_counter()
         ac.segment(image, n_regions=2, backend="levelset", color=color, separate=False)
         two = time.perf_counter() - t
-        print(f"{name} | {truth} | {chosen} | {1000 * choice:.1f} | {auto:.2f} | {two:.2f} | "
-              f"{choice / two:.3f}", flush=True)
+        print(f"{name} | {n_true} | {chosen} | {1000 * choice:.1f} | {cells[0]} | {cells[1]} | "
+              f"{two:.2f} | {choice / two:.3f}", flush=True)
 
 
 def robust_comparison():

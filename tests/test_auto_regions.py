@@ -179,3 +179,10 @@ def test_auto_on_the_polygon_backend():
     res = ac.segment(image, n_regions="auto", separate=False)
     assert res.n_regions == 3 and res.backend == "polygon"
     assert np.all(_dice(res.classes, truth, 3) > 0.98)
+
+
+def test_an_image_without_flat_pixels_has_no_mode():
+    # a steep ramp: 0.05 per pixel, above the flat limit 3.03 tau = 3.03 * 0.159 * 0.03 = 0.015
+    steep = np.tile(np.linspace(0.0, 1.0, 21), (30, 1))
+    assert len(intensity_modes(steep, 0.03)) == 0
+    assert _auto(steep, max_num_iter=0).n_regions == 2

@@ -196,4 +196,4 @@ def _significant(density, variance, peak):
     saddle, where = max(saddles, key=lambda entry: entry[0])
     rise = height - saddle
     noise = np.sqrt(variance[peak] + (0.0 if where is None else variance[where]))
-    return rise >= _PROMINENCE * height and rise >= _SIGNIFICANCE * noise
+    return rise > 0.0 and rise >= _PROMINENCE * height and rise >= _SIGNIFICANCE * noise
