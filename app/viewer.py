@@ -468,7 +468,8 @@ class Viewer:
         return self.set_init(mask)
 
     def save(self, stem=None):
-        """Save mask, overlay and contours with the CLI's writers; returns the paths written.
+        """Save mask, overlay and contours with the CLI's writers (and the classes image when the
+        number of regions is not 2); returns the paths written.
 
         Before any run, or while running, the status line says so and nothing is written.
         """
@@ -489,8 +490,9 @@ class Viewer:
         if self.image_path is not None:
             metadata["image"] = os.fspath(self.image_path)
         try:
+            # K regions: their image too, as the command line writes it
             paths = save_result(self.result, self.image, stem, self.formats, metadata=metadata,
-                                protect=protect)
+                                protect=protect, objects=("classes",) if self.n_regions != 2 else ())
         except (OSError, ValueError) as exc:
             self._set_message(f"not saved: {_one_line(exc)}")
             return None

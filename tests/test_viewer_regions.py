@@ -113,3 +113,16 @@ def test_view_command_passes_regions_and_fit(rings, tmp_path, headless_launch):
     assert status == 1  # Agg cannot open a window: the viewer was built, then refused to show
     (viewer,) = headless_launch
     assert viewer.parameters()["n_regions"] == "auto" and viewer.parameters()["fit"] == "smooth"
+
+
+def test_save_writes_the_classes_image_as_the_command_line_does(rings, make_viewer, tmp_path):
+    from activecontour.object_formats import read_label_image
+
+    image, _ = rings
+    viewer = make_viewer(image)
+    key(viewer, "k")
+    key(viewer, " ")
+    paths = viewer.save(tmp_path / "rings")
+    assert sorted(p.name for p in paths) == ["rings_classes.png", "rings_contours.json", "rings_mask.png",
+                                             "rings_overlay.png"]
+    assert np.array_equal(read_label_image(tmp_path / "rings_classes.png"), viewer.result.classes)
