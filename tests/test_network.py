@@ -167,3 +167,24 @@ def test_polygon_result_obeys_the_invariants_and_is_stationary():
     finer = ac.segment(image, n_regions=3, tol=5e-6)
     assert abs(finer.energy - res.energy) <= 1e-3 * abs(res.energy)
     assert np.sum(finer.classes != res.classes) <= 1e-3 * np.sum(res.classes > 0)
+
+
+def test_dropping_an_island_merges_it_into_the_region_around_it():
+    classes = np.zeros((16, 18), dtype=np.int32)
+    classes[3:12, 4:14] = 1
+    classes[6:8, 7:9] = 2  # an island of region 2 inside region 1
+    classes[13, 2] = 2  # and one in the background
+    image = np.random.default_rng(5).random(classes.shape)
+    model, params = _setup(image, 0.3)
+    network = Network.of_classes(classes)
+    loops = {len(path): path for path, _, _, closed in network.polylines() if closed}
+    assert sorted(loops) == [4, 8, 38]  # the speck, the 2 x 2 island, the block's outline
+    for size, around, box in ((4, 0, (13, 2)), (8, 1, (slice(6, 8), slice(7, 9)))):
+        merged = classes.copy()
+        merged[box] = around
+        dropped = network.without_island(network.nodes, loops[size])
+        expected = evaluate_partition(model, class_boundary(merged), params, 3).energy
+        found = evaluate_partition(model, dropped.boundary(), params, 3).energy
+        assert found == pytest.approx(expected, rel=1e-12)
+    # the block's outline holds the island: dropping it would need the island's regions renamed
+    assert network.without_island(network.nodes, loops[38]) is None

@@ -68,6 +68,8 @@ _STILL_BLOCKS = 2
 _ARMIJO = 1e-4
 #: Target length of the interfaces' segments (px), as the two-region polygon's default spacing.
 _SPACING = 1.0
+#: Closed loops enclosing less than this (px^2) are dropped when that does not raise J.
+_ISLAND_AREA = 1.0
 #: Blocks before a remesh that raised J is tried again.
 _REMESH_COOLDOWN = 4
 #: Halvings of dt before the line search gives up (stationary to working precision).
@@ -213,6 +215,35 @@ class Network:
         network = Network(nodes, *parts, self.shape)
         return network, nodes
 
+    def crossing_nodes(self, nodes):
+        """The nodes of interface segments that cross another one (for the islands to drop)."""
+        import shapely
+
+        chosen = np.flatnonzero(self.interface)
+        ends = np.stack([nodes[self.start[chosen]], nodes[self.end[chosen]]], axis=1)
+        lines = shapely.linestrings(ends)
+        first, second = shapely.STRtree(lines).query(lines, predicate="crosses")
+        crossing = chosen[np.union1d(first, second)]
+        return np.union1d(self.start[crossing], self.end[crossing])
+
+    def without_island(self, nodes, path):
+        """The network without the closed interface loop through ``path`` (nodes of degree two),
+        the region inside it merged into the one around it; None when another part of the
+        network lies inside the loop (its regions would need renaming)."""
+        from matplotlib.path import Path
+
+        ring = nodes[path]
+        low, high = ring.min(axis=0), ring.max(axis=0)
+        in_loop = np.zeros(len(self.start), dtype=bool)
+        in_loop[np.isin(self.start, path) & self.interface] = True
+        used = np.unique(np.concatenate([self.start[~in_loop], self.end[~in_loop]]))
+        near = used[np.all((nodes[used] > low) & (nodes[used] < high), axis=1)]
+        if near.size and Path(ring).contains_points(nodes[near]).any():
+            return None
+        keep = ~in_loop
+        return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
+                       self.shape)
+
     def stiffness(self, nodes, smoothing=1.0):
         """The matrix ``M + l^2 K`` of the H^1 form (6.39) of P1 functions on the interfaces."""
         import scipy.sparse
@@ -289,9 +320,27 @@ class Network:
         normal = np.abs(shift[:, 0] * tangent[:, 1] - shift[:, 1] * tangent[:, 0])  # |shift . nu| h
         return float(normal.sum() / max(length.sum(), 1e-12))
 
+    def simple(self, nodes):
+        """No two interfaces cross: the interface segments meet only at their ends (GEOS's
+        ``is_simple`` of them as one multi-line string, a sweep in O(S log S)).  A crossing would
+        make an overlap of two regions, whose energy the functional would count with a negative
+        area."""
+        import shapely
+
+        chosen = self.interface
+        count = int(np.count_nonzero(chosen))
+        if count == 0:
+            return True
+        coordinates = np.empty((2 * count, 2))
+        coordinates[0::2], coordinates[1::2] = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        lines = shapely.from_ragged_array(shapely.GeometryType.MULTILINESTRING, coordinates,
+                                          (np.arange(0, 2 * count + 1, 2), np.array([0, count])))[0]
+        return bool(shapely.is_simple(lines))
+
     def admissible(self, before, after):
-        """No interface segment reversed or collapsed, every vertex in the image domain."""
-        a, b = self.start[self.interface], self.end[self.interface]
+        """No segment reversed or collapsed, every vertex in the image domain (cheap tests before
+        the energy; :meth:`simple` is the exact one)."""
+        a, b = self.start, self.end
         old, new = before[b] - before[a], after[b] - after[a]
         kept = np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old)
         m, n = self.shape
@@ -355,10 +404,38 @@ class _Flow:
         self.cooldown = _REMESH_COOLDOWN
         network, nodes = self.network.resampled(self.nodes, _SPACING)
         trial = self.evaluate(network, nodes)
-        if trial.energy <= self.current.energy:
-            self.network, self.nodes, self.current = network, nodes, trial
+        if trial.energy <= self.current.energy and network.simple(nodes):
             if trial.energy < self.current.energy:
                 self.energies.append(trial.energy)
+            self.network, self.nodes, self.current = network, nodes, trial
+
+    def drop_islands(self, nodes_of_interest=None):
+        """Remove the closed loops (islands, holes) that enclose less than ``_ISLAND_AREA`` px^2,
+        or, given ``nodes_of_interest``, the loops through them, one at a time, each only if J
+        does not rise: the network cannot change its topology by moving, so a region the flow
+        shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
+        removed = False
+        for path, _, _, closed in self.network.polylines():
+            if not closed:
+                continue
+            ring = self.nodes[path]
+            following = np.roll(ring, -1, axis=0)
+            area = 0.5 * abs(np.sum(ring[:, 0] * following[:, 1] - following[:, 0] * ring[:, 1]))
+            if nodes_of_interest is None:
+                chosen = area < _ISLAND_AREA
+            else:
+                chosen = np.isin(path, nodes_of_interest).any()
+            if not chosen:
+                continue
+            network = self.network.without_island(self.nodes, path)
+            if network is None:
+                continue
+            trial = self.evaluate(network, self.nodes)
+            if trial.energy <= self.current.energy:
+                if trial.energy < self.current.energy:
+                    self.energies.append(trial.energy)
+                self.network, self.current, removed = network, trial, True
+        return removed
 
     def unhealthy(self):
         network, nodes = self.network, self.nodes
@@ -385,14 +462,21 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_last is None else min(2.0 * dt_last, _MAX_STEP / spread)
+            crossed = None
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
                 if network.admissible(nodes, trial):
                     candidate = self.evaluate(network, trial)
                     if candidate.energy <= current.energy + _ARMIJO * dt * slope:
-                        break
+                        if network.simple(trial):
+                            break
+                        crossed = trial if crossed is None else crossed
                 dt *= 0.5
             else:
+                # a region folding over itself as the flow shrinks it: drop it and go on
+                if crossed is not None and self.drop_islands(network.crossing_nodes(crossed)):
+                    factors, dt_last = None, None
+                    continue
                 return 4, n_iter
             self.nodes, self.current, dt_last = trial, candidate, dt
             n_iter += 1
@@ -405,6 +489,7 @@ class _Flow:
                 if still == _STILL_BLOCKS:
                     return 0, n_iter
                 self.cooldown -= 1
+                self.drop_islands()
                 if self.cooldown <= 0 and self.unhealthy():
                     self.remesh()
                 block_start, block_network, factors = self.nodes, self.network, None
