@@ -186,3 +186,40 @@ def test_an_image_without_flat_pixels_has_no_mode():
     steep = np.tile(np.linspace(0.0, 1.0, 21), (30, 1))
     assert len(intensity_modes(steep, 0.03)) == 0
     assert _auto(steep, max_num_iter=0).n_regions == 2
+
+
+def test_any_small_image_gets_a_count_in_range_and_a_consistent_result():
+    """Fuzz: random small images of every dtype and scene of tests/test_fuzz.py, every mu and
+    normalisation: K in 2..MAX_REGIONS, classes in 0..K-1, K constants, the common evaluator's
+    energy."""
+    hypothesis = pytest.importorskip("hypothesis")
+    from hypothesis import strategies as st
+
+    from tests.test_fuzz import DTYPES, SCENES, make_image
+
+    @hypothesis.settings(max_examples=40, derandomize=True, deadline=None, database=None,
+                         suppress_health_check=list(hypothesis.HealthCheck))
+    @hypothesis.given(st.sampled_from(SCENES), st.sampled_from(DTYPES), st.integers(4, 24),
+                      st.integers(4, 24), st.integers(0, 2**32 - 1),
+                      st.sampled_from(["auto", 0.0, 1e-3, 0.5]), st.sampled_from(["range", "dtype", None]),
+                      st.sampled_from(["levelset", "polygon"]))
+    def check(scene, dtype, m, n, seed, mu, normalize, backend):
+        image = make_image(scene, dtype, (m, n), seed)
+        if seed % 2:  # or bands of 2..7 flat levels, to reach more than two regions
+            rng = np.random.default_rng(seed)
+            levels = rng.integers(0, rng.integers(2, 8), n)[np.arange(n) // 3 % n]
+            image = (levels[None, :] + rng.normal(0, 0.02, (m, n))).astype(image.dtype)
+        res = ac.segment(image, n_regions="auto", mu=mu, normalize=normalize, backend=backend,
+                         max_num_iter=5, separate=False)
+        assert 2 <= res.n_regions <= MAX_REGIONS
+        assert res.classes.min() >= 0 and res.classes.max() < res.n_regions
+        assert len(res.constants) == res.n_regions
+        partition = {"regions": res.class_contours} if res.n_regions > 2 else {"contours": res.contours}
+        found.append(res.n_regions)
+        assert res.energy == pytest.approx(
+            ac.chan_vese_energy(image, mu=res.mu, normalize=normalize, **partition), rel=1e-9, abs=1e-9)
+
+    found = []
+
+    check()
+    assert max(found) > 2  # the cases reach more than two regions
