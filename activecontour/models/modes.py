@@ -57,10 +57,10 @@ What it gives: a pure-noise image, a ramp (flat density, no mode but one) and tw
 SNR 3 give 2; three nested classes at SNR 3 give 3; the Shepp-Logan phantom (six levels, two of
 them under 250 px) gives 6.  Shading makes modes of its own: an unevenly lit background is a
 broad bump, sometimes two (the 20 faint blobs under a light gradient and a vignette of
-benchmarks/bench_models.py give 3, whatever ``fit``: the count is made on the image as it is.
-Dividing by the light field of the whole image as one region, the smooth fit's second start, was
-tried and dropped: where large objects make that light, it merges their levels; the nested
-classes gave 2 and the phantom 4).
+benchmarks/bench_models.py give 2 or 3 by seed).  The count is made on the image as it is,
+whatever ``fit``: dividing it by the light field of the whole image as one region (the smooth
+fit's second start) was tried and dropped, since where large objects make that light it merges
+their levels (the nested classes gave 2, the phantom 4).
 
 A known limit: the count noise is taken as Poisson, though neighbouring pixels of the smoothed
 image are correlated (over about 4 pi px, the area of one independent sample of smoothed noise).
