@@ -571,8 +571,9 @@ class Viewer:
                    and now - self._last_draw_end >= self._draw_cost)
             if due:
                 self._last_draw_iteration = state.iteration
-                self._show_contours(state.contours)
-                self._show_readout(state, state.contours)
+                contours = _state_curves(state)
+                self._show_contours(contours)
+                self._show_readout(state, contours)
                 self.fig.canvas.draw_idle()
             if due or now - self._last_flush >= FLUSH_INTERVAL:
                 self._last_flush = now
@@ -992,6 +993,16 @@ def _no_redraw(canvas):
         yield
     finally:
         del canvas.draw_idle
+
+
+def _state_curves(state):
+    """The curves of a run's state: its contours, or where a backend sends none but a level-set
+    function (the N-region label field), the outline of that function's inside."""
+    if state.contours or state.phi is None:
+        return state.contours
+    from activecontour.raster import mask_to_curves
+
+    return mask_to_curves(state.phi > 0)
 
 
 def _closed_xy(curve):

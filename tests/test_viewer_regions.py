@@ -126,3 +126,17 @@ def test_save_writes_the_classes_image_as_the_command_line_does(rings, make_view
     assert sorted(p.name for p in paths) == ["rings_classes.png", "rings_contours.json", "rings_mask.png",
                                              "rings_overlay.png"]
     assert np.array_equal(read_label_image(tmp_path / "rings_classes.png"), viewer.result.classes)
+
+
+def test_a_label_field_run_is_drawn_while_it_runs(rings, make_viewer):
+    from tests.test_viewer import during_run, gui_like
+
+    image, _ = rings
+    viewer = gui_like(make_viewer(image, backend="levelset", redraw_every=1))
+    key(viewer, "k")
+    shown = []
+    during_run(viewer, lambda: shown.append(len(viewer.contour_lines.get_segments())), at_iteration=1)
+    key(viewer, " ")
+    # the label field sends no contours, only the inside's indicator: its outline is drawn
+    assert shown and shown[0] > 0
+    assert viewer.result.n_regions == 3
