@@ -12,6 +12,7 @@ from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
 from activecontour.energy import ChanVeseParameters, to_frame, working_frame
 from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
+from activecontour.models.modes import choose_regions
 from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
 from activecontour.raster import mask_to_curves
@@ -87,7 +88,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         no cancellation for intensities far from 0, no overflow), and report energies and
         constants in these units; weights and constants beyond ``PARAMETER_LIMIT`` (1e8) in
         that frame are refused.
-    n_regions : int
+    n_regions : int or "auto"
         The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
         the sum of each region's fit term plus mu times the length of the interfaces between
         regions, each counted once (:meth:`ChanVeseParameters.class_forms`).  ``result.classes``
@@ -100,6 +101,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         then moves every interface and junction to sub-pixel position by the H^1 flow of the
         boundary network (:mod:`activecontour.backends.network`).  ``result.class_contours``
         are the regions' curves.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+        ``"auto"``: K in 2..6 (:data:`~activecontour.models.modes.MAX_REGIONS`), the number of
+        significant modes of the intensities of the image's flat pixels, at the noise level that
+        ``mu`` assumes (:mod:`activecontour.models.modes`, which says why not a penalised
+        likelihood); it costs a histogram, milliseconds.  It takes the settings of K > 2 (no
+        ``c_in``/``c_out``, ``roi`` or ``options``).  ``result.n_regions`` is the K used.
     fit : {"constant", "smooth"}
         ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
         is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
@@ -165,6 +171,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     image = single_image(image, channel_axis)
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
+    if is_auto(n_regions):
+        n_regions = choose_regions(values, mu)
     if n_regions > 2:
         if backend == "polygon":
             from activecontour.backends.network import segment_network as solver
@@ -206,6 +214,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if result.classes is None:  # two regions: the inside is region 1
         result.classes = result.mask.astype(np.int32)
         result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
+    result.n_regions = int(n_regions)
     return result
 
 
@@ -337,12 +346,17 @@ def _in_caller_units(callback, offset, scale):
 
 
 def _check_regions(n_regions, backend, c_in, c_out, options, roi):
-    if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
-        raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
-    if n_regions < 2:
-        raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
-    if n_regions == 2:
-        return
+    """Refuse what ``n_regions`` cannot do; ``"auto"`` is checked as a K > 2 (it may choose one)."""
+    choices = "an integer >= 2 or 'auto'"
+    if isinstance(n_regions, str) and not is_auto(n_regions):
+        raise ValueError(f"n_regions must be {choices}, got {n_regions!r}")
+    if not is_auto(n_regions):
+        if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
+            raise TypeError(f"n_regions must be {choices}, got {n_regions!r}")
+        if n_regions < 2:
+            raise ValueError(f"n_regions must be {choices}, got {n_regions}")
+        if n_regions == 2:
+            return
     if c_in is not None or c_out is not None:
         raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
                          f"n_regions={n_regions}")

@@ -13,11 +13,17 @@ the objects; thresholds take the bright side); for K regions the mean per-class 
 matching of found to true classes (scipy's linear_sum_assignment), with the per-class values.
 Ours run with ``separate=False``: the times are the segmentation's, not the objects' split.
 
+Then ``n_regions="auto"`` (:func:`activecontour.models.modes.choose_regions`) on the scenes, on
+pure noise, two flat regions at SNR 3, a ramp, and scikit-image's coins, camera, page, text and
+clock: the K chosen, the time of the choice, of ``segment(n_regions="auto")`` and of a two-region
+level-set run (``--no-auto`` skips it).
+
 Then ``fit="smooth"`` against ``"constant"`` on every synthetic case of bench_robust.py (the quick
 set), both backends: Dice and time ratio.  ``--sheets DIR`` writes contact sheets of skimage's
 coins, clock, page and text with the models.
 
-usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-robust] [--sheets DIR]
+usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-auto] [--no-robust]
+       [--sheets DIR]
 """
 
 from __future__ import annotations
@@ -168,6 +174,51 @@ def scenes_table(nuclei):
                   f"{object_dice(res.mask, truth):.4f} | - | {time.perf_counter() - t:.2f}", flush=True)
 
 
+def auto_table():
+    import skimage.data
+
+    from activecontour.image import normalize_image
+    from activecontour.models.modes import choose_regions
+
+    rng = np.random.default_rng(4)
+    halves = np.zeros((256, 256), dtype=int)
+    halves[:, 128:] = 1
+    scenes = [("nested 3, SNR 3, 384^2", *nested_scene(), "gray"),
+              ("Shepp-Logan 6 levels, noise 0.02", *phantom_scene(), "gray"),
+              ("colour 3 regions, one gray (vector)", *colour_scene(), "vector"),
+              ("20 faint blobs, light 0.5", *blobs_scene(), "gray"),
+              ("pure noise 256^2", rng.normal(0.5, 0.1, (256, 256)), None, "gray"),
+              ("two flat halves, SNR 3", halves + rng.normal(0, 1 / 3, halves.shape), halves, "gray"),
+              ("ramp 0..1, 256^2", np.tile(np.linspace(0, 1, 256), (256, 1)), None, "gray")]
+    scenes += [(f"skimage {name}", getattr(skimage.data, name)(), None, "gray")
+               for name in ("coins", "camera", "page", "text", "clock")]
+    print("\nscene | true K | K chosen | choice ms | auto: levelset s, Dice | auto: polygon s, Dice | "
+          "K=2 levelset s | choice / K=2 run")
+    for name, image, truth, color in scenes:
+        n_true = "-" if truth is None else int(truth.max()) + 1
+        t = time.perf_counter()
+        chosen = choose_regions(normalize_image(image, color=color))
+        choice = time.perf_counter() - t
+        cells = []
+        for backend in ("levelset", "polygon"):
+            t = time.perf_counter()
+            try:
+                res = ac.segment(image, n_regions="auto", backend=backend, color=color, separate=False)
+            except (RuntimeError, ValueError) as exc:  # a failing backend is a row of the table
+                cells.append(f"{type(exc).__name__}: {exc}")
+                continue
+            elapsed = time.perf_counter() - t
+            assert res.n_regions == chosen
+            dice = (class_dice(res.classes, truth, chosen).mean()
+                    if truth is not None and chosen == n_true else None)
+            cells.append(f"{elapsed:.2f}, {'-' if dice is None else f'{dice:.4f}'}")
+        t = time.perf_counter()
+        ac.segment(image, n_regions=2, backend="levelset", color=color, separate=False)
+        two = time.perf_counter() - t
+        print(f"{name} | {n_true} | {chosen} | {1000 * choice:.1f} | {cells[0]} | {cells[1]} | "
+              f"{two:.2f} | {choice / two:.3f}", flush=True)
+
+
 def robust_comparison():
     from bench_robust import synthetic_cases
 
@@ -228,11 +279,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--nuclei", default=os.environ.get("NUCLEI_DIR", ""),
                         help="folder with img2d.tif and mask2d.tif (the stardist wheel's data/images)")
+    parser.add_argument("--no-auto", action="store_true", help="skip the n_regions='auto' table")
     parser.add_argument("--no-robust", action="store_true")
     parser.add_argument("--sheets", help="write contact sheets of coins, clock, page, text here")
     args = parser.parse_args()
     ac.segment(np.random.default_rng(0).random((64, 64)))  # load the compiled kernels
     scenes_table(args.nuclei)
+    if not args.no_auto:
+        auto_table()
     if not args.no_robust:
         robust_comparison()
     if args.sheets:
