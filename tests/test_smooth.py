@@ -37,7 +37,7 @@ def test_light_update_is_the_least_squares_solve_on_the_pixels():
     constants = rng.uniform(0.2, 1.0, (3, 2))
     params = ChanVeseParameters(lambda_in=[1.0, 2.0], lambda_out=[0.5, 1.5])
     basis = light_basis(image.shape[:2])
-    light = fit_light(image, classes, constants, params, basis)
+    light, drop = fit_light(image, classes, constants, params)
     # reference: the stacked residuals sqrt(w) (I_c - c_k b) with b = basis . beta, by lstsq
     weights = np.array([[0.5, 1.5], [1.0, 2.0], [1.0, 2.0]]) / 2  # lambda / C
     rows = []
@@ -46,10 +46,41 @@ def test_light_update_is_the_least_squares_solve_on_the_pixels():
         scale = np.sqrt(weights[classes, ch]).ravel()
         rows.append((scale * constants[classes, ch].ravel())[:, None] * basis.reshape(len(basis), -1).T)
         targets.append(scale * image[..., ch].ravel())
-    beta = np.linalg.lstsq(np.vstack(rows), np.concatenate(targets), rcond=None)[0]
+    design, stacked = np.vstack(rows), np.concatenate(targets)
+    beta = np.linalg.lstsq(design, stacked, rcond=None)[0]
     expected = np.tensordot(beta, basis, axes=1)
     assert np.all(expected > 0.1 * expected.mean())  # no clipping in this case
     np.testing.assert_allclose(light, expected / expected.mean(), rtol=1e-9)
+    # the drop is the fit term at uniform light (beta = e_0: P_0 P_0 = 1) less the one at b*
+    uniform = np.zeros(len(basis))
+    uniform[0] = 1.0
+    fit_term = [np.sum((stacked - design @ b) ** 2) for b in (uniform, beta)]
+    assert drop == pytest.approx(fit_term[0] - fit_term[1], rel=1e-9)
+    assert drop > 0
+
+
+def test_light_drop_from_any_previous_field():
+    # from a previous field (in the span, or clipped out of it) the drop is J(previous) - J(b*),
+    # b* the unnormalised least-squares field on the pixels
+    rng = np.random.default_rng(5)
+    image = rng.random((25, 35, 1))
+    classes = rng.integers(0, 2, (25, 35))
+    constants = np.array([[0.3], [0.8]])
+    params = ChanVeseParameters()
+    basis = light_basis(image.shape[:2])
+    design = constants[classes, 0].ravel()[:, None] * basis.reshape(len(basis), -1).T
+    best = np.tensordot(np.linalg.lstsq(design, image[..., 0].ravel(), rcond=None)[0], basis, axes=1)
+
+    def fit_term(b):
+        return np.sum((image[..., 0] - constants[classes, 0] * b) ** 2)
+
+    in_span = np.tensordot(rng.uniform(-0.2, 0.2, len(basis)), basis, axes=1) + 1.0
+    clipped = np.maximum(np.linspace(-1.0, 2.0, 35)[None, :] * np.ones((25, 1)), 0.1)
+    for previous in (in_span, clipped):
+        light, drop = fit_light(image, classes, constants, params, previous=previous)
+        np.testing.assert_allclose(light, best / best.mean(), rtol=1e-9)
+        assert drop == pytest.approx(fit_term(previous) - fit_term(best), rel=1e-9)
+        assert drop > 0
 
 
 def test_an_image_that_is_the_model_costs_only_its_length():
