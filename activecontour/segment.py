@@ -363,8 +363,9 @@ def _smooth_light(values, init, params, run):
     log-likelihood, and the Bayesian information criterion admits the light's P - 1 free
     parameters (P basis functions, less the scale the constants absorb) only when the drop
     exceeds ``sigma^2 (P - 1) ln(N)``, N the pixels.  Under uniform light and pure noise the drop
-    is ``sigma^2`` times a chi-square with P - 1 degrees of freedom (mean 9), far below that
-    (112 sigma^2 at 512^2); light of 1 % over a 512^2 image of contrast 0.4 is above it.  The
+    is ``sigma^2`` times a chi-square with at most P - 1 degrees of freedom (mean <= 9; the
+    constant field is fitted by the constants already), far below that (112 sigma^2 at 512^2);
+    light of 1 % over a 512^2 image of contrast 0.4 is above it.  The
     same bound ends the alternation: a later round that moves the light by less than its noise
     is not worth a run.  So does a round that ends above the J it started from: each step of an
     alternating minimisation lowers J, so a run that does not (the backend restarts its coarse

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import activecontour as ac
+from activecontour import synthetic
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle
 from activecontour.models import ChanVeseParameters
@@ -146,3 +147,55 @@ def test_smooth_never_ends_above_the_constant_fit(backend):
     assert smooth.energy <= constant.energy
     assert _dice(constant.mask, truth) > 0.95
     assert _dice(smooth.mask, truth) > 0.95
+
+
+def test_light_drop_under_pure_noise_is_a_chi_square():
+    # uniform light, the region means as constants, Gaussian noise sigma: the drop is sigma^2
+    # |P_A r|^2, r the noise less its region means, A the columns c_k(x) P_i(y) P_j(x).  Its
+    # mean is sigma^2 (P - tr(P_A P_regions)): at most P - 1 = 9 (the premise of the BIC stop in
+    # segment), as the constant field c_k(x) lies in both spans
+    rows, cols = np.mgrid[:40, :48]
+    classes = (np.hypot(rows - 18, cols - 25) < 12).astype(np.intp)
+    sigma = 0.05
+    drops = []
+    for seed in range(300):
+        image = (0.3 + 0.4 * classes + np.random.default_rng(seed).normal(0, sigma, classes.shape))[..., None]
+        constants = np.array([[image[classes == k, 0].mean()] for k in (0, 1)])
+        drops.append(fit_light(image, classes, constants, ChanVeseParameters())[1] / sigma**2)
+    basis = light_basis(classes.shape).reshape(10, -1)
+    span = np.linalg.qr((np.array([0.3, 0.7])[classes].ravel() * basis).T)[0]
+    regions = np.linalg.qr(np.stack([classes.ravel() == k for k in (0, 1)], axis=1).astype(float))[0]
+    expected = len(basis) - np.sum((span.T @ regions) ** 2)
+    assert 8.0 <= expected <= 9.0 + 1e-9
+    assert abs(np.mean(drops) - expected) < 4 * np.sqrt(2 * 9 / len(drops))
+
+
+def test_light_within_the_noise_costs_one_constant_fit():
+    # a disk under flat light: the light step is not worth its parameters, so the smooth fit is
+    # the constant fit (no light, same contours and energy) after the same iterations
+    image, truth = synthetic.disk_image(128, (60.0, 70.0), 35.0, inside=0.7, outside=0.3)
+    image = synthetic.add_noise(image, 0.1, 3)
+    for backend in ("polygon", "levelset"):
+        counts = {}
+        for fit in ("constant", "smooth"):
+            states = []
+            res = ac.segment(image, backend=backend, fit=fit, callback=states.append)
+            counts[fit] = (len(states), res)
+        assert counts["smooth"][0] == counts["constant"][0]
+        assert counts["smooth"][1].light is None
+        assert counts["smooth"][1].energy == counts["constant"][1].energy
+
+
+def test_a_light_of_ten_percent_is_found():
+    # the same disk under a linear light 0.9 .. 1.1 (normalize=None: the model is I = c_k b, an
+    # offset would break it): worth its parameters (it lowers J by ~N c^2 0.1^2 / 3), and the
+    # light found is the true one to the noise
+    image, truth = synthetic.disk_image(128, (60.0, 70.0), 35.0, inside=0.7, outside=0.3)
+    light = np.linspace(0.9, 1.1, 128)[None, :] * np.ones((128, 1))
+    image = synthetic.add_noise(image * light, 0.05, 3)
+    for backend in ("polygon", "levelset"):
+        res = ac.segment(image, backend=backend, fit="smooth", normalize=None)
+        assert res.light is not None
+        error = res.light - light / light.mean()
+        assert np.sqrt(np.mean(error**2)) < 0.01 and np.max(np.abs(error)) < 0.03
+        assert _dice(res.mask, truth) > 0.99
