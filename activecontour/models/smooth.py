@@ -57,7 +57,7 @@ from numpy.polynomial import legendre
 from activecontour.models.base import QuadraticForm
 from activecontour.models.two_region import ChanVeseParameters
 
-__all__ = ["LIGHT_DEGREE", "LIGHT_TERMS", "SmoothLightParameters", "fit_light", "light_basis",
+__all__ = ["LIGHT_DEGREE", "LIGHT_TERMS", "LightSpace", "SmoothLightParameters", "fit_light", "light_basis",
            "light_features", "smooth_light_model"]
 
 #: Largest total degree of the light field's polynomials ...
@@ -116,6 +116,40 @@ def _light_terms(degree):
     return [(i, j) for i in range(degree + 1) for j in range(degree + 1 - i)]
 
 
+class LightSpace:
+    """The span of :func:`light_basis` on an image's grid, with its separable contractions.
+
+    The basis is ``P_i(y) P_j(x)``, so every sum over the pixels it needs is a contraction of the
+    one-dimensional factors Y (M, D) and X (N, D): ``sum_x f(x) phi_a phi_b`` is
+    ``sum_y P_i P_k(y) sum_x f(y, x) P_j P_l(x)`` and ``sum_x f(x) phi_a`` is ``(Y^T f X)_ij``,
+    O(M N D^2) with D = degree + 1 and no (P, M, N) array (the basis of a 1024^2 image is 80 MB).
+    """
+
+    def __init__(self, shape, degree=LIGHT_DEGREE):
+        self.rows, self.cols = _light_factors(shape, degree)
+        self.size = degree + 1
+        self.terms = np.array(_light_terms(degree))
+
+    def gram(self, weight):
+        """``sum_x weight(x) phi_a(x) phi_b(x)``, (P, P)."""
+        size, (i, j) = self.size, self.terms.T
+        rows = (self.rows[:, :, None] * self.rows[:, None, :]).reshape(len(self.rows), size * size)
+        cols = (self.cols[:, :, None] * self.cols[:, None, :]).reshape(len(self.cols), size * size)
+        full = (rows.T @ (weight @ cols)).reshape(size, size, size, size)  # [i, k, j, l]
+        return full[i[:, None], i[None, :], j[:, None], j[None, :]]
+
+    def project(self, field):
+        """``sum_x field(x) phi_a(x)``, (P,)."""
+        i, j = self.terms.T
+        return (self.rows.T @ field @ self.cols)[i, j]
+
+    def field(self, beta):
+        """``sum_a beta_a phi_a`` on the grid, (M, N)."""
+        coefficients = np.zeros((self.size, self.size))
+        coefficients[tuple(self.terms.T)] = beta
+        return self.rows @ coefficients @ self.cols.T
+
+
 def smooth_light_model(image, light, params):
     """The image model (feature tables) and the model parameters of the smooth fit for a light
     field: what the backends and the common evaluator read.
@@ -157,11 +191,8 @@ def fit_light(image, classes, constants, params, previous=None, degree=LIGHT_DEG
     Minimises ``sum_x sum_c w_k,c (I_c(x) - c_k,c b(x))^2`` over b in the span of
     :func:`light_basis`, with k the region of pixel x and ``w`` the model's channel weights
     (lambda / C): the normal equations ``(B^T W B) beta = B^T r`` with ``W(x) = sum_c w c^2``
-    and ``r(x) = sum_c w c I_c``.  The basis is separable, ``P_i(y) P_j(x)``, so the normal
-    matrix is a contraction of W with the products of the one-dimensional factors,
-    ``sum_y P_i P_k(y) sum_x W(y, x) P_j P_l(x)``, and ``B^T r = Y^T r X``: O(M N D^2) with
-    D = degree + 1 and no (P, M, N) array (the basis of a 1024^2 image is 80 MB).  A field that
-    would not be positive everywhere is clipped at a tenth of its mean.
+    and ``r(x) = sum_c w c I_c``, by the separable contractions of :class:`LightSpace`.  A field
+    that would not be positive everywhere is clipped at a tenth of its mean.
 
     The drop: at fixed partition and constants the fit term is ``sum_x (W b^2 - 2 r b)`` plus a
     constant, so ``b*`` lowers it from the previous field ``b_0`` by
@@ -190,18 +221,8 @@ def fit_light(image, classes, constants, params, previous=None, degree=LIGHT_DEG
     pixel_weight = np.sum(weights * constants**2, axis=1)[classes]
     scaled = weights * constants
     target = sum(image[..., c] * scaled[:, c][classes] for c in range(image.shape[2]))
-    rows, cols = _light_factors(image.shape[:2], degree)
-    size = degree + 1
-    row_products = (rows[:, :, None] * rows[:, None, :]).reshape(len(rows), size * size)
-    col_products = (cols[:, :, None] * cols[:, None, :]).reshape(len(cols), size * size)
-    full = (row_products.T @ (pixel_weight @ col_products)).reshape(size, size, size, size)
-    terms = np.array(_light_terms(degree))  # full[i, k, j, l] = sum W P_i P_k(y) P_j P_l(x)
-    normal = full[terms[:, None, 0], terms[None, :, 0], terms[:, None, 1], terms[None, :, 1]]
-    projected = rows.T @ target @ cols
-    beta = np.linalg.solve(normal, projected[terms[:, 0], terms[:, 1]])
-    coefficients = np.zeros((size, size))
-    coefficients[terms[:, 0], terms[:, 1]] = beta
-    light = rows @ coefficients @ cols.T
+    space = LightSpace(image.shape[:2], degree)
+    light = space.field(np.linalg.solve(space.gram(pixel_weight), space.project(target)))
     before = 1.0 if previous is None else previous
     drop = float(np.sum((before - light) * (pixel_weight * (before + light) - 2.0 * target)))
     light /= light.mean()
