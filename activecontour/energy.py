@@ -269,7 +269,7 @@ def partition_load(model, boundary, params, constants):
 
 def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,
                      lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
-                     light=None):
+                     light=None, noise="gaussian"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
@@ -299,6 +299,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     light : ndarray (M, N), optional
         The light field b of the smooth fit (``result.light`` of ``fit="smooth"``): region k's
         intensity is ``c_k b`` (:mod:`activecontour.models.smooth`).  None: the constant fit.
+    noise : {"gaussian", "poisson"}
+        The fit term, as in :func:`activecontour.segment`.
 
     Returns
     -------
@@ -314,7 +316,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
         (6.38) is not defined.  :func:`activecontour.topology.region_union` turns such curves
         into the boundary of the region they outline.
     """
-    from activecontour.image import ImageModel, normalize_image
+    from activecontour.image import normalize_image
+    from activecontour.models import noise_model
     from activecontour.noise import auto_mu, is_auto
 
     values = normalize_image(image, color=color, normalize=normalize)
@@ -322,12 +325,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
     values = to_frame(values, offset, scale)
     params = ChanVeseParameters(auto_mu(values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out).in_frame(offset, scale)
-    if light is None:
-        model = ImageModel(values)
-    else:
-        from activecontour.models.smooth import smooth_light_model
-
-        model, params = smooth_light_model(values, np.asarray(light, dtype=np.float64), params)
+    build = noise_model(noise)[0]
+    model, params = build(values, None if light is None else np.asarray(light, dtype=np.float64), params)
     if (contours is None) == (classes is None):
         raise TypeError("chan_vese_energy takes either contours or classes")
     if classes is not None:

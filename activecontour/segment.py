@@ -11,7 +11,8 @@ import numpy as np
 from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
 from activecontour.energy import ChanVeseParameters, to_frame, working_frame
-from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
+from activecontour.image import intensity_scale, load_image, normalize_image, single_image
+from activecontour.models import noise_model
 from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
 from activecontour.raster import mask_to_curves
@@ -31,8 +32,8 @@ INSIDE = ("auto", "bright", "dark")
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, fit="constant", inside="auto", roi=None,
-            separate=True, channel_axis=None, options=None):
+            color="gray", normalize="range", n_regions=2, fit="constant", noise="gaussian", inside="auto",
+            roi=None, separate=True, channel_axis=None, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -102,6 +103,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         mean 1), estimated with the contour by alternating minimisation
         (:mod:`activecontour.models.smooth`): for uneven illumination, vignetting, shading.
         ``result.light`` is b; ``constants``, ``c_in``, ``c_out`` are the c_k.
+    noise : {"gaussian", "poisson"}
+        The fit term: ``"gaussian"``, (6.38)'s squared error; ``"poisson"``, the negative
+        log-likelihood of photon counts with the rate ``c_k b`` (fluorescence: the noise grows
+        with the intensity; two regions split at the logarithmic mean of their constants, not
+        the arithmetic one; :mod:`activecontour.models.poisson`).  The counts' zero is the
+        image's minimum.
     inside : {"auto", "bright", "dark"}
         Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
         the class that covers less of the image border, and given curves are the inside as drawn.
@@ -156,6 +163,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     _check_regions(n_regions, backend, c_in, c_out, options, roi)
     if fit not in FITS:
         raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
+    noise_model(noise)  # a bad name is refused before any work
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     image = single_image(image, channel_axis)
@@ -171,7 +179,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         solver = chosen.run
     solve = functools.partial(
         _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
-        inside=inside, normalize=normalize, callback=callback, fit=fit,
+        inside=inside, normalize=normalize, callback=callback, fit=fit, noise=noise,
         settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
     if isinstance(roi, str) and roi == "init":
         # the smallest neighbourhood of the init that holds the object: grown while the result
@@ -204,7 +212,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     return result
 
 
-def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, settings):
+def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, noise,
+           settings):
     """Run the backend on the image, or on the crop of a region of interest.
 
     Returns the result in the whole image's frame, the parameters used, and the affine map
@@ -234,10 +243,11 @@ def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callb
     def run(model, init, params, max_num_iter=settings["max_num_iter"]):
         return solver(model, init, params, callback=callback, **{**settings, "max_num_iter": max_num_iter})
 
+    build, fit_light = noise_model(noise)
     if fit == "smooth":
-        result, model, working = _smooth_light(values, init, working, run)
+        result, model, working = _smooth_light(values, init, working, run, build, fit_light)
     else:
-        model = ImageModel(values)
+        model, working = build(values, None, working)
         result = run(model, init, working)
     result = _make_inside(result, inside, model, working)
     if domain is not None:
@@ -352,9 +362,11 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
                         "takes none")
 
 
-def _smooth_light(values, init, params, run):
+def _smooth_light(values, init, params, run, build, fit_light):
     """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
-    update (partition and constants fixed).  Returns the result, its image model and parameters.
+    update (partition and constants fixed).  ``build`` and ``fit_light`` are the noise model's
+    (:func:`activecontour.models.noise_model`).  Returns the result, its image model and
+    parameters.
 
     When the light is worth its parameters: the light step lowers J by the drop of
     :func:`~activecontour.models.smooth.fit_light`.  Read (6.38) as :func:`~activecontour.noise.auto_mu`
@@ -382,20 +394,20 @@ def _smooth_light(values, init, params, run):
     and the lowest energy of every run is returned, so the smooth fit never ends above the
     constant fit.  When that is the constant fit's own result, ``result.light`` is None.
     """
-    from activecontour.models.smooth import LIGHT_TERMS, fit_light, smooth_light_model
+    from activecontour.models.smooth import LIGHT_TERMS
     from activecontour.noise import MU_PER_NOISE_VARIANCE
 
     noise = auto_mu(values) / MU_PER_NOISE_VARIANCE
     worth = noise * (LIGHT_TERMS - 1) * np.log(values.shape[0] * values.shape[1])
-    plain = (ImageModel(values), params, None)
+    plain = (*build(values, None, params), None)
     result = run(plain[0], init, plain[1])
-    new, drop = fit_light(values, *_classes_and_constants(result), params)
+    new, drop = fit_light(values, *_classes_and_constants(result), plain[1])
     if drop <= worth:
         result.light = None
-        return result, plain[0], params
+        return result, plain[0], plain[1]
     one_region = np.zeros(values.shape[:2], dtype=np.intp)
-    whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), params)[0]
-    lit = (*smooth_light_model(values, whole_light, params), whole_light)
+    whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), plain[1])[0]
+    lit = (*build(values, whole_light, params), whole_light)
     runs = [(result, *plain)]
     start_energy = [run(start[0], init, start[1], max_num_iter=0).energy for start in (plain, lit)]
     if start_energy[1] < start_energy[0]:
@@ -407,7 +419,7 @@ def _smooth_light(values, init, params, run):
             if drop <= worth:
                 break
         light, before = new, result.energy
-        model, model_params = smooth_light_model(values, light, params)
+        model, model_params = build(values, light, params)
         result = run(model, result, model_params)
         runs.append((result, model, model_params, light))
         if result.energy >= before:  # the backend's run did not descend from the light step
