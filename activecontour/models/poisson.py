@@ -32,8 +32,10 @@ The same kernels serve: g_k is *linear* in the feature channels ``(I_1..I_C)`` (
 but J's value across light fields needs it), so the tables, the exact edge integrals, the load
 (6.41), the level set's force and nucleation read :class:`PoissonParameters` as any model.
 
-The zero of the counts is the working frame's: the image's minimum (a camera's dark level is not
-known; the minimum estimates it from below).  A region whose rate is below ``RATE_FLOOR`` of the
+The zero of the counts is the working frame's: the normalised image's zero where it lies within
+[0, 1] (``normalize="dtype"`` of integer counts, or floats in [0, 1] with ``normalize=None``),
+else its minimum (``normalize="range"``, the default: a camera's dark level is not known; the
+minimum estimates it from below).  A region whose rate is below ``RATE_FLOOR`` of the
 frame (all its pixels at the minimum) is given that rate: a pixel above it costs
 ``-2 r I ln RATE_FLOOR``, large and finite.
 """
@@ -98,6 +100,13 @@ class PoissonParameters(ChanVeseParameters):
 def poisson_model(image, light, params):
     """The image model (feature tables) and parameters of the Poisson fit for a light field.
 
+    The default start looks at the square root of the (light-corrected) counts: the variance-
+    stabilising transform of Poisson counts (Anscombe 1948), under which the start's least-
+    squares split (:func:`activecontour.initial.threshold_split`, (6.38) without its length) is
+    the Poisson split to first order; on the counts themselves it would split at the arithmetic
+    midpoint, which the Poisson flow cannot always leave (a dim object apart from the start's
+    curves is out of the level set's reach).
+
     Parameters
     ----------
     image : ndarray (M, N, C)
@@ -117,11 +126,11 @@ def poisson_model(image, light, params):
     model_params = PoissonParameters(**fields, n_channels=image.shape[2], reference=reference,
                                      light=light is not None)
     if light is None:
-        return ImageModel(image), model_params
+        return ImageModel(image, image=np.sqrt(image)), model_params
     if light.shape != image.shape[:2] or not np.all(np.isfinite(light)) or np.any(light <= 0):
         raise ValueError(f"light must be a positive finite array of the image's shape {image.shape[:2]}")
     features = np.concatenate([image, light[..., None], image * np.log(light)[..., None]], axis=2)
-    return ImageModel(features, image=image / light[..., None]), model_params
+    return ImageModel(features, image=np.sqrt(image / light[..., None])), model_params
 
 
 def fit_poisson_light(image, classes, constants, params, previous=None, degree=LIGHT_DEGREE):
