@@ -6,9 +6,10 @@ faint blobs (contrast 0.15) under a gradient and a vignette of amplitude 0.5 (38
 different brightness (DSB 2018 from the stardist wheel, if ``--nuclei DIR`` holds img2d.tif and
 mask2d.tif).  Every method runs on every scene it applies to, in one run: ours with
 ``n_regions=K`` (``backend="levelset"``; for two regions also the polygon), ``fit="constant"`` and
-``"smooth"``; scikit-image's ``threshold_multiotsu`` (on the image smoothed by a Gaussian of 1 px,
-K classes), ``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese`` (35
-iterations) with their defaults.  Dice: for two regions the object's, strict (the inside must be
+``"smooth"`` (for two regions also with ``noise="poisson"``); scikit-image's
+``threshold_multiotsu`` (on the image smoothed by a Gaussian of 1 px, K classes),
+``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese`` (35 iterations) with
+their defaults.  Dice: for two regions the object's, strict (the inside must be
 the objects; thresholds take the bright side); for K regions the mean per-class Dice after the best
 matching of found to true classes (scipy's linear_sum_assignment), with the per-class values.
 Ours run with ``separate=False``: the times are the segmentation's, not the objects' split.
@@ -118,13 +119,15 @@ def methods(n_classes, colour):
     color = {"color": "vector"} if colour else {}
     out = []
     backends = ["levelset"] if n_classes > 2 else ["polygon", "levelset"]
+    noises = ["gaussian"] if n_classes > 2 else ["gaussian", "poisson"]
     for backend in backends:
-        for fit in ("constant", "smooth"):
-            def ours(image, backend=backend, fit=fit):
-                res = ac.segment(image, backend=backend, fit=fit, n_regions=n_classes, separate=False,
-                                 **color)
-                return res.classes if n_classes > 2 else res.mask
-            out.append((f"ours {backend} {fit}", ours))
+        for noise in noises:
+            for fit in ("constant", "smooth"):
+                def ours(image, backend=backend, fit=fit, noise=noise):
+                    res = ac.segment(image, backend=backend, fit=fit, noise=noise, n_regions=n_classes,
+                                     separate=False, **color)
+                    return res.classes if n_classes > 2 else res.mask
+                out.append((f"ours {backend} {fit}" + (" poisson" if noise == "poisson" else ""), ours))
 
     def multiotsu(image):
         smooth = cv2.GaussianBlur(_gray(image).astype(np.float32), (0, 0), 1.0)

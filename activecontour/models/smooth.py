@@ -43,8 +43,10 @@ varies from one to the next (nuclei of different DNA content), b follows cluster
 objects, and a dim object next to them falls under ``c_out b`` on the background side.  That
 is the minimiser of J, not a fault of the alternation: on the DSB 2018 nuclei J of the found
 partition is ~20 % below J of the true one under any light of the span, and richer light
-(degree 6, 8) lowers J further while Dice falls.  Objects of different brightness need more
-classes (``n_regions=3``) or per-object constants, not a richer light.
+(degree 6, 8) lowers J further while Dice falls.  Objects of different brightness need another
+fit term (photon counts, :mod:`activecontour.models.poisson`, weigh region k by ``c_k`` and split
+at the logarithmic mean), more classes (``n_regions=3``) or per-object constants, not a richer
+light.
 """
 
 from __future__ import annotations
