@@ -206,12 +206,17 @@ def partition_moments(model, boundary, n_classes):
     areas = np.zeros(n_classes)
     first = np.zeros((n_classes, model.n_channels))
     second = np.zeros((n_classes, model.n_channels))
-    for k in range(n_classes):
+    for k in range(1, n_classes):
         starts, ends = class_soup(boundary, k)
         points = np.empty((2 * len(starts), 2))
         points[0::2], points[1::2] = starts, ends
         next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
         areas[k], _, first[k], second[k] = _moments(model, points, next_index)
+    # the background: the domain's totals minus the others (as the two-region outside)
+    total_area, total_first, total_second = model.totals
+    areas[0] = total_area - areas[1:].sum()
+    first[0] = total_first - first[1:].sum(axis=0)
+    second[0] = total_second - second[1:].sum(axis=0)
     return areas, first, second
 
 
@@ -250,9 +255,7 @@ def partition_load(model, boundary, params, constants):
     forms = params.class_forms(constants)
     zero = forms[0] - forms[0]
     load = np.zeros((len(boundary.start), 2, 2))
-    pairs = np.unique(np.column_stack([boundary.inner, boundary.outer]), axis=0)
-    for inner, outer in pairs:
-        chosen = np.flatnonzero((boundary.inner == inner) & (boundary.outer == outer))
+    for inner, outer, chosen in boundary.sides.pairs:
         form = forms[inner] - (forms[outer] if outer >= 0 else zero)
         mu = params.mu if (outer >= 0 or inner > 0) else 0.0
         points = np.empty((2 * chosen.size, 2))
@@ -267,7 +270,7 @@ def partition_load(model, boundary, params, constants):
     return load
 
 
-def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0, lambda_in=1.0,
+def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="auto", omega=0.0, lambda_in=1.0,
                      lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
                      light=None, noise="gaussian"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
@@ -288,6 +291,11 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
         boundaries through the midpoints between pixels of different classes, junctions at cell
         centres) with the N-region functional of :func:`evaluate_partition`; for two classes it
         is (6.38) of the marching-squares contours of ``classes == 1``.
+    regions : list of list of ndarray (K, 2), optional
+        Instead of ``contours``: a sub-pixel partition, the closed curves of every region k
+        (``result.class_contours`` of a result with ``n_regions > 2``), region 0 the background.
+        The regions must tile the image domain; scored with the N-region functional of
+        :func:`evaluate_partition` (each interface once, the border outside region 0).
     mu, omega, lambda_in, lambda_out : float
         Weights of (6.38); ``mu="auto"`` as in :func:`activecontour.segment` (``result.mu`` is the
         value a result used).
@@ -327,10 +335,12 @@ def chan_vese_energy(image, contours=None, *, classes=None, mu="auto", omega=0.0
                                 lambda_out, c_in, c_out).in_frame(offset, scale)
     build = noise_model(noise)[0]
     model, params = build(values, None if light is None else np.asarray(light, dtype=np.float64), params)
-    if (contours is None) == (classes is None):
-        raise TypeError("chan_vese_energy takes either contours or classes")
+    if sum(given is not None for given in (contours, classes, regions)) != 1:
+        raise TypeError("chan_vese_energy takes one of contours, classes or regions")
     if classes is not None:
         return scale**2 * _classes_energy(model, classes, params)
+    if regions is not None:
+        return scale**2 * _regions_energy(model, regions, params)
     if isinstance(contours, np.ndarray) and contours.ndim == 2:
         contours = [contours]
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
@@ -382,3 +392,49 @@ def _classes_energy(model, classes, params):
                               for k, name in enumerate(("c_out", "c_in"))])
     return evaluate_partition(model, class_boundary(classes), params, max(n_classes, 2),
                               constants).energy
+
+
+def _regions_energy(model, regions, params):
+    """The N-region functional of a partition given as closed curves per region.
+
+    The moments of each region are boundary integrals of its curves (Green).  The counted length
+    is ``L_interfaces + |border| - B_0`` (B_0: the border along region 0); every interface bounds
+    two regions and the border one, so ``sum_k |boundary of region k| = 2 L_interfaces + |border|``.
+    """
+    if not isinstance(regions, (list, tuple)) or len(regions) < 2:
+        raise ValueError("regions must be a list of at least two regions, each a list of closed curves")
+    if params.c_in is not None or params.c_out is not None:
+        raise ValueError("c_in and c_out fix the constants of two regions; leave them None with regions")
+    n_classes = len(regions)
+    areas = np.zeros(n_classes)
+    first = np.zeros((n_classes, model.n_channels))
+    second = np.zeros((n_classes, model.n_channels))
+    perimeter, border_of_background = 0.0, 0.0
+    (low_r, low_c), (high_r, high_c) = model.bounds
+    for k, curves in enumerate(regions):
+        curves = [as_curve(c, name=f"regions[{k}][{i}]") for i, c in enumerate(curves)]
+        for i, curve in enumerate(curves):
+            _check_in_domain(curve, model.bounds, f"regions[{k}][{i}]")
+        if curves:
+            areas[k], first[k], second[k] = region_moments(model, curves)
+        for curve in curves:
+            following = np.roll(curve, -1, axis=0)
+            lengths = np.hypot(*(following - curve).T)
+            perimeter += float(lengths.sum())
+            if k == 0:
+                along = np.zeros(len(curve), dtype=bool)
+                for axis, value in ((0, low_r), (0, high_r), (1, low_c), (1, high_c)):
+                    along |= (curve[:, axis] == value) & (following[:, axis] == value)
+                border_of_background += float(lengths[along].sum())
+    domain = (high_r - low_r) * (high_c - low_c)
+    if not np.isclose(areas.sum(), domain, rtol=1e-9, atol=0.0) or np.any(areas < -1e-9 * domain):
+        raise ValueError(f"regions do not tile the image domain: their areas sum to {areas.sum():.6g}, "
+                         f"the domain's is {domain:.6g}")
+    whole = params.region_constant(*model.totals)
+    constants = np.array([params.region_constant(a, f, q) if a > 1e-9 else whole
+                          for a, f, q in zip(areas, first, second, strict=True)])
+    border = 2.0 * ((high_r - low_r) + (high_c - low_c))
+    length = 0.5 * (perimeter + border) - border_of_background
+    forms = params.class_forms(constants)
+    return float(params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
+                                          in zip(forms, areas, first, second, strict=True)))

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Boundary", "class_boundary", "class_soup", "chain"]
+__all__ = ["Boundary", "Sides", "chain", "chain_loops", "class_boundary", "class_soup", "lattice_keys"]
 
 
 class Boundary:
@@ -41,15 +41,39 @@ class Boundary:
     inner, outer : ndarray (S,) int
         The class on the inner side (opposite the normal) and the outer side; ``outer == -1`` on
         the domain's edge.
+    sides : Sides
+        Which segments bound which class (computed once for segments that keep their classes
+        while they move: pass it to the moved boundary).
     """
 
-    def __init__(self, start, end, inner, outer):
+    def __init__(self, start, end, inner, outer, sides=None):
         self.start, self.end, self.inner, self.outer = start, end, inner, outer
+        self.sides = Sides(inner, outer) if sides is None else sides
 
     @property
     def length(self):
         d = self.end - self.start
         return np.hypot(d[:, 0], d[:, 1])
+
+
+class Sides:
+    """The segments on each class's boundary, and the segments of each (inner, outer) pair."""
+
+    def __init__(self, inner, outer):
+        order = np.lexsort((outer, inner))
+        pairs = np.column_stack([inner[order], outer[order]])
+        cuts = np.flatnonzero(np.any(np.diff(pairs, axis=0) != 0, axis=1)) + 1
+        self.pairs = [(int(group_pairs[0, 0]), int(group_pairs[0, 1]), group)
+                      for group_pairs, group in zip(np.split(pairs, cuts), np.split(order, cuts), strict=True)
+                      if len(group)]
+        self._inner, self._outer = inner, outer
+        self._soups = {}
+
+    def of_class(self, k):
+        """``(segments with inner == k, segments with outer == k)``."""
+        if k not in self._soups:
+            self._soups[k] = (np.flatnonzero(self._inner == k), np.flatnonzero(self._outer == k))
+        return self._soups[k]
 
 
 def class_boundary(classes):
@@ -157,7 +181,7 @@ def _border(classes):
 def class_soup(boundary, k):
     """Region k's boundary as oriented segments (starts, ends): its inner segments as they are,
     its outer ones reversed."""
-    inner, outer = boundary.inner == k, boundary.outer == k
+    inner, outer = boundary.sides.of_class(k)
     return (np.vstack([boundary.start[inner], boundary.end[outer]]),
             np.vstack([boundary.end[inner], boundary.start[outer]]))
 
@@ -172,19 +196,23 @@ def chain(starts, ends):
     """
     if len(starts) == 0:
         return []
-    key_start = _keys(starts)
-    key_end = _keys(ends)
-    order = np.argsort(key_start, kind="stable")
-    sorted_keys = key_start[order]
-    # the i-th segment ending at a point continues with the i-th segment starting there
-    end_order = np.argsort(key_end, kind="stable")
-    following = np.empty(len(starts), dtype=np.intp)
-    position = np.searchsorted(sorted_keys, key_end[end_order])
-    rank = np.arange(len(end_order)) - np.searchsorted(key_end[end_order], key_end[end_order])
+    return [_corners(starts[loop]) for loop in chain_loops(lattice_keys(starts), lattice_keys(ends))]
+
+
+def chain_loops(start_keys, end_keys):
+    """The closed loops of oriented segments given by the keys of their ends (equal keys: the same
+    point), each as the indices of its segments in order; the i-th segment ending at a point
+    continues with the i-th segment starting there."""
+    order = np.argsort(start_keys, kind="stable")
+    sorted_keys = start_keys[order]
+    end_order = np.argsort(end_keys, kind="stable")
+    following = np.empty(len(start_keys), dtype=np.intp)
+    position = np.searchsorted(sorted_keys, end_keys[end_order])
+    rank = np.arange(len(end_order)) - np.searchsorted(end_keys[end_order], end_keys[end_order])
     following[end_order] = order[position + rank]
-    seen = np.zeros(len(starts), dtype=bool)
-    curves = []
-    for first in range(len(starts)):
+    seen = np.zeros(len(start_keys), dtype=bool)
+    loops = []
+    for first in range(len(start_keys)):
         if seen[first]:
             continue
         loop, current = [], first
@@ -192,8 +220,8 @@ def chain(starts, ends):
             seen[current] = True
             loop.append(current)
             current = following[current]
-        curves.append(_corners(starts[loop]))
-    return curves
+        loops.append(np.array(loop, dtype=np.intp))
+    return loops
 
 
 def _corners(curve):
@@ -206,6 +234,7 @@ def _corners(curve):
     return curve[~straight] if np.count_nonzero(~straight) >= 3 else curve
 
 
-def _keys(points):
+def lattice_keys(points):
+    """One integer per point of the half-pixel lattice (equal points, equal keys)."""
     twice = np.rint(2.0 * points).astype(np.int64) + 2
     return twice[:, 0] * (1 << 32) + twice[:, 1]

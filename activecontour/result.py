@@ -78,6 +78,10 @@ class SegmentationResult:
     roi : bool ndarray (M, N) or None
         With ``segment(roi=...)``: the domain D the functional was solved on
         (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
+    class_contours : list of list of ndarray, or None
+        With ``n_regions > 2``: the closed curves of every region k (outer boundaries positive,
+        holes negative; region 0 the background), the sub-pixel partition whose functional is
+        ``energy``: ``chan_vese_energy(image, regions=result.class_contours)`` scores it.
     """
 
     mask: np.ndarray
@@ -100,6 +104,7 @@ class SegmentationResult:
     constants: np.ndarray | None = None
     light: np.ndarray | None = None
     roi: np.ndarray | None = None
+    class_contours: list | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 

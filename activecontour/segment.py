@@ -94,9 +94,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         holds the region of every pixel (0 = the background, the region covering most of the
         image border; the others by increasing mean intensity), ``result.constants`` their
         constants; the inside (``mask``, ``contours``) is every region but the background.
-        K > 2 runs on ``backend="levelset"`` only (a label field descended on the exact
-        partition length, :mod:`activecontour.backends.labelfield`), started from the global
-        K-means of the intensities.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+        For K > 2 both backends start from the global K-means of the intensities and find the
+        regions on a label field descended on the exact partition length
+        (:mod:`activecontour.backends.labelfield`, the ``"levelset"`` result); ``"polygon"``
+        then moves every interface and junction to sub-pixel position by the H^1 flow of the
+        boundary network (:mod:`activecontour.backends.network`).  ``result.class_contours``
+        are the regions' curves.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
     fit : {"constant", "smooth"}
         ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
         is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
@@ -108,7 +111,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         log-likelihood of photon counts with the rate ``c_k b`` (fluorescence: the noise grows
         with the intensity; two regions split at the logarithmic mean of their constants, not
         the arithmetic one; :mod:`activecontour.models.poisson`).  The counts' zero is the
-        image's minimum.
+        normalised image's zero where its values lie in [0, 1] (``normalize="range"``: its
+        minimum).
     inside : {"auto", "bright", "dark"}
         Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
         the class that covers less of the image border, and given curves are the inside as drawn.
@@ -170,9 +174,11 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
     if n_regions > 2:
-        from activecontour.backends.labelfield import segment_labels
-
-        solver = functools.partial(segment_labels, n_regions=int(n_regions))
+        if backend == "polygon":
+            from activecontour.backends.network import segment_network as solver
+        else:
+            from activecontour.backends.labelfield import segment_labels as solver
+        solver = functools.partial(solver, n_regions=int(n_regions))
     else:
         chosen = BACKENDS[backend]
         parse_options(chosen.options, backend, options or {})  # before any work: bad keys, types
@@ -201,9 +207,8 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
     # objects are the connected pieces of each non-background region (N regions: of each class,
-    # traced on the label field's own pixel grid)
-    by_class = result.contours if result.classes is None else [
-        mask_to_curves(result.classes == k) for k in range(1, int(n_regions))]
+    # its sub-pixel curves)
+    by_class = result.contours if result.class_contours is None else result.class_contours[1:]
     result.object_contours, result.labels, result.objects = find_objects(
         by_class, shape, pixels, separate=bool(separate))
     if result.classes is None:  # two regions: the inside is region 1
@@ -348,9 +353,6 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
         raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
     if n_regions == 2:
         return
-    if backend != "levelset":
-        raise ValueError(f"n_regions={n_regions} needs backend='levelset' (backend={backend!r} "
-                         f"segments two regions)")
     if c_in is not None or c_out is not None:
         raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
                          f"n_regions={n_regions}")

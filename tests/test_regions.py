@@ -149,16 +149,20 @@ def _dice(found, truth, n_classes):
                      for k in range(n_classes)])
 
 
-def test_three_nested_classes_at_snr_3():
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_three_nested_classes_at_snr_3(backend):
     m = 192
     rows, cols = np.mgrid[:m, :m]
     radius = np.hypot(rows - m / 2, cols - m / 2)
     truth = (radius < 75).astype(int) + (radius < 40)
     image = truth / 2.0 + np.random.default_rng(6).normal(0, 0.5 / 3, truth.shape)
-    res = ac.segment(image, n_regions=3, backend="levelset")
-    assert res.success
+    res = ac.segment(image, n_regions=3, backend=backend)
+    assert res.success and res.backend == backend
     assert np.all(_dice(res.classes, truth, 3) > 0.99)
-    assert res.energy == ac.chan_vese_energy(image, classes=res.classes, mu=res.mu)
+    assert res.energy == pytest.approx(ac.chan_vese_energy(image, regions=res.class_contours, mu=res.mu),
+                                       rel=1e-12)
+    if backend == "levelset":  # the partition its label image stands for
+        assert res.energy == ac.chan_vese_energy(image, classes=res.classes, mu=res.mu)
     assert res.energies[-1] == res.energy
     assert np.array_equal(res.mask, res.classes > 0)
     assert np.array_equal(rasterize(res.contours, truth.shape), res.mask)
@@ -168,17 +172,19 @@ def test_three_nested_classes_at_snr_3():
     np.testing.assert_allclose(offset + scale * res.constants[:, 0], means, atol=0.01)
 
 
-def test_shepp_logan_six_levels_with_two_small_ones():
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_shepp_logan_six_levels_with_two_small_ones(backend):
     phantom = skimage.data.shepp_logan_phantom()[::2, ::2]
     levels = np.array([0.0, 0.098, 0.2, 0.298, 0.4, 1.0])
     truth = np.argmin(np.abs(phantom[..., None] - levels), axis=-1)
     assert sorted(np.bincount(truth.ravel()))[:2] < [100, 100]  # two small levels at this size
     image = phantom + np.random.default_rng(7).normal(0, 0.01, phantom.shape)
-    res = ac.segment(image, n_regions=6, backend="levelset")
+    res = ac.segment(image, n_regions=6, backend=backend)
     assert np.mean(_dice(res.classes, truth, 6)) > 0.9
 
 
-def test_colour_regions_of_equal_gray():
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_colour_regions_of_equal_gray(backend):
     # three colours of one luminance: only the vector-valued functional tells them apart
     rgb = np.array([[0.2, 0.5, 0.9], [0.6, 0.45, 0.3], [0.35, 0.5, 0.2]])
     gray = rgb @ np.array([0.2125, 0.7154, 0.0721])
@@ -188,7 +194,7 @@ def test_colour_regions_of_equal_gray():
     truth[20:70, 15:55] = 1
     truth[30:80, 70:110] = 2
     image = rgb[truth] + np.random.default_rng(8).normal(0, 0.05, truth.shape + (3,))
-    res = ac.segment(image, n_regions=3, backend="levelset", color="vector")
+    res = ac.segment(image, n_regions=3, backend=backend, color="vector")
     # regions 1 and 2 have one mean gray level: match them to the truth either way
     dice = max(_dice(res.classes, truth, 3).mean(), _dice(np.array([0, 2, 1])[res.classes], truth, 3).mean())
     assert dice > 0.98
@@ -198,7 +204,7 @@ def test_colour_regions_of_equal_gray():
 @pytest.mark.parametrize(
     "kwargs, error, match",
     [
-        ({"n_regions": 3}, ValueError, "backend='levelset'"),
+        ({"n_regions": 3, "options": {"nucleate": False}}, TypeError, "options"),
         ({"n_regions": 1, "backend": "levelset"}, ValueError, "n_regions"),
         ({"n_regions": 2.5, "backend": "levelset"}, TypeError, "n_regions"),
         ({"n_regions": 3, "backend": "levelset", "c_in": 0.5}, ValueError, "c_in"),

@@ -47,7 +47,7 @@ import numpy as np
 
 from activecontour.energy import evaluate_partition
 from activecontour.models.kmeans import histogram_kmeans
-from activecontour.partition import chain, class_boundary
+from activecontour.partition import chain, class_boundary, class_soup
 from activecontour.result import FlowState, SegmentationResult
 
 __all__ = ["initial_classes", "segment_labels"]
@@ -287,10 +287,12 @@ def _result(model, params, classes, n_regions, energies, n_iter, status):
     areas = final.areas
     inside = areas[1:].sum()
     c_in = (areas[1:, None] * final.constants[1:]).sum(axis=0) / inside if inside > 0 else final.constants[0]
+    class_contours = [chain(*class_soup(boundary, k)) for k in range(n_regions)]
     return SegmentationResult(mask=mask, contours=contours, c_in=c_in, c_out=final.constants[0],
                               energy=final.energy, energies=energies, n_iter=n_iter,
                               status=3 if not mask.any() else status, backend="levelset",
-                              classes=classes, constants=final.constants)
+                              classes=classes, constants=final.constants,
+                              class_contours=class_contours)
 
 
 _HALF = np.sqrt(0.5)

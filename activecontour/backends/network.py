@@ -1,0 +1,546 @@
+"""N regions on the polygon backend: the book's H^1 flow (6.39)-(6.40) on a network of curves.
+
+The functional is the N-region form of (6.38) (:func:`activecontour.energy.evaluate_partition`):
+``J = mu L + sum_k int_{Omega_k} g_k`` with L the interfaces, each counted once.
+
+Why a network
+-------------
+The regions' boundaries are one planar graph: polylines between regions (interfaces) that meet at
+junctions (three or four regions) and at the image border.  Each interface vertex is a P1 node of
+one 1-D mesh, and a junction is a single node shared by the interfaces that meet there, so
+
+* the partition stays a partition: no vacuum, no overlap, whatever the vertices do (a vertex moves
+  the boundary of every region it touches);
+* the energy is the exact N-region functional of the sub-pixel partition, each interface once;
+* the velocity is the book's: ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form (6.39) summed
+  over every interface, ``(M + K) V = -f``, M and K assembled over the graph.  At a junction the
+  weak form adds the shape derivatives of the interfaces that meet there (the natural condition:
+  at a stationary junction the unit tangents weighted by mu balance, Young's law, 120 degrees for
+  equal weights), and the solve couples them.  A node on the image border slides along it.
+* an iteration costs O(boundary): the shape derivative (6.41) per interface is the edge integral
+  of ``g_inner - g_outer`` on the image tables (:func:`activecontour.energy.partition_load`), the
+  energy and constants are boundary integrals (Green), and M + K is a sparse matrix of the graph
+  (a tridiagonal band per interface, coupled at the junctions), factorised once per iteration.
+
+The alternatives were nested curves per class (Chung-Vese's multilayer model: one two-region
+polygon per threshold, ``S_1 > S_2 > ...``), which charges an interface between classes k and m
+``|k - m|`` times and leaves a sliver of every intermediate class along it (a halo around a bright
+object on a dark background), and disjoint closed curves per region, whose coincident curves
+must be kept from overlapping and gapping after every step.
+
+Topology
+--------
+The network moves its vertices; it does not change its graph.  The topology comes first, from the
+label field (:func:`activecontour.backends.labelfield.segment_labels`: the global K-means start, then
+the exact descent with its merge and split moves, which create, remove and reconnect regions
+freely).  Its partition (boundaries through the midpoints between pixels, junctions at cell
+centres: :mod:`activecontour.partition`) is the network's start; the flow then moves every
+interface and junction to sub-pixel position, lowering J from the label field's value.  So the
+polygon backend's N-region result is the label field's topology with the polygon's geometry.
+
+The step is the polygon backend's: dt by Armijo backtracking on J, the first trial twice the last
+accepted dt and at most the dt that moves the vertices ``max_step`` px root-mean-square; a trial
+that reverses an interface segment or leaves the image is halved.  The flow has converged when the
+interfaces' mean normal displacement (the area they sweep over their length) between the start
+and the end of a block of five iterations falls below ``tol`` px per iteration in two consecutive
+blocks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from activecontour.energy import evaluate_partition, partition_load
+from activecontour.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
+from activecontour.raster import rasterize
+from activecontour.result import FlowState, SegmentationResult
+
+__all__ = ["Network", "segment_network"]
+
+#: Root-mean-square vertex displacement of the first trial step (px).
+_MAX_STEP = 0.25
+#: Iterations per block of the convergence test.
+_BLOCK = 5
+#: Consecutive blocks below tol that make convergence: the flow's tail is linear, and one slow
+#: block can be a pause (a 100x smaller tol then still lowered J by 0.1 % on noisy rings).
+_STILL_BLOCKS = 2
+#: Armijo's constant of the sufficient decrease.
+_ARMIJO = 1e-4
+#: Target length of the interfaces' segments (px), as the two-region polygon's default spacing.
+_SPACING = 1.0
+#: Closed loops enclosing less than this (px^2) are dropped when that does not raise J.
+_ISLAND_AREA = 1.0
+#: Blocks before a remesh that raised J is tried again.
+_REMESH_COOLDOWN = 4
+#: Halvings of dt before the line search gives up (stationary to working precision).
+_BACKTRACKS = 30
+
+
+class Network:
+    """The boundary graph of a partition: nodes, and oriented segments between them with the
+    region on either side (``inner`` opposite the normal ``nu = (t_c, -t_r)``, ``outer`` on its
+    side, -1 outside the image).
+
+    Parameters
+    ----------
+    nodes : ndarray (P, 2)
+    start, end : int ndarray (S,)
+        The node of each segment's ends.
+    inner, outer : int ndarray (S,)
+    shape : (M, N)
+    """
+
+    def __init__(self, nodes, start, end, inner, outer, shape):
+        self.nodes, self.start, self.end = nodes, start, end
+        self.inner, self.outer, self.shape = inner, outer, tuple(shape)
+        self.interface = outer >= 0
+        self.sides = Sides(inner, outer)
+        m, n = self.shape
+        moving = np.zeros(len(nodes), dtype=bool)
+        moving[start[self.interface]] = moving[end[self.interface]] = True
+        on_rows = (nodes[:, 0] == -0.5) | (nodes[:, 0] == m - 0.5)
+        on_cols = (nodes[:, 1] == -0.5) | (nodes[:, 1] == n - 0.5)
+        # a node on the border slides along it: its component across the border is held
+        self.free = (moving & ~on_rows, moving & ~on_cols)
+
+    @classmethod
+    def of_classes(cls, classes):
+        """The network of the partition a label image stands for (:mod:`activecontour.partition`)."""
+        boundary = class_boundary(classes)
+        points = np.vstack([boundary.start, boundary.end])
+        _, first, index = np.unique(lattice_keys(points), return_index=True, return_inverse=True)
+        count = len(boundary.start)
+        return cls(points[first], index[:count], index[count:], boundary.inner, boundary.outer,
+                   classes.shape)
+
+    def boundary(self, nodes=None):
+        """The partition's :class:`~activecontour.partition.Boundary` with the vertices at ``nodes``."""
+        nodes = self.nodes if nodes is None else nodes
+        return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
+
+    def relabelled(self, mapping):
+        """The same network with region k renamed ``mapping[k]``."""
+        mapping = np.append(np.asarray(mapping), -1)  # -1 (outside the image) stays
+        return Network(self.nodes, self.start, self.end, mapping[self.inner], mapping[self.outer],
+                       self.shape)
+
+    def region_curves(self, region):
+        """Closed curves of a set of regions (bool per region): outer boundaries positive."""
+        region = np.append(np.asarray(region, dtype=bool), False)
+        inner, outer = region[self.inner], region[self.outer]
+        forward, backward = inner & ~outer, outer & ~inner
+        starts = np.concatenate([self.start[forward], self.end[backward]])
+        ends = np.concatenate([self.end[forward], self.start[backward]])
+        return [self.nodes[starts[loop]] for loop in chain_loops(starts, ends)]
+
+    def polylines(self):
+        """The interfaces as polylines of nodes between branch nodes (junctions and nodes on the
+        border) or closed loops: a list of ``(node indices, inner, outer, closed)``, the regions
+        on either side of the walking direction (the same all along: a region changes only at a
+        junction)."""
+        chosen = np.flatnonzero(self.interface)
+        degree = np.bincount(np.concatenate([self.start[chosen], self.end[chosen]]),
+                             minlength=len(self.nodes))
+        branch = (degree != 2) | ~(self.free[0] & self.free[1])
+        incident = [[] for _ in self.nodes]
+        for segment in chosen:
+            incident[self.start[segment]].append(segment)
+            incident[self.end[segment]].append(segment)
+        used = np.zeros(len(self.start), dtype=bool)
+        lines = []
+
+        def walk(node, segment):
+            forward = self.start[segment] == node
+            sides = (self.inner[segment], self.outer[segment])
+            if not forward:
+                sides = sides[::-1]
+            path = [node]
+            while True:
+                used[segment] = True
+                node = self.end[segment] if self.start[segment] == node else self.start[segment]
+                path.append(node)
+                if branch[node]:
+                    return path, *sides, False
+                segment = next((s for s in incident[node] if not used[s]), None)
+                if segment is None:  # back at the loop's first node
+                    return path[:-1], *sides, True
+
+        for node in np.flatnonzero(branch):
+            for segment in incident[node]:
+                if not used[segment]:
+                    lines.append(walk(node, segment))
+        for segment in chosen:
+            if not used[segment]:
+                lines.append(walk(self.start[segment], segment))
+        return lines
+
+    def resampled(self, nodes, spacing):
+        """The network with every interface resampled at equal arc-length steps of about
+        ``spacing`` px, its branch nodes kept (mesh health, as the two-region flow's
+        :func:`activecontour.curve.resample`).  Returns ``(network, nodes)``."""
+        lines = self.polylines()
+        interior = np.zeros(len(nodes), dtype=bool)
+        for path, _, _, closed in lines:
+            interior[path if closed else path[1:-1]] = True
+        kept = np.flatnonzero(~interior)
+        index = np.full(len(nodes), -1)
+        index[kept] = np.arange(kept.size)
+        points = [nodes[kept]]
+        border = ~self.interface
+        start, end = [index[self.start[border]]], [index[self.end[border]]]
+        inner, outer = [self.inner[border]], [self.outer[border]]
+        count = kept.size
+        for path, left, right, closed in lines:
+            polyline = nodes[np.append(path, path[0]) if closed else path]
+            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
+            pieces = max(3 if closed else 1, int(round(arc[-1] / spacing)))
+            steps = np.arange(0 if closed else 1, pieces) * (arc[-1] / pieces)
+            new = np.column_stack([np.interp(steps, arc, polyline[:, 0]),
+                                   np.interp(steps, arc, polyline[:, 1])])
+            ids = count + np.arange(len(new))
+            count += len(new)
+            points.append(new)
+            if closed:
+                ring = np.append(ids, ids[0])
+                start.append(ring[:-1])
+                end.append(ring[1:])
+            else:
+                chain_ids = np.concatenate([[index[path[0]]], ids, [index[path[-1]]]])
+                start.append(chain_ids[:-1])
+                end.append(chain_ids[1:])
+            inner.append(np.full(len(start[-1]), left))
+            outer.append(np.full(len(start[-1]), right))
+        nodes = np.vstack(points)
+        parts = (np.concatenate(part).astype(np.intp) for part in (start, end, inner, outer))
+        network = Network(nodes, *parts, self.shape)
+        return network, nodes
+
+    def crossing_nodes(self, nodes):
+        """The nodes of interface segments that cross another one (for the islands to drop)."""
+        import shapely
+
+        chosen = np.flatnonzero(self.interface)
+        ends = np.stack([nodes[self.start[chosen]], nodes[self.end[chosen]]], axis=1)
+        lines = shapely.linestrings(ends)
+        first, second = shapely.STRtree(lines).query(lines, predicate="crosses")
+        crossing = chosen[np.union1d(first, second)]
+        return np.union1d(self.start[crossing], self.end[crossing])
+
+    def without_island(self, nodes, path):
+        """The network without the closed interface loop through ``path`` (nodes of degree two),
+        the region inside it merged into the one around it; None when another part of the
+        network lies inside the loop (its regions would need renaming)."""
+        from matplotlib.path import Path
+
+        ring = nodes[path]
+        low, high = ring.min(axis=0), ring.max(axis=0)
+        in_loop = np.zeros(len(self.start), dtype=bool)
+        in_loop[np.isin(self.start, path) & self.interface] = True
+        used = np.unique(np.concatenate([self.start[~in_loop], self.end[~in_loop]]))
+        near = used[np.all((nodes[used] > low) & (nodes[used] < high), axis=1)]
+        if near.size and Path(ring).contains_points(nodes[near]).any():
+            return None
+        keep = ~in_loop
+        return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
+                       self.shape)
+
+    def stiffness(self, nodes, smoothing=1.0):
+        """The matrix ``M + l^2 K`` of the H^1 form (6.39) of P1 functions on the interfaces."""
+        import scipy.sparse
+
+        a, b = self.start[self.interface], self.end[self.interface]
+        h = np.linalg.norm(nodes[b] - nodes[a], axis=1)
+        diagonal = h / 3.0 + smoothing**2 / h
+        off = h / 6.0 - smoothing**2 / h
+        rows = np.concatenate([a, b, a, b])
+        cols = np.concatenate([a, b, b, a])
+        size = len(nodes)
+        return scipy.sparse.csc_matrix((np.concatenate([diagonal, diagonal, off, off]), (rows, cols)),
+                                       shape=(size, size))
+
+    def factors(self, nodes):
+        """The sparse LU factors of ``M + K`` (6.39) restricted to each component's free nodes,
+        for :meth:`velocity`."""
+        from scipy.sparse.linalg import splu
+
+        matrix = self.stiffness(nodes)
+        factors = []
+        for free in self.free:
+            index = np.flatnonzero(free)
+            factors.append((index, splu(matrix[index][:, index].tocsc()) if index.size else None))
+        return factors
+
+    def velocity(self, nodes, force, factors=None):
+        """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component.
+
+        ``factors`` of :meth:`factors` at nearby nodes may be reused: the metric of a mesh whose
+        edges changed a little is still an inner product, so V is still a descent direction
+        (``delta J(V) = -b(V, V) < 0``, (6.27)).
+        """
+        factors = self.factors(nodes) if factors is None else factors
+        velocity = np.zeros_like(nodes)
+        for component, (index, factor) in enumerate(factors):
+            if factor is not None:
+                velocity[index, component] = factor.solve(-force[index, component])
+        return velocity
+
+    def normal_part(self, nodes, velocity):
+        """The velocity without its tangential part at the nodes inside an interface (degree two,
+        off the border): moving along the curve changes the region only through the polygon's
+        discretisation, and lets vertices bunch up."""
+        chosen = np.flatnonzero(self.interface)
+        a, b = self.start[chosen], self.end[chosen]
+        tangent = nodes[b] - nodes[a]
+        normal_sum = np.zeros_like(nodes)
+        np.add.at(normal_sum, a, np.column_stack([tangent[:, 1], -tangent[:, 0]]))
+        np.add.at(normal_sum, b, np.column_stack([tangent[:, 1], -tangent[:, 0]]))
+        degree = np.bincount(np.concatenate([a, b]), minlength=len(nodes))
+        plain = (degree == 2) & self.free[0] & self.free[1]
+        size = np.linalg.norm(normal_sum, axis=1)
+        plain &= size > 0
+        out = velocity.copy()
+        unit = normal_sum[plain] / size[plain, None]
+        out[plain] = np.sum(velocity[plain] * unit, axis=1)[:, None] * unit
+        return out
+
+    def force(self, nodes, model, params, constants):
+        """``delta J`` with respect to every node (6.41): the segments' loads summed at their ends."""
+        load = partition_load(model, self.boundary(nodes), params, constants)
+        force = np.zeros_like(nodes)
+        np.add.at(force, self.start, load[:, 0])
+        np.add.at(force, self.end, load[:, 1])
+        return force
+
+    def swept(self, before, after):
+        """The interfaces' mean normal displacement from ``before`` to ``after`` (px)."""
+        a, b = self.start[self.interface], self.end[self.interface]
+        tangent = before[b] - before[a]
+        length = np.linalg.norm(tangent, axis=1)
+        shift = 0.5 * ((after[a] - before[a]) + (after[b] - before[b]))
+        normal = np.abs(shift[:, 0] * tangent[:, 1] - shift[:, 1] * tangent[:, 0])  # |shift . nu| h
+        return float(normal.sum() / max(length.sum(), 1e-12))
+
+    def simple(self, nodes):
+        """No two interfaces cross: the interface segments meet only at their ends (GEOS's
+        ``is_simple`` of them as one multi-line string, a sweep in O(S log S)).  A crossing would
+        make an overlap of two regions, whose energy the functional would count with a negative
+        area."""
+        import shapely
+
+        chosen = self.interface
+        count = int(np.count_nonzero(chosen))
+        if count == 0:
+            return True
+        coordinates = np.empty((2 * count, 2))
+        coordinates[0::2], coordinates[1::2] = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        lines = shapely.from_ragged_array(shapely.GeometryType.MULTILINESTRING, coordinates,
+                                          (np.arange(0, 2 * count + 1, 2), np.array([0, count])))[0]
+        return bool(shapely.is_simple(lines))
+
+    def admissible(self, before, after):
+        """No segment reversed or collapsed, every vertex in the image domain (cheap tests before
+        the energy; :meth:`simple` is the exact one)."""
+        a, b = self.start, self.end
+        old, new = before[b] - before[a], after[b] - after[a]
+        kept = np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old)
+        m, n = self.shape
+        inside = ((after[:, 0] >= -0.5) & (after[:, 0] <= m - 0.5)
+                  & (after[:, 1] >= -0.5) & (after[:, 1] <= n - 0.5))
+        return bool(kept.all() and inside.all())
+
+
+def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callback):
+    """Minimise the N-region functional with the H^1 flow of the partition's boundary network.
+
+    Parameters
+    ----------
+    model : ImageModel
+    init : None, int ndarray (M, N), or SegmentationResult
+        As for :func:`activecontour.backends.labelfield.segment_labels`, which finds the topology.
+    params : ChanVeseParameters
+    n_regions : int
+    max_num_iter : int
+        Iterations of the label field, and of the flow.
+    tol : float
+        Pixels per iteration (module docstring).
+    callback : callable or None
+        Called with a :class:`~activecontour.result.FlowState` after every iteration (the label
+        field's, then the flow's); return True to stop.
+
+    Returns
+    -------
+    SegmentationResult
+        ``backend="polygon"``; ``classes`` are the pixels whose centre lies in each region,
+        ``class_contours`` the sub-pixel regions, ``energy`` their functional.
+    """
+    from activecontour.backends.labelfield import segment_labels
+
+    start = segment_labels(model, init, params, n_regions=n_regions, max_num_iter=max_num_iter,
+                           tol=tol, callback=callback)
+    network = Network.of_classes(start.classes)
+    energies = list(start.energies)
+    if start.status == 2:
+        return _result(model, params, network, network.nodes, n_regions, energies, start.n_iter, 2)
+    flow = _Flow(network, model, params, n_regions, energies)
+    status, n_iter = flow.run(max_num_iter, tol, callback, start.n_iter)
+    return _result(model, params, flow.network, flow.nodes, n_regions, flow.energies, n_iter, status)
+
+
+class _Flow:
+    """The gradient flow (6.30)-(6.31) of a network's nodes, remeshed to ``_SPACING`` px."""
+
+    def __init__(self, network, model, params, n_regions, energies):
+        self.model, self.params, self.n_regions = model, params, n_regions
+        self.network, self.nodes, self.energies = network, network.nodes.copy(), energies
+        self.current = self.evaluate(network, self.nodes)
+        self.remesh()
+
+    def evaluate(self, network, nodes):
+        return evaluate_partition(self.model, network.boundary(nodes), self.params, self.n_regions)
+
+    def remesh(self):
+        """Resample the interfaces at ``_SPACING`` px; kept only if J does not rise (else not
+        tried again for ``_REMESH_COOLDOWN`` blocks)."""
+        self.cooldown = _REMESH_COOLDOWN
+        network, nodes = self.network.resampled(self.nodes, _SPACING)
+        trial = self.evaluate(network, nodes)
+        if trial.energy <= self.current.energy and network.simple(nodes):
+            if trial.energy < self.current.energy:
+                self.energies.append(trial.energy)
+            self.network, self.nodes, self.current = network, nodes, trial
+
+    def drop_islands(self, nodes_of_interest=None):
+        """Remove the closed loops (islands, holes) that enclose less than ``_ISLAND_AREA`` px^2,
+        or, given ``nodes_of_interest``, the loops through them, one at a time, each only if J
+        does not rise: the network cannot change its topology by moving, so a region the flow
+        shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
+        removed = False
+        for path, _, _, closed in self.network.polylines():
+            if not closed:
+                continue
+            ring = self.nodes[path]
+            following = np.roll(ring, -1, axis=0)
+            area = 0.5 * abs(np.sum(ring[:, 0] * following[:, 1] - following[:, 0] * ring[:, 1]))
+            if nodes_of_interest is None:
+                chosen = area < _ISLAND_AREA
+            else:
+                chosen = np.isin(path, nodes_of_interest).any()
+            if not chosen:
+                continue
+            network = self.network.without_island(self.nodes, path)
+            if network is None:
+                continue
+            trial = self.evaluate(network, self.nodes)
+            if trial.energy <= self.current.energy:
+                if trial.energy < self.current.energy:
+                    self.energies.append(trial.energy)
+                self.network, self.current, removed = network, trial, True
+        return removed
+
+    def unhealthy(self):
+        network, nodes = self.network, self.nodes
+        chosen = network.interface
+        lengths = np.linalg.norm(nodes[network.end[chosen]] - nodes[network.start[chosen]], axis=1)
+        return lengths.size and (lengths.min() < 0.5 * _SPACING or lengths.max() > 2.0 * _SPACING)
+
+    def run(self, max_num_iter, tol, callback, n_iter):
+        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step)
+        and the iteration count."""
+        dt_last, block_start, block_network, still = None, self.nodes, self.network, 0
+        factors = None
+        for iteration in range(1, max_num_iter + 1):
+            network, nodes, current = self.network, self.nodes, self.current
+            force = network.force(nodes, self.model, self.params, current.constants)
+            if factors is None:  # the metric of the block's first mesh, for the whole block
+                factors = network.factors(nodes)
+            velocity = network.velocity(nodes, force, factors)
+            normal = network.normal_part(nodes, velocity)
+            if np.sum(force * normal) < 0:  # still a descent direction (it nearly always is)
+                velocity = normal
+            slope = float(np.sum(force * velocity))
+            spread = np.sqrt(np.mean(np.sum(velocity[network.free[0] | network.free[1]] ** 2, axis=1)))
+            if not spread > 0 or slope >= 0:
+                return 4, n_iter
+            dt = _MAX_STEP / spread if dt_last is None else min(2.0 * dt_last, _MAX_STEP / spread)
+            crossed = None
+            for _ in range(_BACKTRACKS):
+                trial = nodes + dt * velocity
+                if network.admissible(nodes, trial):
+                    candidate = self.evaluate(network, trial)
+                    if candidate.energy <= current.energy + _ARMIJO * dt * slope:
+                        if network.simple(trial):
+                            break
+                        crossed = trial if crossed is None else crossed
+                dt *= 0.5
+            else:
+                # a region folding over itself as the flow shrinks it: drop it and go on
+                if crossed is not None and self.drop_islands(network.crossing_nodes(crossed)):
+                    factors, dt_last = None, None
+                    continue
+                return 4, n_iter
+            self.nodes, self.current, dt_last = trial, candidate, dt
+            n_iter += 1
+            self.energies.append(candidate.energy)
+            if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
+                return 2, n_iter
+            if iteration % _BLOCK == 0:
+                slow = block_network is network and network.swept(block_start, trial) / _BLOCK < tol
+                still = still + 1 if slow else 0
+                if still == _STILL_BLOCKS:
+                    return 0, n_iter
+                self.cooldown -= 1
+                self.drop_islands()
+                if self.cooldown <= 0 and self.unhealthy():
+                    self.remesh()
+                block_start, block_network, factors = self.nodes, self.network, None
+        return 1, n_iter
+
+
+def _state(network, nodes, evaluation, n_iter, max_num_iter):
+    moved = Network(nodes, network.start, network.end, network.inner, network.outer, network.shape)
+    inside = np.arange(len(evaluation.areas)) > 0
+    c_in, c_out = _inside_constants(evaluation)
+    return FlowState(n_iter, moved.region_curves(inside), evaluation.energy, c_in, c_out,
+                     network.shape, max_num_iter)
+
+
+def _inside_constants(evaluation):
+    """``(c_in, c_out)``: the area-weighted mean of the non-background regions' constants, and the
+    background's."""
+    areas, constants = evaluation.areas, evaluation.constants
+    inside = areas[1:].sum()
+    c_in = (areas[1:, None] * constants[1:]).sum(axis=0) / inside if inside > 0 else constants[0]
+    return c_in, constants[0]
+
+
+def _result(model, params, network, nodes, n_regions, energies, n_iter, status):
+    """The result of the moved network: regions renamed by the rule of
+    :func:`activecontour.backends.labelfield.order_classes` (their order can change as they move)."""
+    moved = Network(nodes, network.start, network.end, network.inner, network.outer, network.shape)
+    final = evaluate_partition(model, moved.boundary(), params, n_regions)
+    border = ~moved.interface
+    lengths = np.linalg.norm(nodes[moved.end] - nodes[moved.start], axis=1)
+    on_border = np.bincount(moved.inner[border], weights=lengths[border], minlength=n_regions)
+    background = int(np.argmax(on_border))
+    gray = final.constants.mean(axis=1)
+    others = [k for k in np.argsort(gray, kind="stable") if k != background]
+    mapping = np.empty(n_regions, dtype=np.intp)
+    mapping[[background] + others] = np.arange(n_regions)
+    if np.any(mapping != np.arange(n_regions)):
+        moved = moved.relabelled(mapping)
+        final = evaluate_partition(model, moved.boundary(), params, n_regions)
+    energies = list(energies)
+    energies[-1] = final.energy
+    shape = network.shape
+    class_contours = [moved.region_curves(np.arange(n_regions) == k) for k in range(n_regions)]
+    classes = np.zeros(shape, dtype=np.int32)
+    for k in range(1, n_regions):
+        classes[rasterize(class_contours[k], shape)] = k
+    contours = moved.region_curves(np.arange(n_regions) > 0)
+    mask = rasterize(contours, shape)
+    c_in, c_out = _inside_constants(final)
+    return SegmentationResult(mask=mask, contours=contours, c_in=c_in, c_out=c_out,
+                              energy=final.energy, energies=energies, n_iter=n_iter,
+                              status=3 if not mask.any() else status, backend="polygon",
+                              classes=classes, constants=final.constants,
+                              class_contours=class_contours)
