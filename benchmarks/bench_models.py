@@ -17,7 +17,8 @@ Then ``fit="smooth"`` against ``"constant"`` on every synthetic case of bench_ro
 set), both backends: Dice and time ratio.  ``--sheets DIR`` writes contact sheets of skimage's
 coins, clock, page and text with the models.
 
-usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-robust] [--sheets DIR]
+usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-robust] [--no-scenes]
+                                                      [--sheets DIR] [--repeat N] [--only WORD ...]
 """
 
 from __future__ import annotations
@@ -170,24 +171,30 @@ def scenes_table(nuclei):
                   f"{object_dice(res.mask, truth):.4f} | - | {time.perf_counter() - t:.2f}", flush=True)
 
 
-def robust_comparison():
+def robust_comparison(repeat=1, only=None):
+    """smooth vs constant on bench_robust's quick set; times the minimum of ``repeat`` runs of
+    each, interleaved (the machine's load moves single runs by 2x)."""
     from bench_robust import synthetic_cases
 
     from activecontour import synthetic
 
-    print("\ncase | backend | constant Dice | smooth Dice | difference | time smooth / constant")
+    print(f"\ncase | backend | constant Dice | smooth Dice | difference | time smooth / constant "
+          f"(min of {repeat})")
     for name, make in synthetic_cases(quick=True):
+        if only and not any(word in name for word in only):
+            continue
         image, truth = make()
         for backend in ("polygon", "levelset"):
-            dice, seconds = {}, {}
-            for fit in ("constant", "smooth"):
-                t = time.perf_counter()
-                res = ac.segment(image, backend=backend, fit=fit, separate=False)
-                seconds[fit] = time.perf_counter() - t
-                dice[fit] = synthetic.dice(res.mask, truth)
+            dice, seconds = {}, {"constant": [], "smooth": []}
+            for _ in range(repeat):
+                for fit in ("constant", "smooth"):
+                    t = time.perf_counter()
+                    res = ac.segment(image, backend=backend, fit=fit, separate=False)
+                    seconds[fit].append(time.perf_counter() - t)
+                    dice[fit] = synthetic.dice(res.mask, truth)
+            ratio = min(seconds["smooth"]) / min(seconds["constant"])
             print(f"{name} | {backend} | {dice['constant']:.4f} | {dice['smooth']:.4f} | "
-                  f"{dice['smooth'] - dice['constant']:+.4f} | {seconds['smooth'] / seconds['constant']:.2f}",
-                  flush=True)
+                  f"{dice['smooth'] - dice['constant']:+.4f} | {ratio:.2f}", flush=True)
 
 
 def contact_sheets(folder):
@@ -231,12 +238,17 @@ def main():
     parser.add_argument("--nuclei", default=os.environ.get("NUCLEI_DIR", ""),
                         help="folder with img2d.tif and mask2d.tif (the stardist wheel's data/images)")
     parser.add_argument("--no-robust", action="store_true")
+    parser.add_argument("--no-scenes", action="store_true", help="skip the scenes' table")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="time each fit on the bench_robust cases this many times (the minimum)")
+    parser.add_argument("--only", nargs="*", help="bench_robust cases whose names contain these words")
     parser.add_argument("--sheets", help="write contact sheets of coins, clock, page, text here")
     args = parser.parse_args()
     ac.segment(np.random.default_rng(0).random((64, 64)))  # load the compiled kernels
-    scenes_table(args.nuclei)
+    if not args.no_scenes:
+        scenes_table(args.nuclei)
     if not args.no_robust:
-        robust_comparison()
+        robust_comparison(args.repeat, args.only)
     if args.sheets:
         contact_sheets(args.sheets)
 
