@@ -365,10 +365,10 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
 
 
 def _smooth_light(values, init, params, run, build, fit_light):
-    """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
-    update (partition and constants fixed).  ``build`` and ``fit_light`` are the noise model's
-    (:func:`activecontour.models.noise_model`).  Returns the result, its image model and
-    parameters.
+    """``fit="smooth"``: alternate the backend's run (light fixed) and the light's update
+    (partition and constants fixed: least squares, or the Poisson likelihood's optimum).
+    ``build`` and ``fit_light`` are the noise model's (:func:`activecontour.models.noise_model`).
+    Returns the result, its image model and parameters.
 
     When the light is worth its parameters: the light step lowers J by the drop of
     :func:`~activecontour.models.smooth.fit_light`.  Read (6.38) as :func:`~activecontour.noise.auto_mu`
@@ -379,9 +379,10 @@ def _smooth_light(values, init, params, run, build, fit_light):
     exceeds ``sigma^2 (P - 1) ln(N)``, N the pixels.  Under uniform light and pure noise the drop
     is ``sigma^2`` times a chi-square with at most P - 1 degrees of freedom (mean <= 9; the
     constant field is fitted by the constants already), far below that (112 sigma^2 at 512^2);
-    light of 1 % over a 512^2 image of contrast 0.4 is above it.  The
-    same bound ends the alternation: a later round that moves the light by less than its noise
-    is not worth a run.  So does a round that ends above the J it started from: each step of an
+    light of 1 % over a 512^2 image of contrast 0.4 is above it.  (The Poisson fit term is
+    scaled to be the squared error at the mean intensity, so the same bound holds to second
+    order.)  The same bound ends the alternation: a later round that moves the light by less
+    than its noise is not worth a run.  So does a round that ends above the J it started from: each step of an
     alternating minimisation lowers J, so a run that does not (the backend restarts its coarse
     stages from the previous partition and can settle higher) is not converging.
 
