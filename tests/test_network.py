@@ -177,8 +177,12 @@ def test_dropping_an_island_merges_it_into_the_region_around_it():
     image = np.random.default_rng(5).random(classes.shape)
     model, params = _setup(image, 0.3)
     network = Network.of_classes(classes)
-    loops = {len(path): path for path, _, _, closed in network.polylines() if closed}
+    loops = {len(loop): loop for loop, _ in network.closed_loops(network.nodes)}
     assert sorted(loops) == [4, 8, 38]  # the speck, the 2 x 2 island, the block's outline
+    areas = sorted(area for _, area in network.closed_loops(network.nodes))
+    # the lattice partition: a pixel's square with its corners cut (1 - 4/8), the island's
+    # 2 x 2 square less its corners (4 - 4/8), the block's 9 x 10 less its corners (90 - 4/8)
+    np.testing.assert_allclose(areas, [0.5, 3.5, 89.5])
     for size, around, box in ((4, 0, (13, 2)), (8, 1, (slice(6, 8), slice(7, 9)))):
         merged = classes.copy()
         merged[box] = around

@@ -226,21 +226,54 @@ class Network:
         crossing = chosen[np.union1d(first, second)]
         return np.union1d(self.start[crossing], self.end[crossing])
 
-    def without_island(self, nodes, path):
-        """The network without the closed interface loop through ``path`` (nodes of degree two),
-        the region inside it merged into the one around it; None when another part of the
-        network lies inside the loop (its regions would need renaming)."""
-        from matplotlib.path import Path
+    def closed_loops(self, nodes):
+        """The interfaces that are closed loops (no junction, off the border), each as
+        ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
+        the interface segments, joined at the nodes of degree two."""
+        import scipy.sparse
+        from scipy.sparse.csgraph import connected_components
 
-        ring = nodes[path]
-        low, high = ring.min(axis=0), ring.max(axis=0)
-        in_loop = np.zeros(len(self.start), dtype=bool)
-        in_loop[np.isin(self.start, path) & self.interface] = True
-        used = np.unique(np.concatenate([self.start[~in_loop], self.end[~in_loop]]))
-        near = used[np.all((nodes[used] > low) & (nodes[used] < high), axis=1)]
-        if near.size and Path(ring).contains_points(nodes[near]).any():
-            return None
-        keep = ~in_loop
+        chosen = np.flatnonzero(self.interface)
+        if chosen.size == 0:
+            return []
+        ends = np.concatenate([self.start[chosen], self.end[chosen]])
+        owner = np.tile(np.arange(chosen.size), 2)
+        degree = np.bincount(ends, minlength=len(nodes))
+        branch = (degree != 2) | ~(self.free[0] & self.free[1])
+        order = np.argsort(ends, kind="stable")
+        pairs = order[~branch[ends[order]]].reshape(-1, 2)  # the two segments at a degree-two node
+        graph = scipy.sparse.coo_matrix((np.ones(len(pairs)), (owner[pairs[:, 0]], owner[pairs[:, 1]])),
+                                        shape=(chosen.size, chosen.size))
+        count, piece = connected_components(graph, directed=False)
+        open_piece = np.zeros(count, dtype=bool)
+        open_piece[piece[branch[self.start[chosen]] | branch[self.end[chosen]]]] = True
+        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        # a loop's segments are oriented either way, their sides named accordingly: orient them
+        # all as the piece's first one
+        first = np.full(count, -1)
+        first[piece[::-1]] = np.arange(chosen.size)[::-1]
+        sign = np.where(self.inner[chosen] == self.inner[chosen][first[piece]], 1.0, -1.0)
+        twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
+                                 minlength=count)
+        return [(chosen[piece == k], 0.5 * abs(twice_area[k])) for k in np.flatnonzero(~open_piece)]
+
+    def without_island(self, nodes, loop):
+        """The network without the closed interface loop of segments ``loop``, the region inside
+        it merged into the one around it; None when another part of the network lies inside the
+        loop (its regions would need renaming)."""
+        a, b = nodes[self.start[loop]], nodes[self.end[loop]]
+        low, high = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
+        keep = np.ones(len(self.start), dtype=bool)
+        keep[loop] = False
+        used = np.unique(np.concatenate([self.start[keep], self.end[keep]]))
+        near = nodes[used[np.all((nodes[used] > low) & (nodes[used] < high), axis=1)]]
+        if near.size:  # even-odd rule: crossings of the ray towards +c
+            straddle = (a[None, :, 0] > near[:, None, 0]) != (b[None, :, 0] > near[:, None, 0])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                at = a[None, :, 1] + (near[:, None, 0] - a[None, :, 0]) * (b[None, :, 1] - a[None, :, 1]) / (
+                    b[None, :, 0] - a[None, :, 0])
+            if np.any(np.count_nonzero(straddle & (at > near[:, None, 1]), axis=1) % 2):
+                return None
         return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
                        self.shape)
 
@@ -415,19 +448,13 @@ class _Flow:
         does not rise: the network cannot change its topology by moving, so a region the flow
         shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
         removed = False
-        for path, _, _, closed in self.network.polylines():
-            if not closed:
-                continue
-            ring = self.nodes[path]
-            following = np.roll(ring, -1, axis=0)
-            area = 0.5 * abs(np.sum(ring[:, 0] * following[:, 1] - following[:, 0] * ring[:, 1]))
-            if nodes_of_interest is None:
-                chosen = area < _ISLAND_AREA
-            else:
-                chosen = np.isin(path, nodes_of_interest).any()
-            if not chosen:
-                continue
-            network = self.network.without_island(self.nodes, path)
+        candidates = [self.network.start[loop] for loop, area in self.network.closed_loops(self.nodes)
+                      if (area < _ISLAND_AREA if nodes_of_interest is None
+                          else np.isin(self.network.start[loop], nodes_of_interest).any())]
+        for loop_nodes in candidates:  # its nodes are its own: find its segments after a removal
+            network = self.network
+            loop = np.flatnonzero(np.isin(network.start, loop_nodes) & network.interface)
+            network = network.without_island(self.nodes, loop)
             if network is None:
                 continue
             trial = self.evaluate(network, self.nodes)
