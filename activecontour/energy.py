@@ -272,7 +272,7 @@ def partition_load(model, boundary, params, constants):
 
 def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="auto", omega=0.0, lambda_in=1.0,
                      lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
-                     light=None):
+                     light=None, noise="gaussian"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
@@ -307,6 +307,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
     light : ndarray (M, N), optional
         The light field b of the smooth fit (``result.light`` of ``fit="smooth"``): region k's
         intensity is ``c_k b`` (:mod:`activecontour.models.smooth`).  None: the constant fit.
+    noise : {"gaussian", "poisson"}
+        The fit term, as in :func:`activecontour.segment`.
 
     Returns
     -------
@@ -322,7 +324,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
         (6.38) is not defined.  :func:`activecontour.topology.region_union` turns such curves
         into the boundary of the region they outline.
     """
-    from activecontour.image import ImageModel, normalize_image
+    from activecontour.image import normalize_image
+    from activecontour.models import noise_model
     from activecontour.noise import auto_mu, is_auto
 
     values = normalize_image(image, color=color, normalize=normalize)
@@ -330,12 +333,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
     values = to_frame(values, offset, scale)
     params = ChanVeseParameters(auto_mu(values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out).in_frame(offset, scale)
-    if light is None:
-        model = ImageModel(values)
-    else:
-        from activecontour.models.smooth import smooth_light_model
-
-        model, params = smooth_light_model(values, np.asarray(light, dtype=np.float64), params)
+    build = noise_model(noise)[0]
+    model, params = build(values, None if light is None else np.asarray(light, dtype=np.float64), params)
     if sum(given is not None for given in (contours, classes, regions)) != 1:
         raise TypeError("chan_vese_energy takes one of contours, classes or regions")
     if classes is not None:

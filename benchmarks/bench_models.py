@@ -5,10 +5,10 @@ levels, two of them under 250 px) with noise 0.02; three colour regions of one g
 faint blobs (contrast 0.15) under a gradient and a vignette of amplitude 0.5 (384^2); real nuclei of
 different brightness (DSB 2018 from the stardist wheel, if ``--nuclei DIR`` holds img2d.tif and
 mask2d.tif).  Every method runs on every scene it applies to, in one run: ours with
-``n_regions=K`` on both backends, ``fit="constant"`` and
-``"smooth"``; scikit-image's ``threshold_multiotsu`` (on the image smoothed by a Gaussian of 1 px,
-K classes), ``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese`` (35
-iterations) with their defaults.  Dice: for two regions the object's, strict (the inside must be
+``n_regions=K`` on both backends, ``fit="constant"`` and ``"smooth"`` (for two regions also with
+``noise="poisson"``); scikit-image's ``threshold_multiotsu`` (on the image smoothed by a Gaussian
+of 1 px, K classes), ``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese``
+(35 iterations) with their defaults.  Dice: for two regions the object's, strict (the inside must be
 the objects; thresholds take the bright side); for K regions the mean per-class Dice after the best
 matching of found to true classes (scipy's linear_sum_assignment), with the per-class values.
 Ours run with ``separate=False``: the times are the segmentation's, not the objects' split.
@@ -23,7 +23,7 @@ set), both backends: Dice and time ratio.  ``--sheets DIR`` writes contact sheet
 coins, clock, page and text with the models.
 
 usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-auto] [--no-robust]
-       [--sheets DIR]
+       [--no-scenes] [--sheets DIR] [--repeat N] [--only WORD ...]
 """
 
 from __future__ import annotations
@@ -123,13 +123,15 @@ def methods(n_classes, colour):
 
     color = {"color": "vector"} if colour else {}
     out = []
+    noises = ["gaussian"] if n_classes > 2 else ["gaussian", "poisson"]
     for backend in ("polygon", "levelset"):
-        for fit in ("constant", "smooth"):
-            def ours(image, backend=backend, fit=fit):
-                res = ac.segment(image, backend=backend, fit=fit, n_regions=n_classes, separate=False,
-                                 **color)
-                return res.classes if n_classes > 2 else res.mask
-            out.append((f"ours {backend} {fit}", ours))
+        for noise in noises:
+            for fit in ("constant", "smooth"):
+                def ours(image, backend=backend, fit=fit, noise=noise):
+                    res = ac.segment(image, backend=backend, fit=fit, noise=noise, n_regions=n_classes,
+                                     separate=False, **color)
+                    return res.classes if n_classes > 2 else res.mask
+                out.append((f"ours {backend} {fit}" + (" poisson" if noise == "poisson" else ""), ours))
 
     def multiotsu(image):
         smooth = cv2.GaussianBlur(_gray(image).astype(np.float32), (0, 0), 1.0)
@@ -219,24 +221,30 @@ def auto_table():
               f"{two:.2f} | {choice / two:.3f}", flush=True)
 
 
-def robust_comparison():
+def robust_comparison(repeat=1, only=None):
+    """smooth vs constant on bench_robust's quick set; times the minimum of ``repeat`` runs of
+    each, interleaved (the machine's load moves single runs by 2x)."""
     from bench_robust import synthetic_cases
 
     from activecontour import synthetic
 
-    print("\ncase | backend | constant Dice | smooth Dice | difference | time smooth / constant")
+    print(f"\ncase | backend | constant Dice | smooth Dice | difference | time smooth / constant "
+          f"(min of {repeat})")
     for name, make in synthetic_cases(quick=True):
+        if only and not any(word in name for word in only):
+            continue
         image, truth = make()
         for backend in ("polygon", "levelset"):
-            dice, seconds = {}, {}
-            for fit in ("constant", "smooth"):
-                t = time.perf_counter()
-                res = ac.segment(image, backend=backend, fit=fit, separate=False)
-                seconds[fit] = time.perf_counter() - t
-                dice[fit] = synthetic.dice(res.mask, truth)
+            dice, seconds = {}, {"constant": [], "smooth": []}
+            for _ in range(repeat):
+                for fit in ("constant", "smooth"):
+                    t = time.perf_counter()
+                    res = ac.segment(image, backend=backend, fit=fit, separate=False)
+                    seconds[fit].append(time.perf_counter() - t)
+                    dice[fit] = synthetic.dice(res.mask, truth)
+            ratio = min(seconds["smooth"]) / min(seconds["constant"])
             print(f"{name} | {backend} | {dice['constant']:.4f} | {dice['smooth']:.4f} | "
-                  f"{dice['smooth'] - dice['constant']:+.4f} | {seconds['smooth'] / seconds['constant']:.2f}",
-                  flush=True)
+                  f"{dice['smooth'] - dice['constant']:+.4f} | {ratio:.2f}", flush=True)
 
 
 def contact_sheets(folder):
@@ -281,14 +289,19 @@ def main():
                         help="folder with img2d.tif and mask2d.tif (the stardist wheel's data/images)")
     parser.add_argument("--no-auto", action="store_true", help="skip the n_regions='auto' table")
     parser.add_argument("--no-robust", action="store_true")
+    parser.add_argument("--no-scenes", action="store_true", help="skip the scenes' table")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="time each fit on the bench_robust cases this many times (the minimum)")
+    parser.add_argument("--only", nargs="*", help="bench_robust cases whose names contain these words")
     parser.add_argument("--sheets", help="write contact sheets of coins, clock, page, text here")
     args = parser.parse_args()
     ac.segment(np.random.default_rng(0).random((64, 64)))  # load the compiled kernels
-    scenes_table(args.nuclei)
+    if not args.no_scenes:
+        scenes_table(args.nuclei)
     if not args.no_auto:
         auto_table()
     if not args.no_robust:
-        robust_comparison()
+        robust_comparison(args.repeat, args.only)
     if args.sheets:
         contact_sheets(args.sheets)
 
