@@ -85,6 +85,7 @@ _PARAMETER_OPTIONS = {
     "inside": "--inside",
     "n_regions": "--regions",
     "fit": "--fit",
+    "noise": "--noise",
 }
 
 
@@ -285,6 +286,10 @@ def _add_parameter_options(parser):
                        help="the regions' intensities: constant, or smooth (each region's constant "
                        "times a smooth light field shared by all, for uneven light) "
                        "(default: %(default)s)")
+    group.add_argument("--noise", choices=_noise_choices(), default=defaults["noise"],
+                       help="the fit term: gaussian (the squared error of 6.38) or poisson (photon "
+                       "counts, for fluorescence: the cut between two regions at their "
+                       "logarithmic mean) (default: %(default)s)")
     init = parser.add_argument_group(
         "initial curve",
         "default: the outlines of the two-means (6.38 without its length term) threshold of the "
@@ -997,6 +1002,12 @@ def _inside_choices():
     from activecontour.segment import INSIDE
 
     return INSIDE
+
+
+def _noise_choices():
+    from activecontour.models import NOISES
+
+    return NOISES
 
 
 def _fit_choices():

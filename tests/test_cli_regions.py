@@ -1,4 +1,5 @@
-"""The command line's models: ``--regions K|auto`` and ``--fit``, and the classes image they write."""
+"""The command line's models: ``--regions K|auto``, ``--fit`` and ``--noise``, and the classes image
+they write."""
 
 import json
 import os
@@ -85,6 +86,7 @@ def test_fit_reaches_the_library(nested, tmp_path, capsys):
         (["--regions", "2.5"], ["--regions", "integer >= 2 or 'auto'"]),
         (["--regions", "many"], ["--regions", "integer >= 2 or 'auto'"]),
         (["--fit", "linear"], ["--fit", "constant", "smooth"]),
+        (["--noise", "laplace"], ["--noise", "gaussian", "poisson"]),
         (["--regions", "3", "--backend", "levelset", "--c-in", "0.5"], ["c_in", "n_regions=3"]),
         (["--regions", "auto", "--backend", "levelset", "--c-out", "0.5"], ["c_out"]),
     ],
@@ -101,6 +103,16 @@ def test_help_lists_regions_and_fit(capsys):
     status, stdout, _ = run(capsys, "segment", "--help")
     assert status == 0
     assert "--regions K|auto" in stdout and "--fit {constant,smooth}" in stdout
+    assert "--noise {gaussian,poisson}" in stdout
+
+
+def test_noise_reaches_the_library(nested, tmp_path, capsys):
+    path, _ = nested
+    out = tmp_path / "out"
+    status, _, stderr = run(capsys, "segment", path, "-o", out, "--noise", "poisson")
+    assert status == 0, stderr
+    meta = json.loads((out / "rings_contours.json").read_text())["metadata"]
+    assert meta["parameters"]["noise"] == "poisson"
 
 
 def test_the_overlay_draws_each_region_in_its_own_colour(nested, tmp_path, capsys):
