@@ -44,10 +44,12 @@ __all__ = [
     "PartitionEvaluation",
     "chan_vese_energy",
     "evaluate",
+    "energy_of_moments",
     "evaluate_partition",
     "partition_load",
     "partition_moments",
     "region_moments",
+    "soup_moments",
     "stack_curves",
     "to_frame",
     "working_frame",
@@ -207,17 +209,23 @@ def partition_moments(model, boundary, n_classes):
     first = np.zeros((n_classes, model.n_channels))
     second = np.zeros((n_classes, model.n_channels))
     for k in range(1, n_classes):
-        starts, ends = class_soup(boundary, k)
-        points = np.empty((2 * len(starts), 2))
-        points[0::2], points[1::2] = starts, ends
-        next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
-        areas[k], _, first[k], second[k] = _moments(model, points, next_index)
+        areas[k], first[k], second[k] = soup_moments(model, *class_soup(boundary, k))
     # the background: the domain's totals minus the others (as the two-region outside)
     total_area, total_first, total_second = model.totals
     areas[0] = total_area - areas[1:].sum()
     first[0] = total_first - first[1:].sum(axis=0)
     second[0] = total_second - second[1:].sum(axis=0)
     return areas, first, second
+
+
+def soup_moments(model, starts, ends):
+    """``int 1``, ``int I``, ``int I^2`` (per channel) over the region that oriented segments
+    (S, 2) bound, in any order (Green's theorem needs no chaining)."""
+    points = np.empty((2 * len(starts), 2))
+    points[0::2], points[1::2] = starts, ends
+    next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
+    area, _, first, second = _moments(model, points, next_index)
+    return area, first, second
 
 
 def evaluate_partition(model, boundary, params, n_classes, constants=None):
@@ -229,14 +237,18 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None):
     close along the image border there.  ``constants`` (K, C), by default the region means (6.42);
     an empty region's term is 0 whatever its constant, which is then the image mean.
     """
-    areas, first, second = partition_moments(model, boundary, n_classes)
+    moments = partition_moments(model, boundary, n_classes)
+    lengths = boundary.length
+    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
+    return energy_of_moments(model, params, *moments, float(lengths[counted].sum()), constants)
+
+
+def energy_of_moments(model, params, areas, first, second, length, constants=None):
+    """:func:`evaluate_partition` from the regions' moments and the counted length."""
     if constants is None:
         whole = params.region_constant(*model.totals)
         constants = np.array([params.region_constant(a, f, q) if a > 1e-9 else whole
                               for a, f, q in zip(areas, first, second, strict=True)])
-    lengths = boundary.length
-    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
-    length = float(lengths[counted].sum())
     forms = params.class_forms(constants)
     energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
                                       in zip(forms, areas, first, second, strict=True))

@@ -50,7 +50,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.energy import evaluate_partition, partition_load
+from activecontour.energy import (
+    energy_of_moments,
+    evaluate_partition,
+    partition_load,
+    partition_moments,
+    soup_moments,
+)
 from activecontour.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
 from activecontour.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
@@ -298,8 +304,9 @@ class Network:
         low, high = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
         keep = np.ones(len(self.start), dtype=bool)
         keep[loop] = False
-        used = np.unique(np.concatenate([self.start[keep], self.end[keep]]))
-        near = nodes[used[np.all((nodes[used] > low) & (nodes[used] < high), axis=1)]]
+        used = np.zeros(len(nodes), dtype=bool)
+        used[self.start[keep]] = used[self.end[keep]] = True
+        near = nodes[used & np.all((nodes > low) & (nodes < high), axis=1)]
         if near.size:  # even-odd rule: crossings of the ray towards +c
             straddle = (a[None, :, 0] > near[:, None, 0]) != (b[None, :, 0] > near[:, None, 0])
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -482,22 +489,46 @@ class _Flow:
         or, given ``nodes_of_interest``, the loops through them, one at a time, each only if J
         does not rise: the network cannot change its topology by moving, so a region the flow
         shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
-        removed = False
-        candidates = [self.network.start[loop] for loop, area in self.network.closed_loops(self.nodes)
+        network, nodes = self.network, self.nodes
+        candidates = [network.start[loop] for loop, area in network.closed_loops(nodes)
                       if (area < _ISLAND_AREA if nodes_of_interest is None
-                          else np.isin(self.network.start[loop], nodes_of_interest).any())]
+                          else np.isin(network.start[loop], nodes_of_interest).any())]
+        if not candidates:
+            return False
+        # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
+        # move from the region inside to the one around it, and its loop leaves the length
+        areas, first, second = partition_moments(self.model, network.boundary(nodes), self.n_regions)
+        length, energy, removed = self.current.length, self.current.energy, False
         for loop_nodes in candidates:  # its nodes are its own: find its segments after a removal
-            network = self.network
             loop = np.flatnonzero(np.isin(network.start, loop_nodes) & network.interface)
-            network = network.without_island(self.nodes, loop)
-            if network is None:
+            reduced = network.without_island(nodes, loop)
+            if reduced is None:
                 continue
-            trial = self.evaluate(network, self.nodes)
-            if trial.energy <= self.current.energy:
-                if trial.energy < self.current.energy:
-                    self.energies.append(trial.energy)
-                self.network, self.current, removed = network, trial, True
-        return removed
+            flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
+            starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
+            ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
+            area, moment_1, moment_2 = soup_moments(self.model, starts, ends)
+            sides = (network.inner[loop[0]], network.outer[loop[0]])
+            inside, around = sides if area > 0 else sides[::-1]
+            sign = 1.0 if area > 0 else -1.0
+            trial = [part.copy() for part in (areas, first, second)]
+            for part, island in zip(trial, (area, moment_1, moment_2), strict=True):
+                part[inside] -= sign * island
+                part[around] += sign * island
+            loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
+            candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
+            if candidate.energy <= energy:
+                network, (areas, first, second) = reduced, trial
+                length, energy, removed = length - loop_length, candidate.energy, True
+        if not removed:
+            return False
+        current = self.evaluate(network, nodes)  # the same J, integrated afresh
+        if current.energy > self.current.energy + 1e-9 * abs(self.current.energy):
+            return False
+        if current.energy < self.current.energy:
+            self.energies.append(current.energy)
+        self.network, self.current = network, current
+        return True
 
     def unhealthy(self):
         network, nodes = self.network, self.nodes
