@@ -24,6 +24,7 @@ coins, clock, page and text with the models.
 
 usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-auto] [--no-robust]
        [--no-scenes] [--sheets DIR] [--repeat N] [--only WORD ...]
+       PYTHONPATH=. python benchmarks/bench_models.py --backends [--repeat N]   # N regions, both backends
 """
 
 from __future__ import annotations
@@ -283,6 +284,32 @@ def contact_sheets(folder):
         print("wrote", path)
 
 
+def backends_table(repeat=3):
+    """N regions on both backends, side by side: energy (the common evaluator's, of each one's
+    partition), per-class Dice where the truth is known, and the best of ``repeat`` times."""
+    import skimage.data
+
+    scenes = [("nested 3, SNR 3, 384^2", *nested_scene(), 3, "gray"),
+              ("Shepp-Logan 6 levels, noise 0.02", *phantom_scene(), 6, "gray"),
+              ("colour 3 regions, one gray", *colour_scene(), 3, "vector")]
+    scenes += [(f"skimage {name}", getattr(skimage.data, name)(), None, 3, "gray")
+               for name in ("coins", "page", "camera", "text")]
+    print(f"\nscene | K | polygon: J, Dice, s (best of {repeat}) | levelset: J, Dice, s | "
+          "J polygon / levelset")
+    for name, image, truth, n_regions, color in scenes:
+        cells, energies = [], []
+        for backend in ("polygon", "levelset"):
+            best = np.inf
+            for _ in range(repeat):
+                t = time.perf_counter()
+                res = ac.segment(image, n_regions=n_regions, backend=backend, color=color, separate=False)
+                best = min(best, time.perf_counter() - t)
+            dice = "-" if truth is None else f"{class_dice(res.classes, truth, n_regions).mean():.4f}"
+            cells.append(f"{res.energy:.2f}, {dice}, {best:.2f}")
+            energies.append(res.energy)
+        print(f"{name} | {n_regions} | {cells[0]} | {cells[1]} | {energies[0] / energies[1]:.4f}", flush=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--nuclei", default=os.environ.get("NUCLEI_DIR", ""),
@@ -294,8 +321,13 @@ def main():
                         help="time each fit on the bench_robust cases this many times (the minimum)")
     parser.add_argument("--only", nargs="*", help="bench_robust cases whose names contain these words")
     parser.add_argument("--sheets", help="write contact sheets of coins, clock, page, text here")
+    parser.add_argument("--backends", action="store_true",
+                        help="only the N-region table of both backends (energy, Dice, best of --repeat)")
     args = parser.parse_args()
     ac.segment(np.random.default_rng(0).random((64, 64)))  # load the compiled kernels
+    if args.backends:
+        backends_table(max(args.repeat, 1))
+        return
     if not args.no_scenes:
         scenes_table(args.nuclei)
     if not args.no_auto:
