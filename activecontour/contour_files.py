@@ -85,7 +85,8 @@ def write_contours(path, contours, *, metadata=None, image_shape=None, fmt=None)
         Ends in ``.json``, ``.geojson``, ``.svg``, ``.csv`` or ``.npz`` (see the module docstring).
     contours : SegmentationResult, list of ndarray (K, 2), or one ndarray (K, 2)
         Closed curves in (row, col).  From a result, the metadata also records the image shape,
-        ``c_in``, ``c_out``, ``energy``, ``n_iter``, ``backend``, ``success`` and ``message``.
+        ``c_in``, ``c_out``, ``energy``, ``n_iter``, ``backend``, ``success`` and ``message``, and
+        when set, ``n_regions`` and ``constants`` (one row per region).
         A repeated closing vertex is dropped.
     metadata : dict, optional
         More JSON-serialisable entries (e.g. the source image and the parameters); they override
@@ -200,6 +201,9 @@ def _metadata_of(contours, metadata, image_shape):
         for name in ("backend", "n_iter", "energy", "mu", "c_in", "c_out", "success", "status",
                      "message"):
             if hasattr(result, name):
+                meta[name] = getattr(result, name)
+        for name in ("n_regions", "constants"):  # the regions' count and constants (K, C)
+            if getattr(result, name, None) is not None:
                 meta[name] = getattr(result, name)
     if image_shape is not None:
         shape = tuple(int(v) for v in image_shape)

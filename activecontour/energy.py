@@ -44,10 +44,12 @@ __all__ = [
     "PartitionEvaluation",
     "chan_vese_energy",
     "evaluate",
+    "energy_of_moments",
     "evaluate_partition",
     "partition_load",
     "partition_moments",
     "region_moments",
+    "soup_moments",
     "stack_curves",
     "to_frame",
     "working_frame",
@@ -207,17 +209,23 @@ def partition_moments(model, boundary, n_classes):
     first = np.zeros((n_classes, model.n_channels))
     second = np.zeros((n_classes, model.n_channels))
     for k in range(1, n_classes):
-        starts, ends = class_soup(boundary, k)
-        points = np.empty((2 * len(starts), 2))
-        points[0::2], points[1::2] = starts, ends
-        next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
-        areas[k], _, first[k], second[k] = _moments(model, points, next_index)
+        areas[k], first[k], second[k] = soup_moments(model, *class_soup(boundary, k))
     # the background: the domain's totals minus the others (as the two-region outside)
     total_area, total_first, total_second = model.totals
     areas[0] = total_area - areas[1:].sum()
     first[0] = total_first - first[1:].sum(axis=0)
     second[0] = total_second - second[1:].sum(axis=0)
     return areas, first, second
+
+
+def soup_moments(model, starts, ends):
+    """``int 1``, ``int I``, ``int I^2`` (per channel) over the region that oriented segments
+    (S, 2) bound, in any order (Green's theorem needs no chaining)."""
+    points = np.empty((2 * len(starts), 2))
+    points[0::2], points[1::2] = starts, ends
+    next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
+    area, _, first, second = _moments(model, points, next_index)
+    return area, first, second
 
 
 def evaluate_partition(model, boundary, params, n_classes, constants=None):
@@ -229,14 +237,18 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None):
     close along the image border there.  ``constants`` (K, C), by default the region means (6.42);
     an empty region's term is 0 whatever its constant, which is then the image mean.
     """
-    areas, first, second = partition_moments(model, boundary, n_classes)
+    moments = partition_moments(model, boundary, n_classes)
+    lengths = boundary.length
+    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
+    return energy_of_moments(model, params, *moments, float(lengths[counted].sum()), constants)
+
+
+def energy_of_moments(model, params, areas, first, second, length, constants=None):
+    """:func:`evaluate_partition` from the regions' moments and the counted length."""
     if constants is None:
         whole = params.region_constant(*model.totals)
         constants = np.array([params.region_constant(a, f, q) if a > 1e-9 else whole
                               for a, f, q in zip(areas, first, second, strict=True)])
-    lengths = boundary.length
-    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
-    length = float(lengths[counted].sum())
     forms = params.class_forms(constants)
     energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
                                       in zip(forms, areas, first, second, strict=True))
@@ -272,7 +284,7 @@ def partition_load(model, boundary, params, constants):
 
 def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="auto", omega=0.0, lambda_in=1.0,
                      lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
-                     light=None):
+                     light=None, noise="gaussian"):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
@@ -307,6 +319,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
     light : ndarray (M, N), optional
         The light field b of the smooth fit (``result.light`` of ``fit="smooth"``): region k's
         intensity is ``c_k b`` (:mod:`activecontour.models.smooth`).  None: the constant fit.
+    noise : {"gaussian", "poisson"}
+        The fit term, as in :func:`activecontour.segment`.
 
     Returns
     -------
@@ -322,7 +336,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
         (6.38) is not defined.  :func:`activecontour.topology.region_union` turns such curves
         into the boundary of the region they outline.
     """
-    from activecontour.image import ImageModel, normalize_image
+    from activecontour.image import normalize_image
+    from activecontour.models import noise_model
     from activecontour.noise import auto_mu, is_auto
 
     values = normalize_image(image, color=color, normalize=normalize)
@@ -330,12 +345,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
     values = to_frame(values, offset, scale)
     params = ChanVeseParameters(auto_mu(values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
                                 lambda_out, c_in, c_out).in_frame(offset, scale)
-    if light is None:
-        model = ImageModel(values)
-    else:
-        from activecontour.models.smooth import smooth_light_model
-
-        model, params = smooth_light_model(values, np.asarray(light, dtype=np.float64), params)
+    build = noise_model(noise)[0]
+    model, params = build(values, None if light is None else np.asarray(light, dtype=np.float64), params)
     if sum(given is not None for given in (contours, classes, regions)) != 1:
         raise TypeError("chan_vese_energy takes one of contours, classes or regions")
     if classes is not None:

@@ -26,6 +26,7 @@ __all__ = [
     "encode_mask",
     "line_width",
     "OVERLAY_MAX_SIDE",
+    "REGION_COLORS",
     "encode_overlay",
     "read_mask",
     "render_overlay",
@@ -148,7 +149,10 @@ def write_overlay(path, image, contours, *, color="auto", thickness="auto", max_
     image : ndarray of shape (M, N), (M, N, C) or (C, M, N)
         Gray or colour image, shown by its own range (:func:`display_rgb`).
     contours : list of ndarray (K, 2), or a SegmentationResult
-        Closed curves in (row, col); drawn anti-aliased at sub-pixel precision.
+        Closed curves in (row, col); drawn anti-aliased at sub-pixel precision.  A result with
+        more than two regions (``class_contours``) has each region's boundary drawn, region k
+        (k >= 1) in the k-th colour of :data:`REGION_COLORS` with ``color="auto"`` (where two
+        regions meet, the line takes the brighter region's colour).
     color : str or (int, int, int)
         ``"auto"`` (:func:`contrasting_color`), a name from :data:`COLORS` or an RGB triple in
         0..255.
@@ -176,7 +180,9 @@ def render_overlay(image, contours, color="auto", thickness="auto", max_side=Non
     """
     import cv2
 
-    curves = curve_list(contours)
+    # a result of K > 2 regions: the curves of regions 1..K-1, each region its own colour
+    regions = getattr(contours, "class_contours", None)
+    groups = [curve_list(contours)] if regions is None else [curve_list(c) for c in regions[1:]]
     if thickness != "auto" and (isinstance(thickness, bool) or not isinstance(thickness, (int, np.integer))
                                 or thickness < 1):
         raise ValueError(f"thickness must be an integer >= 1 or 'auto', got {thickness!r}")
@@ -191,16 +197,20 @@ def render_overlay(image, contours, color="auto", thickness="auto", max_side=Non
         size = (max(1, round(rgb.shape[1] * scale)), max(1, round(rgb.shape[0] * scale)))
         rgb = np.ascontiguousarray(cv2.resize(rgb, size, interpolation=cv2.INTER_AREA))
     if isinstance(color, str):
-        color = contrasting_color(rgb)
+        colors = ([contrasting_color(rgb)] if regions is None else
+                  [COLORS[REGION_COLORS[k % len(REGION_COLORS)]] for k in range(len(groups))])
+    else:
+        colors = [color] * len(groups)
     if thickness == "auto":
         thickness = line_width(rgb.shape)
-    polylines = [
-        np.round(((to_xy(curve) + 0.5) * scale - 0.5) * (1 << _DRAW_SHIFT)).astype(np.int32)
-        .reshape(-1, 1, 2)
-        for curve in curves
-    ]
-    if polylines:
-        cv2.polylines(rgb, polylines, True, color, int(thickness), cv2.LINE_AA, _DRAW_SHIFT)
+    for curves, line_color in zip(groups, colors, strict=True):
+        polylines = [
+            np.round(((to_xy(curve) + 0.5) * scale - 0.5) * (1 << _DRAW_SHIFT)).astype(np.int32)
+            .reshape(-1, 1, 2)
+            for curve in curves
+        ]
+        if polylines:
+            cv2.polylines(rgb, polylines, True, line_color, int(thickness), cv2.LINE_AA, _DRAW_SHIFT)
     return rgb
 
 
@@ -213,6 +223,8 @@ def line_width(shape):
 
 #: The colours :func:`contrasting_color` chooses from, in order of preference.
 _LINE_COLORS = ("red", "yellow", "cyan", "green", "magenta", "blue")
+#: The overlay colours of regions 1, 2, ... of a result with more than two regions (cycled).
+REGION_COLORS = ("red", "yellow", "cyan", "magenta", "green", "blue")
 
 
 def contrasting_color(rgb):

@@ -13,6 +13,9 @@ format name            file                            read by
                                                        polygon ROI per object (its outer boundary),
                                                        named by its id, written with ``roifile``
 ``csv``                ``<stem>_objects.csv``          pandas, spreadsheets: the measurement table
+``classes``            ``<stem>_classes.png``          the same tools as ``labels``: 16-bit gray,
+                                                       pixel = its region (``result.classes``: 0 =
+                                                       background, the others by mean intensity)
 =====================  ==============================  =============================================
 
 Coordinates: GeoJSON uses the image coordinates of :mod:`activecontour.vector_formats` (x = col,
@@ -41,6 +44,7 @@ OBJECT_FORMATS = {
     "geojson": "_objects.geojson",
     "roi": "_rois.zip",
     "csv": "_objects.csv",
+    "classes": "_classes.png",
 }
 
 #: ImageJ's coordinates of our pixel centre (0, 0): the centre of its pixel square.
@@ -69,6 +73,8 @@ def encode_objects(result, fmt):
         raise ValueError("the result has no objects (it was not made by activecontour.segment)")
     if fmt == "labels":
         return _label_png(result.labels)
+    if fmt == "classes":
+        return _label_png(result.classes)
     if fmt == "labels-tif":
         return _label_tiff(result.labels)
     if fmt == "geojson":

@@ -530,8 +530,9 @@ def _contrast_split(mask, values, least, smallest):
     if inside.size <= 2 * smallest or np.ptp(inside) <= least:
         return None
     threshold = skimage.filters.threshold_otsu(inside)
-    if inside[inside > threshold].mean() - inside[inside <= threshold].mean() < least:
-        return None
+    above = inside > threshold
+    if above.all() or not above.any() or inside[above].mean() - inside[~above].mean() < least:
+        return None  # (Otsu of values that hardly differ can put them all on one side)
     bright = _without_small(scipy.ndimage.binary_fill_holes((smooth > threshold) & mask), smallest) & mask
     # (no bright core: every pixel is far from one)
     away = (scipy.ndimage.distance_transform_edt(mask) > CONTRAST_RIM) & (

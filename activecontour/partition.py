@@ -201,8 +201,14 @@ def chain(starts, ends):
 
 def chain_loops(start_keys, end_keys):
     """The closed loops of oriented segments given by the keys of their ends (equal keys: the same
-    point), each as the indices of its segments in order; the i-th segment ending at a point
-    continues with the i-th segment starting there."""
+    point), each as the indices of its segments in order.
+
+    The i-th segment ending at a point continues with the i-th starting there.  Where a region
+    is pinched at a point (two of its corners meet at a junction), that pairing can make one
+    loop that passes the point twice (a figure eight, which bounds no polygon); such a loop is
+    cut there into two, each closed: two pieces that touch, or an outer boundary and a hole
+    that touches it.
+    """
     order = np.argsort(start_keys, kind="stable")
     sorted_keys = start_keys[order]
     end_order = np.argsort(end_keys, kind="stable")
@@ -220,8 +226,19 @@ def chain_loops(start_keys, end_keys):
             seen[current] = True
             loop.append(current)
             current = following[current]
-        loops.append(np.array(loop, dtype=np.intp))
+        loops += _untwisted(np.array(loop, dtype=np.intp), start_keys)
     return loops
+
+
+def _untwisted(loop, start_keys):
+    """A loop cut at every point it passes twice into loops that pass each point once."""
+    keys = start_keys[loop]
+    unique, first, counts = np.unique(keys, return_index=True, return_counts=True)
+    if np.all(counts == 1):
+        return [loop]
+    i = first[np.argmax(counts > 1)]
+    j = i + 1 + int(np.flatnonzero(keys[i + 1:] == keys[i])[0])
+    return _untwisted(loop[i:j], start_keys) + _untwisted(np.concatenate([loop[j:], loop[:i]]), start_keys)
 
 
 def _corners(curve):

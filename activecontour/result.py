@@ -78,6 +78,9 @@ class SegmentationResult:
     roi : bool ndarray (M, N) or None
         With ``segment(roi=...)``: the domain D the functional was solved on
         (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
+    n_regions : int or None
+        The number of regions K of the model (the one ``n_regions="auto"`` chose); ``classes``
+        takes values in 0..K-1 and ``constants`` has K rows.  Set by :func:`activecontour.segment`.
     class_contours : list of list of ndarray, or None
         With ``n_regions > 2``: the closed curves of every region k (outer boundaries positive,
         holes negative; region 0 the background), the sub-pixel partition whose functional is
@@ -104,6 +107,7 @@ class SegmentationResult:
     constants: np.ndarray | None = None
     light: np.ndarray | None = None
     roi: np.ndarray | None = None
+    n_regions: int | None = None
     class_contours: list | None = None
     success: bool = field(init=False)
     message: str = field(init=False)

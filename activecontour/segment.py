@@ -11,7 +11,9 @@ import numpy as np
 from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
 from activecontour.energy import ChanVeseParameters, to_frame, working_frame
-from activecontour.image import ImageModel, intensity_scale, load_image, normalize_image, single_image
+from activecontour.image import intensity_scale, load_image, normalize_image, single_image
+from activecontour.models import noise_model
+from activecontour.models.modes import choose_regions
 from activecontour.noise import auto_mu, is_auto
 from activecontour.objects import clip_region, complement_region, find_objects
 from activecontour.raster import mask_to_curves
@@ -22,18 +24,17 @@ __all__ = ["BACKENDS", "FITS", "INSIDE", "segment"]
 
 #: The models of the regions' intensities (``fit``).
 FITS = ("constant", "smooth")
-#: Rounds of the smooth fit's alternation (light field, then contour) at most ...
+#: Rounds of the smooth fit's alternation (light field, then contour) at most; a round whose
+#: light step lowers J by less than the light's BIC cost ends it sooner (:func:`_smooth_light`).
 _LIGHT_ROUNDS = 4
-#: ... ending when the light field changes by less than this (it has mean 1).
-_LIGHT_TOL = 0.01
 
 #: The choices of ``inside``: which region holds the objects.
 INSIDE = ("auto", "bright", "dark")
 
 def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
             lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, fit="constant", inside="auto", roi=None,
-            separate=True, channel_axis=None, options=None):
+            color="gray", normalize="range", n_regions=2, fit="constant", noise="gaussian", inside="auto",
+            roi=None, separate=True, channel_axis=None, options=None):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -87,7 +88,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         no cancellation for intensities far from 0, no overflow), and report energies and
         constants in these units; weights and constants beyond ``PARAMETER_LIMIT`` (1e8) in
         that frame are refused.
-    n_regions : int
+    n_regions : int or "auto"
         The number of regions K >= 2 of the piecewise-constant model: (6.38) for two; for more,
         the sum of each region's fit term plus mu times the length of the interfaces between
         regions, each counted once (:meth:`ChanVeseParameters.class_forms`).  ``result.classes``
@@ -100,12 +101,24 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         then moves every interface and junction to sub-pixel position by the H^1 flow of the
         boundary network (:mod:`activecontour.backends.network`).  ``result.class_contours``
         are the regions' curves.  ``c_in``/``c_out`` and ``options`` apply to two regions only.
+        ``"auto"``: K in 2..6 (:data:`~activecontour.models.modes.MAX_REGIONS`), the number of
+        significant modes of the intensities of the image's flat pixels, at the noise level that
+        ``mu`` assumes (:mod:`activecontour.models.modes`, which says why not a penalised
+        likelihood); it costs a histogram, milliseconds.  It takes the settings of K > 2 (no
+        ``c_in``/``c_out``, ``roi`` or ``options``).  ``result.n_regions`` is the K used.
     fit : {"constant", "smooth"}
         ``"constant"``: each region has one intensity (6.42).  ``"smooth"``: region k's intensity
         is ``c_k b(x)``, b a smooth light field shared by all regions (a polynomial of degree 3,
         mean 1), estimated with the contour by alternating minimisation
         (:mod:`activecontour.models.smooth`): for uneven illumination, vignetting, shading.
         ``result.light`` is b; ``constants``, ``c_in``, ``c_out`` are the c_k.
+    noise : {"gaussian", "poisson"}
+        The fit term: ``"gaussian"``, (6.38)'s squared error; ``"poisson"``, the negative
+        log-likelihood of photon counts with the rate ``c_k b`` (fluorescence: the noise grows
+        with the intensity; two regions split at the logarithmic mean of their constants, not
+        the arithmetic one; :mod:`activecontour.models.poisson`).  The counts' zero is the
+        normalised image's zero where its values lie in [0, 1] (``normalize="range"``: its
+        minimum).
     inside : {"auto", "bright", "dark"}
         Which of the two regions is the inside (the objects).  ``"auto"``: the default start takes
         the class that covers less of the image border, and given curves are the inside as drawn.
@@ -160,11 +173,14 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     _check_regions(n_regions, backend, c_in, c_out, options, roi)
     if fit not in FITS:
         raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
+    noise_model(noise)  # a bad name is refused before any work
     if isinstance(image, (str, os.PathLike)):
         image = load_image(image)
     image = single_image(image, channel_axis)
     values = normalize_image(image, color=color, normalize=normalize)
     shape = values.shape[:2]
+    if is_auto(n_regions):
+        n_regions = choose_regions(values, mu)
     if n_regions > 2:
         if backend == "polygon":
             from activecontour.backends.network import segment_network as solver
@@ -177,7 +193,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         solver = chosen.run
     solve = functools.partial(
         _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
-        inside=inside, normalize=normalize, callback=callback, fit=fit,
+        inside=inside, normalize=normalize, callback=callback, fit=fit, noise=noise,
         settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
     if isinstance(roi, str) and roi == "init":
         # the smallest neighbourhood of the init that holds the object: grown while the result
@@ -206,10 +222,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     if result.classes is None:  # two regions: the inside is region 1
         result.classes = result.mask.astype(np.int32)
         result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
+    result.n_regions = int(n_regions)
     return result
 
 
-def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, settings):
+def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, noise,
+           settings):
     """Run the backend on the image, or on the crop of a region of interest.
 
     Returns the result in the whole image's frame, the parameters used, and the affine map
@@ -239,10 +257,11 @@ def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callb
     def run(model, init, params, max_num_iter=settings["max_num_iter"]):
         return solver(model, init, params, callback=callback, **{**settings, "max_num_iter": max_num_iter})
 
+    build, fit_light = noise_model(noise)
     if fit == "smooth":
-        result, model, working = _smooth_light(values, init, working, run)
+        result, model, working = _smooth_light(values, init, working, run, build, fit_light)
     else:
-        model = ImageModel(values)
+        model, working = build(values, None, working)
         result = run(model, init, working)
     result = _make_inside(result, inside, model, working)
     if domain is not None:
@@ -337,12 +356,17 @@ def _in_caller_units(callback, offset, scale):
 
 
 def _check_regions(n_regions, backend, c_in, c_out, options, roi):
-    if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
-        raise TypeError(f"n_regions must be an integer >= 2, got {n_regions!r}")
-    if n_regions < 2:
-        raise ValueError(f"n_regions must be an integer >= 2, got {n_regions}")
-    if n_regions == 2:
-        return
+    """Refuse what ``n_regions`` cannot do; ``"auto"`` is checked as a K > 2 (it may choose one)."""
+    choices = "an integer >= 2 or 'auto'"
+    if isinstance(n_regions, str) and not is_auto(n_regions):
+        raise ValueError(f"n_regions must be {choices}, got {n_regions!r}")
+    if not is_auto(n_regions):
+        if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
+            raise TypeError(f"n_regions must be {choices}, got {n_regions!r}")
+        if n_regions < 2:
+            raise ValueError(f"n_regions must be {choices}, got {n_regions}")
+        if n_regions == 2:
+            return
     if c_in is not None or c_out is not None:
         raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
                          f"n_regions={n_regions}")
@@ -354,39 +378,69 @@ def _check_regions(n_regions, backend, c_in, c_out, options, roi):
                         "takes none")
 
 
-def _smooth_light(values, init, params, run):
-    """``fit="smooth"``: alternate the backend's run (light fixed) and the light's least-squares
-    update (partition and constants fixed).  Returns the result, its image model and parameters.
+def _smooth_light(values, init, params, run, build, fit_light):
+    """``fit="smooth"``: alternate the backend's run (light fixed) and the light's update
+    (partition and constants fixed: least squares, or the Poisson likelihood's optimum).
+    ``build`` and ``fit_light`` are the noise model's (:func:`activecontour.models.noise_model`).
+    Returns the result, its image model and parameters.
 
-    Two starts for the light: uniform (the constant fit: c_k b = c_k) and the least-squares light
-    of the whole image as one region (right when the objects are a small part of the image, as
-    faint objects under a vignette, where the constant fit splits the image along the light
-    instead; wrong when large objects make the light).  The constant fit always runs; the other
-    start runs too when its start (the backend's default start on the image corrected by that
+    When the light is worth its parameters: the light step lowers J by the drop of
+    :func:`~activecontour.models.smooth.fit_light`.  Read (6.38) as :func:`~activecontour.noise.auto_mu`
+    does, a MAP estimate under Gaussian noise of the variance sigma^2 that the default mu
+    assumes (``auto_mu / MU_PER_NOISE_VARIANCE``): the fit term is 2 sigma^2 times a negative
+    log-likelihood, and the Bayesian information criterion admits the light's P - 1 free
+    parameters (P basis functions, less the scale the constants absorb) only when the drop
+    exceeds ``sigma^2 (P - 1) ln(N)``, N the pixels.  Under uniform light and pure noise the drop
+    is ``sigma^2`` times a chi-square with at most P - 1 degrees of freedom (mean <= 9; the
+    constant field is fitted by the constants already), far below that (112 sigma^2 at 512^2);
+    light of 1 % over a 512^2 image of contrast 0.4 is above it.  (The Poisson fit term is
+    scaled to be the squared error at the mean intensity, so the same bound holds to second
+    order.)  The same bound ends the alternation: a later round that moves the light by less
+    than its noise is not worth a run.  So does a round that ends above the J it started from: each step of an
+    alternating minimisation lowers J, so a run that does not (the backend restarts its coarse
+    stages from the previous partition and can settle higher) is not converging.
+
+    So the constant fit always runs, and when the light its partition implies is not worth its
+    parameters (flat light: the constant fit is then a stationary point of the alternation), it
+    is the result, at the cost of one light fit.  Otherwise two starts for the light: uniform
+    and the least-squares light of the whole image as one region (right when the objects are a
+    small part of the image, as faint objects under a vignette, where the constant fit splits
+    the image along the light instead; wrong when large objects make the light).  The other
+    start runs when its start (the backend's default start on the image corrected by that
     light, or ``init``) has the lower energy.  The alternation continues from the better result,
     and the lowest energy of every run is returned, so the smooth fit never ends above the
     constant fit.  When that is the constant fit's own result, ``result.light`` is None.
     """
-    from activecontour.models.smooth import fit_light, light_basis, smooth_light_model
+    from activecontour.models.smooth import LIGHT_TERMS
+    from activecontour.noise import MU_PER_NOISE_VARIANCE
 
-    basis = light_basis(values.shape[:2])
+    noise = auto_mu(values) / MU_PER_NOISE_VARIANCE
+    worth = noise * (LIGHT_TERMS - 1) * np.log(values.shape[0] * values.shape[1])
+    plain = (*build(values, None, params), None)
+    result = run(plain[0], init, plain[1])
+    new, drop = fit_light(values, *_classes_and_constants(result), plain[1])
+    if drop <= worth:
+        result.light = None
+        return result, plain[0], plain[1]
     one_region = np.zeros(values.shape[:2], dtype=np.intp)
-    whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), params, basis)
-    plain = (ImageModel(values), params, None)
-    lit = (*smooth_light_model(values, whole_light, params), whole_light)
-    runs = [(run(plain[0], init, plain[1]), *plain)]
+    whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), plain[1])[0]
+    lit = (*build(values, whole_light, params), whole_light)
+    runs = [(result, *plain)]
     start_energy = [run(start[0], init, start[1], max_num_iter=0).energy for start in (plain, lit)]
     if start_energy[1] < start_energy[0]:
         runs.append((run(lit[0], init, lit[1]), *lit))
     result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
-    for _ in range(_LIGHT_ROUNDS):
-        new = fit_light(values, *_classes_and_constants(result), model_params, basis)
-        if np.max(np.abs(new - (1.0 if light is None else light))) < _LIGHT_TOL:
-            break
-        light = new
-        model, model_params = smooth_light_model(values, light, params)
+    for round_ in range(_LIGHT_ROUNDS):
+        if round_ > 0 or light is not None:  # the constant fit's step is known
+            new, drop = fit_light(values, *_classes_and_constants(result), model_params, previous=light)
+            if drop <= worth:
+                break
+        light, before = new, result.energy
+        model, model_params = build(values, light, params)
         result = run(model, result, model_params)
         runs.append((result, model, model_params, light))
+        if result.energy >= before:  # the backend's run did not descend from the light step
+            break
     result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
     result.light = light
     return result, model, model_params

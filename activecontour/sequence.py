@@ -200,6 +200,12 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
     for position, (index, image) in enumerate(source):
         if previous is None:
             result = segment(image, init, **segment_kwargs)
+            # n_regions="auto" chooses K on the first frame; every frame keeps it (a class means
+            # the same region in every frame)
+            segment_kwargs = {**segment_kwargs, "n_regions": result.n_regions}
+            warm_kwargs = _warm_kwargs(segment_kwargs)
+        elif previous.n_regions > 2:  # K regions: the previous frame's classes are the start
+            result = segment(image, previous, **segment_kwargs)
         else:
             start = _warm_start(previous, image, segment_kwargs)
             result = segment(image, start, **(segment_kwargs if start is None else warm_kwargs))

@@ -9,6 +9,7 @@ Usage
                           [--backend {polygon,levelset}] [--mu MU] [--omega OMEGA]
                           [--lambda-in L] [--lambda-out L] [--max-iter N] [--tol TOL]
                           [--c-in C] [--c-out C] [--color {gray,vector}]
+                          [--regions K|auto] [--fit {constant,smooth}]
                           [--init-circle ROW COL RADIUS | --init-rect ROW0 COL0 ROW1 COL1 |
                            --init-mask FILE | --init-contours FILE | --init-grid |
                            --init-checkerboard] [--option KEY=VALUE ...]
@@ -17,7 +18,8 @@ Usage
 
 ``segment`` writes, for each IMAGE, ``<DIR>/<name>_mask.png`` (0/255), ``<DIR>/<name>_overlay.png``
 (the contour drawn on the image, shown by its own range) and ``<DIR>/<name>_contours.<fmt>`` for
-each format, where ``<name>`` is the image's file name without its suffix, made safe
+each format (and ``<DIR>/<name>_classes.png``, the region of each pixel, when ``--regions`` is
+not 2), where ``<name>`` is the image's file name without its suffix, made safe
 (:func:`activecontour.io.output_stem`: never outside ``DIR``).  ``DIR`` defaults to the directory
 of each image and is created when the first files go into it.  A FOLDER stands for the images in it and a
 quoted GLOB (``'data/**/*.tif'``) for the files it matches, both sorted, without this tool's own
@@ -81,6 +83,9 @@ _PARAMETER_OPTIONS = {
     "c_out": "--c-out",
     "color": "--color",
     "inside": "--inside",
+    "n_regions": "--regions",
+    "fit": "--fit",
+    "noise": "--noise",
 }
 
 
@@ -208,7 +213,8 @@ def _output_options():
             "dest": "objects", "type": _object_formats, "default": [], "metavar": "FMT[,FMT...]",
             "help": "object files, one id per object: labels (16-bit PNG label image), labels-tif, "
                     "geojson (a Feature per object with its measurements), roi (ImageJ/Fiji ROI "
-                    "set .zip), csv (the measurements) (default: none)"}),
+                    "set .zip), csv (the measurements), classes (16-bit PNG, the region of each pixel; "
+                    "written without asking when --regions is not 2) (default: none)"}),
         (("--line-color", "--overlay-color"), {
             "dest": "line_color", "default": "auto", "metavar": "COLOR",
             "help": "colour of the contour in the overlay: auto (one that stands out from the "
@@ -270,6 +276,20 @@ def _add_parameter_options(parser):
     group.add_argument("--inside", choices=_inside_choices(), default=defaults["inside"],
                        help="which region is the objects: auto (the class covering less of the "
                        "image border), bright or dark (default: %(default)s)")
+    group.add_argument("--regions", dest="n_regions", type=_regions, default=defaults["n_regions"],
+                       metavar="K|auto",
+                       help="number of regions K >= 2 of the piecewise model, or auto: chosen in "
+                       "2..6 from the image's intensities; not 2: <name>_classes.png is written "
+                       "too, the region of each pixel (0 = background, the others by mean "
+                       "intensity) (default: %(default)s)")
+    group.add_argument("--fit", choices=_fit_choices(), default=defaults["fit"],
+                       help="the regions' intensities: constant, or smooth (each region's constant "
+                       "times a smooth light field shared by all, for uneven light) "
+                       "(default: %(default)s)")
+    group.add_argument("--noise", choices=_noise_choices(), default=defaults["noise"],
+                       help="the fit term: gaussian (the squared error of 6.38) or poisson (photon "
+                       "counts, for fluorescence: the cut between two regions at their "
+                       "logarithmic mean) (default: %(default)s)")
     init = parser.add_argument_group(
         "initial curve",
         "default: the outlines of the two-means (6.38 without its length term) threshold of the "
@@ -308,6 +328,8 @@ def _run_segment(args):
         raise UsageError("--frames selects frames of a stack (a multi-page TIFF or a video); "
                          "no input is one")
     images = [path for path in images if path not in stacks]
+    if settings["n_regions"] != 2 and "classes" not in args.objects:  # K regions: their image too
+        args.objects = [*args.objects, "classes"]
     plans = _plan_outputs(images, args.output, args.formats, args.objects)
     overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
@@ -440,7 +462,8 @@ def _segment_one(image_path, stem, batch, progress=None):
     written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
                              protect=batch.protect, objects=batch.objects,
                              **batch.overlay)
-    return _summary(Path(image_path).name, result, elapsed, written)
+    return _summary(Path(image_path).name, result, elapsed, written,
+                    regions=batch.settings["n_regions"] != 2)
 
 
 def _load_image(image_path, max_pixels):
@@ -794,12 +817,14 @@ def _line_color(text):
     return values
 
 
-def _summary(name, result, elapsed, written):
-    """One line per image; a result that did not converge says why."""
+def _summary(name, result, elapsed, written, regions=False):
+    """One line per image; a result that did not converge says why.  ``regions``: say how many
+    regions the model had (when they were asked for, or chosen)."""
     stem = os.path.commonprefix([os.fspath(p) for p in written])
     why = "" if result.success else f" ({result.message.rstrip('.')})"
     return _shown(
         f"{name}: iterations={result.n_iter} energy={result.energy:.6g} mu={result.mu:.4g} "
+        f"{f'regions={result.n_regions} ' if regions else ''}"
         f"c_in={_format_constant(result.c_in)} c_out={_format_constant(result.c_out)} "
         f"time={elapsed:.2f}s success={result.success}{why} output={stem}*"
     )
@@ -977,6 +1002,31 @@ def _inside_choices():
     from activecontour.segment import INSIDE
 
     return INSIDE
+
+
+def _noise_choices():
+    from activecontour.models import NOISES
+
+    return NOISES
+
+
+def _fit_choices():
+    from activecontour.segment import FITS
+
+    return FITS
+
+
+def _regions(text):
+    """``--regions``: an integer >= 2 or "auto"."""
+    if text == "auto":
+        return text
+    try:
+        value = int(text)
+    except ValueError:
+        value = None
+    if value is None or value < 2:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 2 or 'auto', got {text!r}")
+    return value
 
 
 def _int_at_least(low):

@@ -6,10 +6,14 @@ the flow of :func:`activecontour.segment` while showing the iteration, the energ
 constants c_in, c_out (6.42) and a small plot of the energy history.  Sliders set mu, omega,
 lambda_in, lambda_out and the polygon backend's step size; fields set max_num_iter and tol; radio
 buttons choose the backend and the init gesture.  Changes apply to the next run.  Another image
-can be opened from the window (the "image" field, key i).  The result is saved with the CLI's
-writers (:func:`activecontour.io.save_result`), by default next to the input image, which is never
-overwritten.  The toolbar's readout gives the mouse position as (row, col), the convention of the
-whole package, and the image's value there.
+can be opened from the window (the "image" field, key i).  Key k chooses the number of regions
+(2, 3, 4, 5, 6, auto: ``n_regions`` of :func:`activecontour.segment`) and key l the light
+(``fit``: constant or smooth); with more than two regions every region's boundary is drawn in its
+own colour (:data:`activecontour.image_files.REGION_COLORS`, as the overlays) and a run starts from
+the library's start for K regions (the global K-means): a drawn curve outlines two regions.
+The result is saved with the CLI's writers (:func:`activecontour.io.save_result`), by default
+next to the input image, which is never overwritten.  The toolbar's readout gives the mouse
+position as (row, col), the convention of the whole package, and the image's value there.
 
 Without a drawn init the viewer starts from the library's: it passes ``init=None`` (or the named
 start given, ``"grid"`` or ``"checkerboard"``) to :func:`activecontour.segment`, and shows as the
@@ -57,7 +61,7 @@ import numpy as np
 
 from activecontour.curve import length, to_xy
 from activecontour.image import MAX_PIXELS, load_image, normalize_image
-from activecontour.image_files import display_rgb
+from activecontour.image_files import REGION_COLORS, display_rgb
 from activecontour.initial import initial_curves
 from activecontour.noise import auto_mu, is_auto
 from activecontour.segment import BACKENDS, segment
@@ -77,11 +81,14 @@ from .viewer_layout import (
 )
 from .viewer_tools import INIT_MODES, CurveDrawer
 
-__all__ = ["CONTOUR_COLOR", "NAMED_INITS", "SHORTCUTS", "Viewer", "launch"]
+__all__ = ["CONTOUR_COLOR", "NAMED_INITS", "REGION_CHOICES", "SHORTCUTS", "Viewer", "launch"]
 
 #: The library's named starts the viewer passes on as they are (the level set's checkerboard
 #: needs ``backend="levelset"``).
 NAMED_INITS = ("grid", "checkerboard")
+
+#: The numbers of regions key k cycles through (``n_regions`` of :func:`activecontour.segment`).
+REGION_CHOICES = (2, 3, 4, 5, 6, "auto")
 
 #: Seconds between two calls of ``flush_events`` during a run: the GUI answers within this time
 #: plus one iteration.
@@ -99,6 +106,8 @@ SHORTCUTS = (
     ("m", "m", "load mask"),
     ("i", "i", "open image"),
     ("g", "g", "gray/colour"),
+    ("k", "k", "regions"),
+    ("l", "l", "light fit"),
     ("q", "q", "quit"),
 )
 
@@ -141,6 +150,11 @@ class Viewer:
         Which region is the objects (see :func:`activecontour.segment`).  A run started from
         drawn curves is restricted to their neighbourhood (``segment(roi="init")``, see
         :mod:`activecontour.roi`): drawing around one object gives that object.
+    n_regions : int or "auto"
+        The number of regions (see :func:`activecontour.segment`); key k cycles through
+        :data:`REGION_CHOICES`.
+    fit : {"constant", "smooth"}
+        The regions' intensities (see :func:`activecontour.segment`); key l switches.
 
     Attributes
     ----------
@@ -173,7 +187,8 @@ class Viewer:
 
     def __init__(self, image, *, image_path=None, backend=None, mu=None, omega=None, lambda_in=None,
                  lambda_out=None, max_num_iter=None, tol=None, init=None, c_in=None, c_out=None,
-                 color="gray", formats=("json",), redraw_every=2, live=None, inside="auto"):
+                 color="gray", formats=("json",), redraw_every=2, live=None, inside="auto",
+                 n_regions=2, fit="constant"):
         settings = _settings(backend=backend, mu=mu, omega=omega, lambda_in=lambda_in,
                              lambda_out=lambda_out, max_num_iter=max_num_iter, tol=tol)
         if isinstance(redraw_every, bool) or not isinstance(redraw_every, (int, np.integer)) \
@@ -191,6 +206,7 @@ class Viewer:
         self.color = color
         self.fixed_constants = {"c_in": c_in, "c_out": c_out}
         self.inside = inside  # checked by the library on the first run
+        self.n_regions, self.fit = n_regions, fit  # checked by the library's start below
         display = display_rgb(self.image)  # validates the image, too
         self.shape = display.shape[:2]
         # mu="auto": the slider shows the value segment(mu="auto") would use, until it is moved
@@ -243,6 +259,7 @@ class Viewer:
                 help_line=f"keys:  {help_line}")
         self.layout = layout
         vars(self).update(vars(layout))  # its artists and widgets are the viewer's attributes
+        self._contour_rgb = contour_color(display)  # of two regions' contours
         self._valid_fields = {"max iter": self.maxiter_box.text, "tol": self.tol_box.text}
         self.drawer = CurveDrawer(self.ax_image, self._on_drawn_curve, self._set_message, self._redraw,
                                   color=PREVIEW_COLOR)
@@ -270,8 +287,9 @@ class Viewer:
         backend = self.backend_radio.value_selected
         params = {name: float(self.sliders[name].val) for name, *_ in SLIDERS}
         params.update(backend=backend, max_num_iter=self._max_num_iter, tol=self._tol,
-                      color=self.color, inside=self.inside, **self.fixed_constants)
-        if backend in self.step_sliders:
+                      color=self.color, inside=self.inside, n_regions=self.n_regions, fit=self.fit,
+                      **self.fixed_constants)
+        if backend in self.step_sliders and self.n_regions == 2:  # the two-region flows' setting
             option = STEP_OPTIONS[backend][0]
             value = float(self.step_sliders[backend].val)
             if value != _backend_default(backend, option):  # untouched: the backend's own default
@@ -419,7 +437,8 @@ class Viewer:
         self._clear_run()
         self.drawer.cancel()
         show_image(self.ax_image, display)
-        self.contour_lines.set_color(contour_color(display))
+        self._contour_rgb = contour_color(display)
+        self.contour_lines.set_color(self._contour_rgb)
         toolbar = getattr(self.fig.canvas, "toolbar", None)
         if toolbar is not None:
             toolbar.update()  # forget the zoom and pan history of the old image
@@ -449,7 +468,8 @@ class Viewer:
         return self.set_init(mask)
 
     def save(self, stem=None):
-        """Save mask, overlay and contours with the CLI's writers; returns the paths written.
+        """Save mask, overlay and contours with the CLI's writers (and the classes image when the
+        number of regions is not 2); returns the paths written.
 
         Before any run, or while running, the status line says so and nothing is written.
         """
@@ -470,8 +490,9 @@ class Viewer:
         if self.image_path is not None:
             metadata["image"] = os.fspath(self.image_path)
         try:
+            # K regions: their image too, as the command line writes it
             paths = save_result(self.result, self.image, stem, self.formats, metadata=metadata,
-                                protect=protect)
+                                protect=protect, objects=("classes",) if self.n_regions != 2 else ())
         except (OSError, ValueError) as exc:
             self._set_message(f"not saved: {_one_line(exc)}")
             return None
@@ -497,11 +518,11 @@ class Viewer:
         params["max_num_iter"] = n_iter
         if self.contours:  # continue: the last result carries the level set's phi, too
             same_backend = self.result is not None and self.result.backend == params["backend"]
-            start = self.result if same_backend else self.contours
+            start = self.result if same_backend or self.n_regions != 2 else self.contours
         else:  # a fresh start from the init (also after a collapse): exactly the library's
             self._clear_run()
-            start = self.init
-            if not (self.init is None or isinstance(self.init, str)):
+            start = self._start()
+            if not (start is None or isinstance(start, str)):
                 params["roi"] = "init"  # drawing around one object gives that object
         if self.contours and self.result is not None and self.result.roi is not None:
             params["roi"] = self.result.roi  # a continued run stays on its domain
@@ -550,8 +571,9 @@ class Viewer:
                    and now - self._last_draw_end >= self._draw_cost)
             if due:
                 self._last_draw_iteration = state.iteration
-                self._show_contours(state.contours)
-                self._show_readout(state, state.contours)
+                contours = _state_curves(state)
+                self._show_contours(contours)
+                self._show_readout(state, contours)
                 self.fig.canvas.draw_idle()
             if due or now - self._last_flush >= FLUSH_INTERVAL:
                 self._last_flush = now
@@ -560,6 +582,11 @@ class Viewer:
                     self._last_draw_end = time.perf_counter()
                     self._draw_cost = self._last_draw_end - now
         return self._stop or self.closed
+
+    def _start(self):
+        """What a fresh run starts from: the init, or for more than two regions the library's
+        start (a drawn curve or a named start outlines two regions)."""
+        return self.init if self.n_regions == 2 else None
 
     def _accept(self, result):
         self.result = result
@@ -648,6 +675,8 @@ class Viewer:
             "m": self.load_mask,
             "i": self.open_image,
             "g": self.toggle_color,
+            "k": self.cycle_regions,
+            "l": self.toggle_fit,
             "q": self.quit,
         }
 
@@ -706,6 +735,34 @@ class Viewer:
         problem = self._refresh_named_init()
         self._set_message(f"colour: {'each channel (vector)' if self.color == 'vector' else 'gray'}"
                           f"; applies to the next run (space){problem}")
+
+    def cycle_regions(self):
+        """The next number of regions of :data:`REGION_CHOICES`; the next run starts afresh (a
+        result's regions are no start for another number of them)."""
+        if self.running:
+            self._set_message("running: press space to pause before changing the regions")
+            return
+        index = REGION_CHOICES.index(self.n_regions) if self.n_regions in REGION_CHOICES else -1
+        self.n_regions = REGION_CHOICES[(index + 1) % len(REGION_CHOICES)]
+        self._clear_run()
+        problem = self._refresh_start()
+        start = ("the init" if self.n_regions == 2 else
+                 "the library's start (the global K-means; a drawn curve outlines two regions)")
+        self._set_message(f"regions: {self.n_regions}; the next run (space) starts from {start}{problem}")
+
+    def toggle_fit(self):
+        """Switch the regions' intensities between constant and smooth (a light field)."""
+        self.fit = "smooth" if self.fit == "constant" else "constant"
+        problem = self._refresh_named_init()
+        light = "each region's constant times a smooth light field" if self.fit == "smooth" else "constant"
+        self._set_message(f"light fit: {light}; applies to the next run (space){problem}")
+
+    def _refresh_start(self):
+        """Show the start of a fresh run anew (after the number of regions changed)."""
+        problem = self._preview_init()
+        self._show_curves()
+        self._show_readout(None)
+        return "" if problem is None else f"; {problem}"
 
     def _auto_mu(self):
         return auto_mu(normalize_image(self.image, color=self.color))
@@ -771,13 +828,14 @@ class Viewer:
         and a named init the library's start (its result after zero iterations, so that the
         viewer never reimplements it).  Returns None, or the library's message refusing it."""
         self._start_stale = False
-        if not (self.init is None or isinstance(self.init, str)):
-            self.init_curves = self.init
+        init = self._start()
+        if not (init is None or isinstance(init, str)):
+            self.init_curves = init
             return None
         params = self.parameters()
         params["max_num_iter"] = 0
         try:
-            start = segment(self.image, self.init, **params)
+            start = segment(self.image, init, **params)
         except (ValueError, TypeError) as exc:
             self.init_curves = []
             return f"init {self._describe_init(self.init)}: {_one_line(exc)}"
@@ -787,7 +845,8 @@ class Viewer:
     def _refresh_named_init(self):
         """After a change of backend or colour: show the library's start anew (an empty text, or
         the problem to append to the status line)."""
-        if self.running or not (self.init is None or isinstance(self.init, str)):
+        init = self._start()
+        if self.running or not (init is None or isinstance(init, str)):
             return ""
         problem = self._preview_init()
         self._show_curves()
@@ -820,7 +879,27 @@ class Viewer:
         self._show_contours(self.contours)
 
     def _show_contours(self, contours):
-        self.contour_lines.set_segments([_closed_xy(c) for c in contours])
+        """The contours; for a result of more than two regions, every region's boundary in its
+        own colour (region k in the k-th of :data:`REGION_COLORS`, as the overlays)."""
+        regions = self._region_curves(contours)
+        if regions is None:
+            self.contour_lines.set_segments([_closed_xy(c) for c in contours])
+            self.contour_lines.set_color(self._contour_rgb)
+            return
+        segments, colors = [], []
+        for k, curves in enumerate(regions):
+            segments += [_closed_xy(c) for c in curves]
+            colors += [REGION_COLORS[k % len(REGION_COLORS)]] * len(curves)
+        self.contour_lines.set_segments(segments)
+        self.contour_lines.set_color(colors or [self._contour_rgb])
+
+    def _region_curves(self, contours):
+        """The curves of regions 1..K-1 when ``contours`` are those of a result of K > 2 regions."""
+        result = self.result
+        if (result is None or contours is not self.contours or result.class_contours is None
+                or len(result.class_contours) <= 2):
+            return None
+        return result.class_contours[1:]
 
     def _show_readout(self, state, contours=None):
         """Iteration, energy, c_in, c_out of a FlowState or result (None: not run), the contours'
@@ -832,6 +911,12 @@ class Viewer:
             energy = f"{state.energy:.6g}"
             c_in, c_out = _format_constant(state.c_in), _format_constant(state.c_out)
         lines = [f"iteration {self.iteration:<6d} energy {energy}", f"c_in  {c_in}", f"c_out {c_out}"]
+        if self.n_regions != 2:  # K regions: how many, and each one's constant (once known)
+            constants = getattr(state, "constants", None)
+            count = f" (auto: {state.n_regions})" if getattr(state, "n_regions", None) and \
+                self.n_regions == "auto" else ""
+            shown = "-" if constants is None else _format_constant(np.mean(constants, axis=1))
+            lines[1:3] = [f"regions {self.n_regions}{count}, {self.fit} light", f"c_k   {shown}"]
         if contours:
             lines.append(f"{len(contours)} contour{'s' * (len(contours) > 1)}, "
                          f"{sum(len(c) for c in contours)} vertices, "
@@ -853,14 +938,15 @@ class Viewer:
 
 def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lambda_out=None,
            max_num_iter=None, tol=None, init=None, c_in=None, c_out=None, color="gray",
-           formats=("json",), inside="auto", max_pixels=MAX_PIXELS):
+           formats=("json",), inside="auto", max_pixels=MAX_PIXELS, n_regions=2, fit="constant"):
     """Open the viewer's window on an image and return an exit code when it is closed.
 
     Parameters
     ----------
     image_path : str or os.PathLike
         Any image :func:`activecontour.load_image` reads.
-    backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats, inside
+    backend, mu, omega, lambda_in, lambda_out, max_num_iter, tol, init, c_in, c_out, color, formats,
+    inside, n_regions, fit
         See :class:`Viewer` (None: the library's default); ``init`` may also be a name from
         :data:`NAMED_INITS` (``"grid"``, ``"checkerboard"``) or a mask file's path.
     max_pixels : int or None
@@ -880,7 +966,7 @@ def launch(image_path, *, backend=None, mu=None, omega=None, lambda_in=None, lam
         viewer = Viewer(image, image_path=image_path, backend=backend, mu=mu, omega=omega,
                         lambda_in=lambda_in, lambda_out=lambda_out, max_num_iter=max_num_iter,
                         tol=tol, init=init, c_in=c_in, c_out=c_out, color=color, formats=formats,
-                        inside=inside)
+                        inside=inside, n_regions=n_regions, fit=fit)
         viewer.max_pixels = max_pixels
     except (OSError, ValueError, TypeError) as exc:
         print(f"activecontour view: {exc}", file=sys.stderr)
@@ -907,6 +993,16 @@ def _no_redraw(canvas):
         yield
     finally:
         del canvas.draw_idle
+
+
+def _state_curves(state):
+    """The curves of a run's state: its contours, or where a backend sends none but a level-set
+    function (the N-region label field), the outline of that function's inside."""
+    if state.contours or state.phi is None:
+        return state.contours
+    from activecontour.raster import mask_to_curves
+
+    return mask_to_curves(state.phi > 0)
 
 
 def _closed_xy(curve):

@@ -5,19 +5,26 @@ levels, two of them under 250 px) with noise 0.02; three colour regions of one g
 faint blobs (contrast 0.15) under a gradient and a vignette of amplitude 0.5 (384^2); real nuclei of
 different brightness (DSB 2018 from the stardist wheel, if ``--nuclei DIR`` holds img2d.tif and
 mask2d.tif).  Every method runs on every scene it applies to, in one run: ours with
-``n_regions=K`` on both backends, ``fit="constant"`` and
-``"smooth"``; scikit-image's ``threshold_multiotsu`` (on the image smoothed by a Gaussian of 1 px,
-K classes), ``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese`` (35
-iterations) with their defaults.  Dice: for two regions the object's, strict (the inside must be
+``n_regions=K`` on both backends, ``fit="constant"`` and ``"smooth"`` (for two regions also with
+``noise="poisson"``); scikit-image's ``threshold_multiotsu`` (on the image smoothed by a Gaussian
+of 1 px, K classes), ``threshold_local`` (block 35), ``chan_vese`` and ``morphological_chan_vese``
+(35 iterations) with their defaults.  Dice: for two regions the object's, strict (the inside must be
 the objects; thresholds take the bright side); for K regions the mean per-class Dice after the best
 matching of found to true classes (scipy's linear_sum_assignment), with the per-class values.
 Ours run with ``separate=False``: the times are the segmentation's, not the objects' split.
+
+Then ``n_regions="auto"`` (:func:`activecontour.models.modes.choose_regions`) on the scenes, on
+pure noise, two flat regions at SNR 3, a ramp, and scikit-image's coins, camera, page, text and
+clock: the K chosen, the time of the choice, of ``segment(n_regions="auto")`` and of a two-region
+level-set run (``--no-auto`` skips it).
 
 Then ``fit="smooth"`` against ``"constant"`` on every synthetic case of bench_robust.py (the quick
 set), both backends: Dice and time ratio.  ``--sheets DIR`` writes contact sheets of skimage's
 coins, clock, page and text with the models.
 
-usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-robust] [--sheets DIR]
+usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-auto] [--no-robust]
+       [--no-scenes] [--sheets DIR] [--repeat N] [--only WORD ...]
+       PYTHONPATH=. python benchmarks/bench_models.py --backends [--repeat N]   # N regions, both backends
 """
 
 from __future__ import annotations
@@ -117,13 +124,15 @@ def methods(n_classes, colour):
 
     color = {"color": "vector"} if colour else {}
     out = []
+    noises = ["gaussian"] if n_classes > 2 else ["gaussian", "poisson"]
     for backend in ("polygon", "levelset"):
-        for fit in ("constant", "smooth"):
-            def ours(image, backend=backend, fit=fit):
-                res = ac.segment(image, backend=backend, fit=fit, n_regions=n_classes, separate=False,
-                                 **color)
-                return res.classes if n_classes > 2 else res.mask
-            out.append((f"ours {backend} {fit}", ours))
+        for noise in noises:
+            for fit in ("constant", "smooth"):
+                def ours(image, backend=backend, fit=fit, noise=noise):
+                    res = ac.segment(image, backend=backend, fit=fit, noise=noise, n_regions=n_classes,
+                                     separate=False, **color)
+                    return res.classes if n_classes > 2 else res.mask
+                out.append((f"ours {backend} {fit}" + (" poisson" if noise == "poisson" else ""), ours))
 
     def multiotsu(image):
         smooth = cv2.GaussianBlur(_gray(image).astype(np.float32), (0, 0), 1.0)
@@ -168,24 +177,75 @@ def scenes_table(nuclei):
                   f"{object_dice(res.mask, truth):.4f} | - | {time.perf_counter() - t:.2f}", flush=True)
 
 
-def robust_comparison():
+def auto_table():
+    import skimage.data
+
+    from activecontour.image import normalize_image
+    from activecontour.models.modes import choose_regions
+
+    rng = np.random.default_rng(4)
+    halves = np.zeros((256, 256), dtype=int)
+    halves[:, 128:] = 1
+    scenes = [("nested 3, SNR 3, 384^2", *nested_scene(), "gray"),
+              ("Shepp-Logan 6 levels, noise 0.02", *phantom_scene(), "gray"),
+              ("colour 3 regions, one gray (vector)", *colour_scene(), "vector"),
+              ("20 faint blobs, light 0.5", *blobs_scene(), "gray"),
+              ("pure noise 256^2", rng.normal(0.5, 0.1, (256, 256)), None, "gray"),
+              ("two flat halves, SNR 3", halves + rng.normal(0, 1 / 3, halves.shape), halves, "gray"),
+              ("ramp 0..1, 256^2", np.tile(np.linspace(0, 1, 256), (256, 1)), None, "gray")]
+    scenes += [(f"skimage {name}", getattr(skimage.data, name)(), None, "gray")
+               for name in ("coins", "camera", "page", "text", "clock")]
+    print("\nscene | true K | K chosen | choice ms | auto: levelset s, Dice | auto: polygon s, Dice | "
+          "K=2 levelset s | choice / K=2 run")
+    for name, image, truth, color in scenes:
+        n_true = "-" if truth is None else int(truth.max()) + 1
+        t = time.perf_counter()
+        chosen = choose_regions(normalize_image(image, color=color))
+        choice = time.perf_counter() - t
+        cells = []
+        for backend in ("levelset", "polygon"):
+            t = time.perf_counter()
+            try:
+                res = ac.segment(image, n_regions="auto", backend=backend, color=color, separate=False)
+            except (RuntimeError, ValueError) as exc:  # a failing backend is a row of the table
+                cells.append(f"{type(exc).__name__}: {exc}")
+                continue
+            elapsed = time.perf_counter() - t
+            assert res.n_regions == chosen
+            dice = (class_dice(res.classes, truth, chosen).mean()
+                    if truth is not None and chosen == n_true else None)
+            cells.append(f"{elapsed:.2f}, {'-' if dice is None else f'{dice:.4f}'}")
+        t = time.perf_counter()
+        ac.segment(image, n_regions=2, backend="levelset", color=color, separate=False)
+        two = time.perf_counter() - t
+        print(f"{name} | {n_true} | {chosen} | {1000 * choice:.1f} | {cells[0]} | {cells[1]} | "
+              f"{two:.2f} | {choice / two:.3f}", flush=True)
+
+
+def robust_comparison(repeat=1, only=None):
+    """smooth vs constant on bench_robust's quick set; times the minimum of ``repeat`` runs of
+    each, interleaved (the machine's load moves single runs by 2x)."""
     from bench_robust import synthetic_cases
 
     from activecontour import synthetic
 
-    print("\ncase | backend | constant Dice | smooth Dice | difference | time smooth / constant")
+    print(f"\ncase | backend | constant Dice | smooth Dice | difference | time smooth / constant "
+          f"(min of {repeat})")
     for name, make in synthetic_cases(quick=True):
+        if only and not any(word in name for word in only):
+            continue
         image, truth = make()
         for backend in ("polygon", "levelset"):
-            dice, seconds = {}, {}
-            for fit in ("constant", "smooth"):
-                t = time.perf_counter()
-                res = ac.segment(image, backend=backend, fit=fit, separate=False)
-                seconds[fit] = time.perf_counter() - t
-                dice[fit] = synthetic.dice(res.mask, truth)
+            dice, seconds = {}, {"constant": [], "smooth": []}
+            for _ in range(repeat):
+                for fit in ("constant", "smooth"):
+                    t = time.perf_counter()
+                    res = ac.segment(image, backend=backend, fit=fit, separate=False)
+                    seconds[fit].append(time.perf_counter() - t)
+                    dice[fit] = synthetic.dice(res.mask, truth)
+            ratio = min(seconds["smooth"]) / min(seconds["constant"])
             print(f"{name} | {backend} | {dice['constant']:.4f} | {dice['smooth']:.4f} | "
-                  f"{dice['smooth'] - dice['constant']:+.4f} | {seconds['smooth'] / seconds['constant']:.2f}",
-                  flush=True)
+                  f"{dice['smooth'] - dice['constant']:+.4f} | {ratio:.2f}", flush=True)
 
 
 def contact_sheets(folder):
@@ -224,17 +284,56 @@ def contact_sheets(folder):
         print("wrote", path)
 
 
+def backends_table(repeat=3):
+    """N regions on both backends, side by side: energy (the common evaluator's, of each one's
+    partition), per-class Dice where the truth is known, and the best of ``repeat`` times."""
+    import skimage.data
+
+    scenes = [("nested 3, SNR 3, 384^2", *nested_scene(), 3, "gray"),
+              ("Shepp-Logan 6 levels, noise 0.02", *phantom_scene(), 6, "gray"),
+              ("colour 3 regions, one gray", *colour_scene(), 3, "vector")]
+    scenes += [(f"skimage {name}", getattr(skimage.data, name)(), None, 3, "gray")
+               for name in ("coins", "page", "camera", "text")]
+    print(f"\nscene | K | polygon: J, Dice, s (best of {repeat}) | levelset: J, Dice, s | "
+          "J polygon / levelset")
+    for name, image, truth, n_regions, color in scenes:
+        cells, energies = [], []
+        for backend in ("polygon", "levelset"):
+            best = np.inf
+            for _ in range(repeat):
+                t = time.perf_counter()
+                res = ac.segment(image, n_regions=n_regions, backend=backend, color=color, separate=False)
+                best = min(best, time.perf_counter() - t)
+            dice = "-" if truth is None else f"{class_dice(res.classes, truth, n_regions).mean():.4f}"
+            cells.append(f"{res.energy:.2f}, {dice}, {best:.2f}")
+            energies.append(res.energy)
+        print(f"{name} | {n_regions} | {cells[0]} | {cells[1]} | {energies[0] / energies[1]:.4f}", flush=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--nuclei", default=os.environ.get("NUCLEI_DIR", ""),
                         help="folder with img2d.tif and mask2d.tif (the stardist wheel's data/images)")
+    parser.add_argument("--no-auto", action="store_true", help="skip the n_regions='auto' table")
     parser.add_argument("--no-robust", action="store_true")
+    parser.add_argument("--no-scenes", action="store_true", help="skip the scenes' table")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="time each fit on the bench_robust cases this many times (the minimum)")
+    parser.add_argument("--only", nargs="*", help="bench_robust cases whose names contain these words")
     parser.add_argument("--sheets", help="write contact sheets of coins, clock, page, text here")
+    parser.add_argument("--backends", action="store_true",
+                        help="only the N-region table of both backends (energy, Dice, best of --repeat)")
     args = parser.parse_args()
     ac.segment(np.random.default_rng(0).random((64, 64)))  # load the compiled kernels
-    scenes_table(args.nuclei)
+    if args.backends:
+        backends_table(max(args.repeat, 1))
+        return
+    if not args.no_scenes:
+        scenes_table(args.nuclei)
+    if not args.no_auto:
+        auto_table()
     if not args.no_robust:
-        robust_comparison()
+        robust_comparison(args.repeat, args.only)
     if args.sheets:
         contact_sheets(args.sheets)
 

@@ -1,7 +1,11 @@
 """N regions on the polygon backend: the boundary network, its H^1 flow and the region evaluator."""
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import activecontour as ac
 from activecontour.backends.network import Network, segment_network
@@ -9,6 +13,7 @@ from activecontour.energy import evaluate_partition
 from activecontour.image import ImageModel, normalize_image
 from activecontour.models import ChanVeseParameters
 from activecontour.partition import chain, class_boundary, class_soup
+from activecontour.raster import rasterize
 
 
 def _antialiased(shape, classify, levels, factor=8):
@@ -192,3 +197,54 @@ def test_dropping_an_island_merges_it_into_the_region_around_it():
         assert found == pytest.approx(expected, rel=1e-12)
     # the block's outline holds the island: dropping it would need the island's regions renamed
     assert network.without_island(network.nodes, loops[38]) is None
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_a_region_pinched_at_a_junction_is_two_simple_curves(backend):
+    # region 1 meets itself diagonally at the corner of region 2: its two squares touch at one
+    # point, which must not make one curve that touches itself (a figure eight is not a polygon)
+    from activecontour.topology import region_problem
+
+    truth = np.zeros((30, 30), dtype=int)
+    truth[5:15, 5:15] = 1
+    truth[15:25, 15:25] = 1
+    truth[15:25, 5:15] = 2
+    image = np.array([0.1, 0.9, 0.5])[truth] + np.random.default_rng(6).normal(0, 0.02, truth.shape)
+    res = ac.segment(image, n_regions=3, backend=backend)
+    assert np.mean(res.classes == np.array([0, 2, 1])[truth]) > 0.99
+    for curves in res.class_contours:
+        assert region_problem(curves) is None
+    assert len(res.class_contours[2]) == 2
+
+
+_MANY = int(os.environ.get("FUZZ_EXAMPLES", "0"))
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+@settings(max_examples=_MANY or 25, derandomize=not _MANY, deadline=None, database=None,
+          suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 2**32 - 1), rows=st.integers(4, 30), cols=st.integers(4, 30),
+       kind=st.sampled_from(["noise", "blocks", "disk and step"]), n_regions=st.integers(3, 4),
+       mu=st.sampled_from([0.0, 0.01, 0.1, 1.0]))
+def test_n_region_results_obey_the_invariants(backend, seed, rows, cols, kind, n_regions, mu):
+    # FUZZ_EXAMPLES=2000 tries many more, at random (as tests/test_fuzz.py)
+    import shapely
+
+    rng = np.random.default_rng(seed)
+    r, c = np.mgrid[:rows, :cols]
+    image = {"noise": lambda: rng.random((rows, cols)),
+             "blocks": lambda: (rng.random((rows, cols)) > 0.5) + rng.normal(0, 0.3, (rows, cols)),
+             "disk and step": lambda: ((r - rows / 2) ** 2 + (c - cols / 2) ** 2 < (min(rows, cols) / 3) ** 2)
+             + 0.5 * (c > cols / 2) + rng.normal(0, 0.1, (rows, cols))}[kind]().astype(float)
+    res = ac.segment(image, n_regions=n_regions, mu=mu, backend=backend)
+    assert res.energy == pytest.approx(ac.chan_vese_energy(image, regions=res.class_contours, mu=mu),
+                                       rel=1e-9, abs=1e-9)
+    energies = res.energies
+    assert energies[-1] == res.energy
+    assert np.all(np.diff(energies) <= 1e-9 * np.maximum(np.abs(energies[1:]), 1.0)), energies
+    assert np.array_equal(res.mask, res.classes > 0)
+    assert res.energy >= -1e-9
+    for k, curves in enumerate(res.class_contours):
+        assert all(len(curve) >= 3 and shapely.LinearRing(curve).is_simple for curve in curves)
+        if k:
+            assert np.array_equal(rasterize(curves, image.shape), res.classes == k)

@@ -71,8 +71,12 @@ def initial_classes(values, n_classes):
 
 def order_classes(classes, values, n_classes):
     """Relabel: 0 = the region covering most of the image border (the background), the others by
-    increasing mean intensity (of the mean channel).  Returns the new labels."""
-    border = np.concatenate([classes[0], classes[-1], classes[1:-1, 0], classes[1:-1, -1]])
+    increasing mean intensity (of the mean channel).  Returns the new labels.
+
+    The border is measured as the functional does (every border pixel side; a corner pixel has
+    two), so that with equal weights the choice never raises J: the length term counts the border
+    outside the background."""
+    border = np.concatenate([classes[0], classes[-1], classes[:, 0], classes[:, -1]])
     background = int(np.argmax(np.bincount(border, minlength=n_classes)))
     gray = values.mean(axis=2)
     count = np.bincount(classes.ravel(), minlength=n_classes)
@@ -137,7 +141,7 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     # lower; most significant split first, until none lowers J.  A start from a previous result
     # (a smooth fit's next round, a sequence's next frame) keeps its regions: no reseeding.
     for _ in range(0 if hasattr(init, "classes") else 2 * n_regions):
-        if status != 0:
+        if status not in (0, 4):
             break
         trial = _reseed(classes, image, n_regions, run, model, params)
         if trial is None:
@@ -196,7 +200,8 @@ class _Descent:
         self.energies, self.n_iter = [], 0
 
     def descend(self, classes, record=True):
-        """Returns the labels and the status (0 converged, 1 out of iterations, 2 callback)."""
+        """Returns the labels and the status (0 converged, 1 out of iterations, 2 callback, 4 the
+        next sweep would raise J)."""
         model, params, n_regions = self.model, self.params, self.n_regions
         values = model.values
         if record:
@@ -211,11 +216,18 @@ class _Descent:
             new, changed = _sweep(classes, cost, params.mu)
             if changed == 0:
                 return classes, 0
+            # named as the result will be: the partition's saddle cells depend on the names
+            new = order_classes(new, values, n_regions)
+            if record:
+                # the sweep descends on the fit term as a pixel sum; J integrates the bilinear
+                # image over the sub-pixel partition: a sweep that raises J is not taken
+                current = evaluate_partition(model, class_boundary(new), params, n_regions)
+                if current.energy > self.energies[-1] + 1e-12 * abs(self.energies[-1]):
+                    return classes, 4
+                self.energies.append(current.energy)
             classes = new
             self.n_iter += 1
             if record:
-                current = evaluate_partition(model, class_boundary(classes), params, n_regions)
-                self.energies.append(current.energy)
                 if self.callback is not None and self.callback(FlowState(
                         self.n_iter, [], current.energy, None, None, tuple(model.shape), self.max_num_iter,
                         phi=np.where(classes > 0, 1.0, -1.0))):

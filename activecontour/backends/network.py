@@ -50,7 +50,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.energy import evaluate_partition, partition_load
+from activecontour.energy import (
+    energy_of_moments,
+    evaluate_partition,
+    partition_load,
+    partition_moments,
+    soup_moments,
+)
 from activecontour.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
 from activecontour.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
@@ -95,6 +101,7 @@ class Network:
         self.inner, self.outer, self.shape = inner, outer, tuple(shape)
         self.interface = outer >= 0
         self.sides = Sides(inner, outer)
+        self._faces = None
         m, n = self.shape
         moving = np.zeros(len(nodes), dtype=bool)
         moving[start[self.interface]] = moving[end[self.interface]] = True
@@ -123,6 +130,35 @@ class Network:
         mapping = np.append(np.asarray(mapping), -1)  # -1 (outside the image) stays
         return Network(self.nodes, self.start, self.end, mapping[self.inner], mapping[self.outer],
                        self.shape)
+
+    def faces(self):
+        """The closed boundary curves of every region, as ``(face of each entry, segment, sign)``:
+        the entries of face f are its segments, traversed forward (+1) or backward (-1).  They
+        do not change while the nodes move, so each face's signed area (:meth:`face_areas`) must
+        keep its sign: a region turned inside out crosses no segment when it is a triangle."""
+        if self._faces is None:
+            face, segment, sign = [], [], []
+            for k in range(max(int(self.inner.max()), int(self.outer.max())) + 1):
+                forward = np.flatnonzero(self.inner == k)
+                backward = np.flatnonzero(self.outer == k)
+                both = np.concatenate([forward, backward])
+                starts = np.concatenate([self.start[forward], self.end[backward]])
+                ends = np.concatenate([self.end[forward], self.start[backward]])
+                signs = np.concatenate([np.ones(len(forward)), -np.ones(len(backward))])
+                for loop in chain_loops(starts, ends):
+                    face.append(np.full(len(loop), len(face)))
+                    segment.append(both[loop])
+                    sign.append(signs[loop])
+            self._faces = (np.concatenate(face).astype(np.intp), np.concatenate(segment).astype(np.intp),
+                           np.concatenate(sign))
+        return self._faces
+
+    def face_areas(self, nodes):
+        """The signed area of every face (:meth:`faces`)."""
+        face, segment, sign = self.faces()
+        a, b = nodes[self.start[segment]], nodes[self.end[segment]]
+        return 0.5 * np.bincount(face, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
+                                 minlength=int(face.max()) + 1 if face.size else 0)
 
     def region_curves(self, region):
         """Closed curves of a set of regions (bool per region): outer boundaries positive."""
@@ -193,7 +229,10 @@ class Network:
         for path, left, right, closed in lines:
             polyline = nodes[np.append(path, path[0]) if closed else path]
             arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
-            pieces = max(3 if closed else 1, int(round(arc[-1] / spacing)))
+            # an interface keeps a vertex between its ends: a region between two single segments
+            # (two interfaces joining the same junctions, or one and the border) would be a 2-gon
+            fewest = 3 if closed or path[0] == path[-1] else 2
+            pieces = max(fewest, int(round(arc[-1] / spacing)))
             steps = np.arange(0 if closed else 1, pieces) * (arc[-1] / pieces)
             new = np.column_stack([np.interp(steps, arc, polyline[:, 0]),
                                    np.interp(steps, arc, polyline[:, 1])])
@@ -265,8 +304,9 @@ class Network:
         low, high = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
         keep = np.ones(len(self.start), dtype=bool)
         keep[loop] = False
-        used = np.unique(np.concatenate([self.start[keep], self.end[keep]]))
-        near = nodes[used[np.all((nodes[used] > low) & (nodes[used] < high), axis=1)]]
+        used = np.zeros(len(nodes), dtype=bool)
+        used[self.start[keep]] = used[self.end[keep]] = True
+        near = nodes[used & np.all((nodes > low) & (nodes < high), axis=1)]
         if near.size:  # even-odd rule: crossings of the ray towards +c
             straddle = (a[None, :, 0] > near[:, None, 0]) != (b[None, :, 0] > near[:, None, 0])
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -379,7 +419,9 @@ class Network:
         m, n = self.shape
         inside = ((after[:, 0] >= -0.5) & (after[:, 0] <= m - 0.5)
                   & (after[:, 1] >= -0.5) & (after[:, 1] <= n - 0.5))
-        return bool(kept.all() and inside.all())
+        if not (kept.all() and inside.all()):
+            return False
+        return bool(np.all(np.sign(self.face_areas(after)) == np.sign(self.face_areas(before))))
 
 
 def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callback):
@@ -447,22 +489,46 @@ class _Flow:
         or, given ``nodes_of_interest``, the loops through them, one at a time, each only if J
         does not rise: the network cannot change its topology by moving, so a region the flow
         shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
-        removed = False
-        candidates = [self.network.start[loop] for loop, area in self.network.closed_loops(self.nodes)
+        network, nodes = self.network, self.nodes
+        candidates = [network.start[loop] for loop, area in network.closed_loops(nodes)
                       if (area < _ISLAND_AREA if nodes_of_interest is None
-                          else np.isin(self.network.start[loop], nodes_of_interest).any())]
+                          else np.isin(network.start[loop], nodes_of_interest).any())]
+        if not candidates:
+            return False
+        # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
+        # move from the region inside to the one around it, and its loop leaves the length
+        areas, first, second = partition_moments(self.model, network.boundary(nodes), self.n_regions)
+        length, energy, removed = self.current.length, self.current.energy, False
         for loop_nodes in candidates:  # its nodes are its own: find its segments after a removal
-            network = self.network
             loop = np.flatnonzero(np.isin(network.start, loop_nodes) & network.interface)
-            network = network.without_island(self.nodes, loop)
-            if network is None:
+            reduced = network.without_island(nodes, loop)
+            if reduced is None:
                 continue
-            trial = self.evaluate(network, self.nodes)
-            if trial.energy <= self.current.energy:
-                if trial.energy < self.current.energy:
-                    self.energies.append(trial.energy)
-                self.network, self.current, removed = network, trial, True
-        return removed
+            flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
+            starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
+            ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
+            area, moment_1, moment_2 = soup_moments(self.model, starts, ends)
+            sides = (network.inner[loop[0]], network.outer[loop[0]])
+            inside, around = sides if area > 0 else sides[::-1]
+            sign = 1.0 if area > 0 else -1.0
+            trial = [part.copy() for part in (areas, first, second)]
+            for part, island in zip(trial, (area, moment_1, moment_2), strict=True):
+                part[inside] -= sign * island
+                part[around] += sign * island
+            loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
+            candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
+            if candidate.energy <= energy:
+                network, (areas, first, second) = reduced, trial
+                length, energy, removed = length - loop_length, candidate.energy, True
+        if not removed:
+            return False
+        current = self.evaluate(network, nodes)  # the same J, integrated afresh
+        if current.energy > self.current.energy + 1e-9 * abs(self.current.energy):
+            return False
+        if current.energy < self.current.energy:
+            self.energies.append(current.energy)
+        self.network, self.current = network, current
+        return True
 
     def unhealthy(self):
         network, nodes = self.network, self.nodes
