@@ -26,6 +26,9 @@ centres, so its second moments differ by the 1/12 px^2 of a pixel square and by 
 
 from __future__ import annotations
 
+import heapq
+from itertools import pairwise
+
 import numpy as np
 
 from activecontour.curve import clean, signed_area
@@ -301,6 +304,11 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     keeps them shared), and each part is the polygon intersected with its cell.  Parts therefore
     share their split lines exactly, never overlap, and their union is the object.
 
+    The cost is about linear in the object's pixels however many parts the watershed makes (a
+    speckled outline makes one every few pixels): merges are queued by priority and move the
+    smaller side (:class:`_PartGraph`), merged parts' shapes are added up rather than measured
+    again (:class:`_PartShapes`), and the split by contrast and the cut work on each part's box.
+
     Parameters
     ----------
     objects : list of list of ndarray
@@ -394,9 +402,15 @@ def _boundary_distance(curves, region, low):
 def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
     """Label the pixels of a bool region by parts separated by narrow waists (0 outside), given
     its edge pixels' depth inside the outline's convex hull (:func:`_concavity`) and each pixel's
-    distance to the outline."""
+    distance to the outline.
+
+    The watershed's parts are merged pair by pair (:meth:`_PartGraph.merge_necks`), then the
+    parts that are no blob take their neighbours back (:meth:`_PartGraph.merge_non_blobs`).
+    Both work on the graph of parts with priority queues and merge the smaller side into the
+    larger, so the cost is about linear in the region's pixels however many parts the watershed
+    makes (a speckled outline makes one per few pixels).
+    """
     import scipy.ndimage
-    import skimage.measure
     import skimage.morphology
     import skimage.segmentation
 
@@ -404,44 +418,10 @@ def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32)
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    graph = _PartGraph(parts, distance, count, concavity)
-    while graph.saddle:
-        # the widest neck relative to the thinner side first; a side too small to be an object
-        # is merged whatever its neck
-        merit = {(i, j): np.inf if min(graph.peak[i], graph.peak[j]) < min_radius
-                 else v / min(graph.peak[i], graph.peak[j]) for (i, j), v in graph.saddle.items()}
-        pair = max(merit, key=merit.get)
-        thinner = min(graph.peak[pair[0]], graph.peak[pair[1]])
-        if merit[pair] < neck_ratio and graph.saddle[pair] < thinner - MIN_NECK_DEPTH:
-            # the narrowest necks are left: the ones that are a notch on one side only go too
-            one_sided = [p for p in graph.saddle if not graph.is_waist(*p)]
-            if not one_sided:
-                break
-            pair = max(one_sided, key=merit.get)
-        graph.merge(*pair)
-    # a part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were a
-    # shape's own: it takes its neighbours back, until every part is a blob or has no neighbour
-    # (each merged part's shape is measured once, on its bounding box: only the merged one changes)
-    boxes = scipy.ndimage.find_objects(parts)
-    shape_of = {}  # root: (blob, solidity)
-    while True:
-        roots = [int(r) for r in np.unique(graph.parent[1:])]
-        for root in roots:
-            if root not in shape_of:
-                members = np.flatnonzero(graph.parent == root)
-                box = tuple(slice(min(boxes[m - 1][a].start for m in members),
-                                  max(boxes[m - 1][a].stop for m in members)) for a in range(2))
-                props = skimage.measure.regionprops(np.isin(parts[box], members).astype(np.uint8))[0]
-                shape_of[root] = (_is_blob(props), props.solidity)
-        # a part with no 4-neighbour border left (pixels touching only at a corner) has none to take
-        takers = [r for r in roots if not shape_of[r][0] and graph.neighbours(r)]
-        if not takers:
-            return graph.labels()[0]
-        root = min(takers, key=lambda r: shape_of[r][1])
-        for neighbour in graph.neighbours(root):
-            graph.merge(root, neighbour)
-            shape_of.pop(neighbour, None)
-        shape_of.pop(root)
+    graph = _PartGraph(parts, distance, count, concavity, min_radius)
+    graph.merge_necks(neck_ratio)
+    graph.merge_non_blobs()
+    return graph.labels()
 
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
@@ -496,23 +476,38 @@ def _contrast_parts(parts, values, least, min_radius):
 
     result, count = np.zeros_like(parts), 0
     smallest = np.pi * min_radius ** 2
-    for j in range(1, int(parts.max()) + 1):
-        mask = parts == j
-        pieces = _contrast_split(mask, values, least, smallest)
+    # each part on its box, grown by the reach of the smoothing: the same numbers as on the
+    # window (outside the part everything is zero), at a cost of the part's size, not the window's
+    margin = int(4.0 * CONTRAST_SCALE + 0.5) + 1
+    for j, box in enumerate(scipy.ndimage.find_objects(parts), start=1):
+        if box is None:
+            continue
+        box = tuple(slice(max(b.start - margin, 0), b.stop + margin) for b in box)
+        mask = parts[box] == j
+        pieces = _contrast_split(mask, values[box], least, smallest)
         if pieces is not None:
             props = skimage.measure.regionprops(pieces)
             largest = max(p.area for p in props)
+            # a piece's inscribed radius on its box and a pixel more (the nearest pixel outside
+            # a piece touches it)
             if not all(_is_blob(p) and p.area >= CONTRAST_SIZE_RATIO * largest
-                       and scipy.ndimage.distance_transform_edt(pieces == p.label).max() >= min_radius
-                       for p in props):
+                       and _inscribed_radius(pieces, p.label, p.slice) >= min_radius for p in props):
                 pieces = None
         if pieces is None:
             count += 1
-            result[mask] = count
+            result[box][mask] = count
         else:
-            result[mask] = pieces[mask] + count
+            result[box][mask] = pieces[mask] + count
             count += int(pieces.max())
     return result
+
+
+def _inscribed_radius(labels, label, box):
+    """The largest distance from a pixel of ``labels == label`` (within ``box``) to one outside."""
+    import scipy.ndimage
+
+    grown = tuple(slice(max(b.start - 1, 0), b.stop + 1) for b in box)
+    return scipy.ndimage.distance_transform_edt(labels[grown] == label).max()
 
 
 def _contrast_split(mask, values, least, smallest):
@@ -522,7 +517,8 @@ def _contrast_split(mask, values, least, smallest):
 
     # the smoothed values inside are weighted means of the values inside: their range is no wider
     raw = values[mask]
-    if raw.size <= 2 * smallest or np.ptp(raw) < least:
+    # (a least contrast of 0, on a constant image, splits nothing either)
+    if raw.size <= 2 * smallest or np.ptp(raw) <= least:
         return None
     weight = scipy.ndimage.gaussian_filter(mask.astype(float), CONTRAST_SCALE)
     smooth = (scipy.ndimage.gaussian_filter(np.where(mask, values, 0.0), CONTRAST_SCALE)
@@ -531,15 +527,16 @@ def _contrast_split(mask, values, least, smallest):
     # differences at the rounding of the values' magnitude (an image far from zero) are no contrast
     least = max(least, 1e-9 * float(np.max(np.abs(inside), initial=0.0)))
     # the two classes' means differ by less than the range: a narrower range has no split
-    if inside.size <= 2 * smallest or np.ptp(inside) < least:
+    if inside.size <= 2 * smallest or np.ptp(inside) <= least:
         return None
     threshold = skimage.filters.threshold_otsu(inside)
     above = inside > threshold
     if above.all() or not above.any() or inside[above].mean() - inside[~above].mean() < least:
         return None  # (Otsu of values that hardly differ can put them all on one side)
     bright = _without_small(scipy.ndimage.binary_fill_holes((smooth > threshold) & mask), smallest) & mask
-    away = ((scipy.ndimage.distance_transform_edt(mask) > CONTRAST_RIM)
-            & (scipy.ndimage.distance_transform_edt(~bright) > CONTRAST_RIM))
+    # (no bright core: every pixel is far from one)
+    away = (scipy.ndimage.distance_transform_edt(mask) > CONTRAST_RIM) & (
+        (scipy.ndimage.distance_transform_edt(~bright) > CONTRAST_RIM) if bright.any() else True)
     dim = _without_small(mask & ~bright & away, smallest / 2)
     bright_cores, n_bright = scipy.ndimage.label(bright)
     dim_cores, n_dim = scipy.ndimage.label(dim)
@@ -557,8 +554,13 @@ MAX_PART_ASPECT = 4.0
 
 
 def _is_blob(props):
-    return (props.solidity >= MIN_PART_SOLIDITY
-            and props.axis_major_length <= MAX_PART_ASPECT * max(props.axis_minor_length, 1e-9))
+    """Whether a ``skimage.measure.regionprops`` region is blob-like (:func:`_blob_shape`)."""
+    return _blob_shape(props.solidity, props.axis_major_length, props.axis_minor_length)
+
+
+def _blob_shape(solidity, axis_major_length, axis_minor_length):
+    return (solidity >= MIN_PART_SOLIDITY
+            and axis_major_length <= MAX_PART_ASPECT * max(axis_minor_length, 1e-9))
 
 
 #: A split line must end in a concavity of the outline at both ends, at least this deep (pixels
@@ -583,76 +585,284 @@ def _concavity(region, outline):
     return depth
 
 
+class _Border:
+    """The common border of two parts: its neck (the largest distance value along it), its
+    pixels (flat indices, in chunks), its rank in the scan that found the borders (ties between
+    equal merits go to the first found) and whether it is a waist (cached)."""
+
+    __slots__ = ("neck", "chunks", "rank", "waist")
+
+    def __init__(self, neck, pixels, rank):
+        self.neck, self.chunks, self.rank, self.waist = neck, [pixels], rank, None
+
+    def absorb(self, other):
+        """Become the border of a merged part with ``other``'s neighbour too."""
+        self.neck = max(self.neck, other.neck)
+        self.rank = min(self.rank, other.rank)
+        small, large = sorted((self.chunks, other.chunks), key=len)
+        large.extend(small)
+        self.chunks, self.waist = large, None
+
+    def pixels(self):
+        if len(self.chunks) > 1:
+            self.chunks = [np.concatenate(self.chunks)]
+        return self.chunks[0]
+
+
 class _PartGraph:
     """Parts of a watershed as a graph: each part's peak distance, each border's neck (saddle),
-    its pixels and whether it is a waist (cached until one of its parts merges)."""
+    its pixels and whether it is a waist.
 
-    def __init__(self, parts, distance, count, concavity):
+    A merge moves the smaller side's members and borders to the kept part, and the merges are
+    chosen from priority queues whose entries are checked when they come out (a merit only
+    falls unless the border itself changed, and a changed border is queued again): the whole
+    merging costs O(B log B) for B border pixels, not a scan of every border per merge.
+    """
+
+    def __init__(self, parts, distance, count, concavity, min_radius):
         import scipy.ndimage
 
-        self.parts = parts
-        self.concavity = concavity
+        self.parts, self.concavity, self.min_radius = parts, concavity, min_radius
         self.peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
-        self.parent = np.arange(count + 1)
-        # the neck between two adjacent parts: the largest distance over their 4-neighbour pairs
-        self.saddle, self.border, self.waist = {}, {}, {}
+        self.members = {k: [k] for k in range(1, count + 1)}
+        self.adjacent = {k: {} for k in range(1, count + 1)}  # part: {neighbour: _Border}
+        # every 4-neighbour pair of pixels in two parts: rows first, then columns, in raster order
         index = np.arange(parts.size).reshape(parts.shape)
+        first, second, neck, pixels = [], [], [], []
         for a, b, da, db, ia, ib in ((parts[:, :-1], parts[:, 1:], distance[:, :-1], distance[:, 1:],
                                       index[:, :-1], index[:, 1:]),
                                      (parts[:-1], parts[1:], distance[:-1], distance[1:], index[:-1],
                                       index[1:])):
             border = (a != b) & (a > 0) & (b > 0)
-            pa, pb, value = a[border], b[border], np.minimum(da[border], db[border])
-            for i, j, v, p, q in zip(np.minimum(pa, pb), np.maximum(pa, pb), value, ia[border],
-                                     ib[border], strict=True):
-                if v > self.saddle.get((i, j), -1.0):
-                    self.saddle[(i, j)] = v
-                self.border.setdefault((i, j), []).extend((p, q))
+            first.append(np.minimum(a[border], b[border]))
+            second.append(np.maximum(a[border], b[border]))
+            neck.append(np.minimum(da[border], db[border]))
+            pixels.append(np.column_stack([ia[border], ib[border]]))
+        first, second = np.concatenate(first), np.concatenate(second)
+        neck, pixels = np.concatenate(neck), np.concatenate(pixels)
+        pair = first.astype(np.int64) * (count + 1) + second
+        order = np.argsort(pair, kind="stable")
+        starts = np.flatnonzero(np.diff(pair[order], prepend=-1))  # none: parts touch at corners
+        for start, stop in pairwise(np.append(starts, order.size)):
+            chosen = order[start:stop]
+            i, j = int(first[chosen[0]]), int(second[chosen[0]])
+            border = _Border(float(neck[chosen].max()), pixels[chosen].ravel(), int(chosen[0]))
+            self.adjacent[i][j] = self.adjacent[j][i] = border
+        self.queues = None
+        self.shapes = None  # per part: moments and convex hull, once the blob test needs them
 
-    def is_waist(self, i, j):
-        """Whether the border of i and j ends in a concavity of the outline at two places."""
-        import scipy.ndimage
+    def merit(self, i, j, border):
+        """The neck over the thinner part's peak; infinite when that part is too small to be an
+        object (it merges whatever its neck)."""
+        thinner = min(self.peak[i], self.peak[j])
+        return np.inf if thinner < self.min_radius else border.neck / thinner
 
-        if (i, j) in self.waist:
-            return self.waist[(i, j)]
-        pixels = np.asarray(self.border[(i, j)])
+    def _queue(self, i, j, border):
+        entry = (-self.merit(i, j, border), border.rank, min(i, j), max(i, j))
+        for queue in self.queues:
+            heapq.heappush(queue, entry)
+
+    def _best(self, queue, one_sided=False):
+        """The pair of highest merit in a queue (first found on ties), and its merit; with
+        ``one_sided``, of the pairs whose border is no waist.  None when there is none."""
+        while queue:
+            negative, rank, i, j = queue[0]
+            border = self.adjacent.get(i, {}).get(j)
+            if border is None:
+                heapq.heappop(queue)
+                continue
+            merit = self.merit(i, j, border)
+            if (-merit, border.rank) != (negative, rank):  # the merit fell since: queue it anew
+                heapq.heapreplace(queue, (-merit, border.rank, i, j))
+                continue
+            if one_sided and self.is_waist(border):
+                heapq.heappop(queue)  # a waist stays one until its border changes (queued then)
+                continue
+            return (i, j), merit
+        return None
+
+    def merge_necks(self, neck_ratio):
+        """Merge neighbouring parts, the widest neck relative to the thinner side first, while
+        the neck is at least ``neck_ratio`` of the thinner part's peak or within
+        ``MIN_NECK_DEPTH`` of it (a side too small to be an object merges whatever its neck);
+        the narrow necks left that are a notch on one side only (no waist) go too."""
+        self.queues = ([], [])  # all pairs; the pairs not yet found to be waists
+        for i, neighbours in self.adjacent.items():
+            for j, border in neighbours.items():
+                if i < j:
+                    self._queue(i, j, border)
+        while (best := self._best(self.queues[0])) is not None:
+            (i, j), merit = best
+            thinner = min(self.peak[i], self.peak[j])
+            if merit < neck_ratio and self.adjacent[i][j].neck < thinner - MIN_NECK_DEPTH:
+                best = self._best(self.queues[1], one_sided=True)
+                if best is None:
+                    break
+            self.merge(*best[0])
+        self.queues = None
+
+    def merge_non_blobs(self):
+        """A part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were
+        a shape's own: it takes its neighbours back, the least solid first, until every part is a
+        blob or has no neighbour (pixels touching only at a corner are no neighbours)."""
+        self.shapes = _PartShapes(self.parts, self.members)
+        queue = []
+        for root in self.members:
+            self._queue_shape(queue, root)
+        while queue:
+            solidity, root, version = heapq.heappop(queue)
+            if root not in self.members or version != self.shapes.version[root]:
+                continue
+            for neighbour in list(self.adjacent[root]):
+                self.merge(root, neighbour)
+            self._queue_shape(queue, root)
+
+    def _queue_shape(self, queue, root):
+        blob, solidity = self.shapes.blob(root)
+        if not blob and self.adjacent[root]:  # a part without neighbours never gains one
+            heapq.heappush(queue, (solidity, root, self.shapes.version[root]))
+
+    def is_waist(self, border):
+        """Whether a border ends in a concavity of the outline at two places: its pixels on the
+        outline fall in two pieces (8-neighbours) or more, two of them ``MIN_WAIST_DEPTH`` deep."""
+        import scipy.sparse
+        import scipy.sparse.csgraph
+
+        if border.waist is not None:
+            return border.waist
+        pixels = np.unique(border.pixels())
         depth = self.concavity.ravel()[pixels]
         pixels, depth = pixels[depth >= 0], depth[depth >= 0]
-        # the border's pixels on the outline, in pieces (8-neighbours), on their bounding box
-        rows, cols = np.unravel_index(pixels, self.parts.shape)
-        ends = np.zeros((np.ptp(rows) + 1, np.ptp(cols) + 1), dtype=bool) if pixels.size else None
-        count = 0
-        if ends is not None:
-            ends[rows - rows.min(), cols - cols.min()] = True
-            pieces, count = scipy.ndimage.label(ends, structure=np.ones((3, 3)))
-        if count < 2:
-            self.waist[(i, j)] = False
-            return False
-        deepest = np.full(count, -1.0)
-        np.maximum.at(deepest, pieces[rows - rows.min(), cols - cols.min()] - 1, depth)
-        self.waist[(i, j)] = bool(np.sort(deepest)[-2] >= MIN_WAIST_DEPTH)
-        return self.waist[(i, j)]
+        border.waist = False
+        if pixels.size >= 2:
+            width = self.parts.shape[1]
+            rows, cols = np.divmod(pixels, width)
+            # 8-neighbour pieces of a sparse set of pixels: join each to its neighbours ahead
+            links = []
+            for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
+                target = (rows + dr) * width + cols + dc
+                found = np.minimum(np.searchsorted(pixels, target), pixels.size - 1)
+                hit = (pixels[found] == target) & (cols + dc >= 0) & (cols + dc < width)
+                links.append(np.column_stack([np.flatnonzero(hit), found[hit]]))
+            links = np.concatenate(links)
+            graph = scipy.sparse.coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])),
+                                            shape=(pixels.size, pixels.size))
+            count, piece = scipy.sparse.csgraph.connected_components(graph, directed=False)
+            if count >= 2:
+                deepest = np.full(count, -1.0)
+                np.maximum.at(deepest, piece, depth)
+                border.waist = bool(np.sort(deepest)[-2] >= MIN_WAIST_DEPTH)
+        return border.waist
 
     def merge(self, keep, gone):
-        self.parent[self.parent == gone] = keep
+        """Part ``gone`` joins part ``keep`` (which keeps its number)."""
         self.peak[keep] = max(self.peak[keep], self.peak[gone])
-        saddle, border = {}, {}
-        for (i, j), v in self.saddle.items():
-            i2, j2 = (keep if i == gone else i), (keep if j == gone else j)
-            if i2 != j2:
-                key = (min(i2, j2), max(i2, j2))
-                saddle[key] = max(v, saddle.get(key, -1.0))
-                border.setdefault(key, []).extend(self.border[(i, j)])
-        self.saddle, self.border = saddle, border
-        self.waist = {pair: w for pair, w in self.waist.items() if keep not in pair and gone not in pair}
-
-    def neighbours(self, root):
-        return [j if i == root else i for (i, j) in self.saddle if root in (i, j)]
+        small, large = sorted((self.members.pop(gone), self.members[keep]), key=len)
+        large.extend(small)
+        self.members[keep] = large
+        if self.shapes is not None:
+            self.shapes.merge(keep, gone)
+        kept = self.adjacent[keep]
+        for neighbour, border in self.adjacent.pop(gone).items():
+            del self.adjacent[neighbour][gone]
+            if neighbour == keep:
+                continue
+            if neighbour in kept:
+                kept[neighbour].absorb(border)
+                border = kept[neighbour]
+            else:
+                kept[neighbour] = self.adjacent[neighbour][keep] = border
+            if self.queues is not None:
+                self._queue(keep, neighbour, border)
 
     def labels(self):
-        """The merged parts numbered 1..k (0 outside), and the root of each number."""
-        roots, relabel = np.unique(self.parent, return_inverse=True)
-        return relabel[self.parts].astype(np.int32), roots
+        """The merged parts numbered 1..k in the order of their numbers (0 outside)."""
+        relabel = np.zeros(len(self.peak), dtype=np.int32)
+        for number, root in enumerate(sorted(self.members), start=1):
+            relabel[self.members[root]] = number
+        return relabel[self.parts]
+
+
+#: The four points of a pixel's edge midpoints, whose hull is the pixel's in the convex hull of
+#: ``skimage.morphology.convex_hull_image`` (``offset_coordinates=True``).
+_EDGE_MIDPOINTS = np.array([[-0.5, 0.0], [0.5, 0.0], [0.0, -0.5], [0.0, 0.5]])
+
+
+class _PartShapes:
+    """The area, second moments and convex hull of every part, kept through merges: the blob
+    test (:func:`_blob_shape`) of a merged part without measuring its pixels again.
+
+    The solidity and axis lengths are those of ``skimage.measure.regionprops`` (its convex hull
+    holds the pixel centres in the hull of the pixels' edge midpoints), from sums that add up
+    under a merge and hulls that merge by their vertices."""
+
+    def __init__(self, parts, members):
+        rows, cols = np.nonzero(parts)
+        lookup = np.zeros(int(parts.max()) + 1, dtype=np.intp)
+        for root, numbers in members.items():
+            lookup[numbers] = root
+        owner = lookup[parts[rows, cols]]
+        rows, cols = rows.astype(np.float64), cols.astype(np.float64)
+        size = len(lookup)
+        sums = [np.bincount(owner, weights=w, minlength=size)
+                for w in (None, rows, cols, rows * rows, cols * cols, rows * cols)]
+        self.sums = {root: np.array([s[root] for s in sums]) for root in members}
+        # hull candidates: the first and last pixel of every row and of every column of a part
+        ends = []
+        for along, across in ((rows, cols), (cols, rows)):
+            order = np.lexsort((across, along, owner))
+            key = np.column_stack([owner[order], along[order]])
+            change = np.any(key[1:] != key[:-1], axis=1)
+            ends.append(order[np.r_[True, change] | np.r_[change, True]])
+        ends = np.unique(np.concatenate(ends))
+        by_owner = np.argsort(owner[ends], kind="stable")
+        ends = ends[by_owner]
+        splits = np.searchsorted(owner[ends], list(members), side="left")
+        stops = np.searchsorted(owner[ends], list(members), side="right")
+        self.hull = {}
+        for root, a, b in zip(members, splits, stops, strict=True):
+            centres = np.column_stack([rows[ends[a:b]], cols[ends[a:b]]])
+            self.hull[root] = _hull((centres[:, None, :] + _EDGE_MIDPOINTS).reshape(-1, 2))
+        self.version = dict.fromkeys(members, 0)
+
+    def merge(self, keep, gone):
+        self.sums[keep] = self.sums[keep] + self.sums.pop(gone)
+        self.hull[keep] = _hull(np.vstack([self.hull[keep], self.hull.pop(gone)]))
+        self.version[keep] += 1
+        del self.version[gone]
+
+    def blob(self, root):
+        """(whether the part is a blob, its solidity)."""
+        n, sr, sc, srr, scc, src = self.sums[root]
+        solidity = n / _lattice_points(self.hull[root])
+        # the inertia tensor of regionprops: central moments over the area
+        mu20, mu02, mu11 = (srr - sr * sr / n) / n, (scc - sc * sc / n) / n, (src - sr * sc / n) / n
+        low, high = np.clip(np.linalg.eigvalsh([[mu02, -mu11], [-mu11, mu20]]), 0, None)
+        return _blob_shape(solidity, 4 * np.sqrt(high), 4 * np.sqrt(low)), solidity
+
+
+def _hull(points):
+    """The vertices of the convex hull of points (P, 2), P >= 3 not all on a line."""
+    import scipy.spatial
+
+    points = np.unique(points, axis=0)
+    return points[scipy.spatial.ConvexHull(points).vertices]
+
+
+def _lattice_points(vertices):
+    """How many integer points (pixel centres) a convex polygon holds, its boundary included:
+    the span of each integer row between the polygon's two crossings of it."""
+    start, end = vertices, np.roll(vertices, -1, axis=0)
+    rows = np.arange(np.ceil(vertices[:, 0].min()), np.floor(vertices[:, 0].max()) + 1)[:, None]
+    r0, r1, c0, c1 = start[:, 0], end[:, 0], start[:, 1], end[:, 1]
+    spans = (np.minimum(r0, r1) <= rows) & (rows <= np.maximum(r0, r1))
+    flat = r0 == r1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross = c0 + np.where(flat, 0.0, (rows - r0) / (r1 - r0)) * (c1 - c0)
+    low = np.where(spans, np.where(flat, np.minimum(c0, c1), cross), np.inf).min(axis=1)
+    high = np.where(spans, np.where(flat, np.maximum(c0, c1), cross), -np.inf).max(axis=1)
+    # the vertices are half-integers: a centre on the boundary is exact to far below 1e-9
+    return int(np.sum(np.maximum(np.floor(high + 1e-9) - np.ceil(low - 1e-9) + 1, 0)))
 
 
 #: Tolerance (pixels) of the straightening of split lines (``shapely.coverage_simplify``).
@@ -666,20 +876,25 @@ def _cut(curves, parts, low):
 
     from activecontour.raster import mask_to_curves
 
-    # grow the parts over the whole window so that their cells tile it
+    # grow the parts over the whole window so that their cells tile it; each cell is traced
+    # and cut on its own box (the work grows with the object, not with its parts times it)
     nearest = scipy.ndimage.distance_transform_edt(parts == 0, return_distances=False,
                                                    return_indices=True)
     cells = parts[tuple(nearest)]
-    geometries = [_to_shapely([c + low for c in mask_to_curves(cells == j)])
-                  for j in range(1, int(cells.max()) + 1)]
+    boxes = scipy.ndimage.find_objects(cells)
+    geometries = [_to_shapely([c + low + (box[0].start, box[1].start)
+                               for c in mask_to_curves(cells[box] == j)])
+                  for j, box in enumerate(boxes, start=1)]
     geometries = shapely.coverage_simplify(geometries, SPLIT_LINE_TOLERANCE, simplify_boundary=False)
     region = _to_shapely(curves)
-    pieces, taken = [], None
-    for cell in geometries:
+    tree = shapely.STRtree(geometries)
+    pieces = []
+    for j, cell in enumerate(geometries):
         piece = shapely.intersection(region, cell)
-        if taken is not None:  # floating-point slivers along a shared border go to the first
-            piece = shapely.difference(piece, taken)
-        taken = cell if taken is None else shapely.union(taken, cell)
+        # floating-point slivers along a shared border go to the first cell
+        earlier = [k for k in tree.query(cell) if k < j]
+        if earlier:
+            piece = shapely.difference(piece, shapely.union_all(geometries[earlier]))
         for polygon in getattr(piece, "geoms", [piece]):
             if isinstance(polygon, shapely.Polygon) and polygon.area > 0:
                 part = _from_shapely(polygon)

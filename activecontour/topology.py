@@ -29,6 +29,10 @@ __all__ = ["border_overlap", "crossings", "curve_areas", "nucleation_sites", "re
 
 #: pixels per band of rows in :func:`nucleation_sites` (a few float32 arrays of 16 MB)
 _BAND_PIXELS = 1 << 22
+#: probe-vertex pairs below which :func:`winding_number` makes one pass over every curve
+_DIRECT_WORK = 1 << 18
+#: curves per block of the box-in-box test of :func:`_right_windings` (a bool array of 4 MB)
+_BOX_BLOCK = 1024
 
 
 def crossings(points, next_index):
@@ -56,12 +60,13 @@ def winding_number(points, next_index, probes, offsets=None):
 
     With the curves' ``offsets`` (as from :func:`activecontour.energy.stack_curves`) only the
     curves whose bounding box holds a probe are visited for it: a curve contributes 0 to every
-    point outside its box, so many small curves cost O(P + K) instead of O(P K).
+    point outside its box, so many small curves cost O(P + K) instead of O(P K).  (Below
+    ``_DIRECT_WORK`` probe-vertex pairs one compiled pass over all is cheaper than the visits.)
     """
     probes = np.ascontiguousarray(np.atleast_2d(probes), dtype=np.float64)
     points = np.ascontiguousarray(points, dtype=np.float64)
     next_index = np.ascontiguousarray(next_index, dtype=np.intp)
-    if offsets is None or len(offsets) <= 2:
+    if offsets is None or len(offsets) <= 2 or len(probes) * len(points) <= _DIRECT_WORK:
         return _winding(points, next_index, probes)
     out = np.zeros(len(probes), dtype=np.int64)
     low = np.minimum.reduceat(points, offsets[:-1], axis=0)
@@ -93,7 +98,13 @@ def curve_areas(points, next_index, offsets):
 
 
 def repair(points, next_index, offsets, *, min_area=0.0):
-    """Rebuild the curves as the boundary of {w > 0}; None when no edges cross.
+    """Rebuild the curves as the boundary of {w > 0}; None when they already are.
+
+    They are when no edges cross and every curve has w = 0 on its right.  A step can turn a
+    whole curve over without any crossing left at its end (a sliver whose sides pass each other,
+    a small curve jumped across itself): alone it bounds a region of w = -1, inside an object
+    (positive, within another positive curve) one of w = 2; such a curve is no boundary of
+    {w > 0} and is dropped, like any chain between crossings.
 
     Parameters
     ----------
@@ -106,10 +117,14 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     list of ndarray (K, 2) or None
     """
     first, second, s, t = crossings(points, next_index)
-    if first.size == 0:
-        return None
     n_points = len(points)
     n_cross = first.size
+    if n_cross == 0:  # every curve is one closed chain: the common case, vectorised
+        turned = _right_windings(points, next_index, offsets) != 0
+        if not turned.any():
+            return None
+        return [points[a:b] for a, b, out in zip(offsets[:-1], offsets[1:], turned, strict=True)
+                if not out and b - a >= 3 and abs(signed_area(points[a:b])) > min_area]
     cross_points = points[first] + s[:, None] * (points[next_index[first]] - points[first])
     nodes = np.vstack([points, cross_points])
     # Every curve's node sequence with its crossings inserted in order along each edge: vertex e
@@ -124,12 +139,7 @@ def repair(points, next_index, offsets, *, min_area=0.0):
     chains = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         chains.extend(_chains(sequence[a:b], n_points))
-    starts, seconds = nodes[[c[0] for c in chains]], nodes[[c[1] for c in chains]]
-    direction = seconds - starts
-    length = np.maximum(np.hypot(direction[:, 0], direction[:, 1]), 1e-300)
-    normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
-    probes = 0.5 * (starts + seconds) + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
-    windings = winding_number(points, next_index, probes, offsets)
+    windings = winding_number(points, next_index, _right_probes(chains, nodes), offsets)
     kept = [chain for chain, w in zip(chains, windings, strict=True) if w == 0]
     curves = _link(kept, nodes, n_points)
     return [c for c in curves if len(c) >= 3 and abs(signed_area(c)) > min_area]
@@ -260,6 +270,54 @@ def _chains(sequence, n_points):
     cuts = np.append(marks - marks[0], len(rotated))
     closed = np.append(rotated, rotated[0])
     return [closed[a: b + 1] for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+
+def _right_windings(points, next_index, offsets):
+    """The winding number just right of every stacked curve, beside its longest edge (as
+    :func:`_right_probes` for the closed chains of curves without crossings).
+
+    It is 0 for a positive curve that lies in no other curve: only holes and curves whose box
+    lies in another's are probed (in a segmentation, the holes and the islands in them).
+    """
+    n_curves = len(offsets) - 1
+    out = np.zeros(n_curves, dtype=np.int64)
+    suspect = curve_areas(points, next_index, offsets) <= 0
+    low = np.minimum.reduceat(points, offsets[:-1], axis=0)
+    high = np.maximum.reduceat(points, offsets[:-1], axis=0)
+    for start in range(0, n_curves, _BOX_BLOCK):  # blocks of curves: bounded memory
+        block = slice(start, start + _BOX_BLOCK)
+        inside = np.all(low[None, :] <= low[block, None], axis=2) & np.all(
+            high[None, :] >= high[block, None], axis=2)
+        inside[np.arange(inside.shape[0]), np.arange(start, start + inside.shape[0])] = False
+        suspect[block] |= inside.any(axis=1)
+    if suspect.any():
+        edges = np.flatnonzero(np.repeat(suspect, np.diff(offsets)))
+        owner = np.repeat(np.arange(n_curves), np.diff(offsets))[edges]
+        probes = _beside_longest(points[edges], points[next_index[edges]], owner)
+        out[suspect] = winding_number(points, next_index, probes, offsets)
+    return out
+
+
+def _right_probes(chains, nodes):
+    """A point just right of each chain (:func:`_beside_longest`)."""
+    starts = np.concatenate([c[:-1] for c in chains])
+    ends = np.concatenate([c[1:] for c in chains])
+    owner = np.repeat(np.arange(len(chains)), [len(c) - 1 for c in chains])
+    return _beside_longest(nodes[starts], nodes[ends], owner)
+
+
+def _beside_longest(starts, ends, owner):
+    """For each owner (sorted ids) of segments ``starts -> ends``: a point just right of the
+    middle of its longest segment, so that a segment of (nearly) zero length, as clipping to the
+    border makes, never places it on the curves themselves."""
+    direction = ends - starts
+    length = np.hypot(direction[:, 0], direction[:, 1])
+    order = np.lexsort((-length, owner))
+    longest = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]  # the first of each owner
+    direction, length = direction[longest], np.maximum(length[longest], 1e-300)
+    normal = np.column_stack([direction[:, 1], -direction[:, 0]]) / length[:, None]
+    middle = starts[longest] + 0.5 * direction
+    return middle + normal * np.minimum(1e-6, 1e-3 * length)[:, None]
 
 
 def _link(kept, nodes, n_points):

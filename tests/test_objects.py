@@ -321,3 +321,63 @@ def test_n_regions_objects_are_pieces_of_each_class():
     assert by_class[2] == pytest.approx(np.pi * 14**2, rel=0.05)  # class 2: the brighter one
     assert by_class[1] == pytest.approx(np.pi * 13**2, rel=0.05)
     assert res.labels[40, 40] != res.labels[40, 66]
+
+
+# ---- the cost of splitting ---------------------------------------------------------------------
+
+
+def test_thousands_of_small_watershed_parts_merge_into_one():
+    # A speckled inside: a local maximum of the distance in every 3 x 3 pixels, all below
+    # MIN_SPLIT_RADIUS, so every part merges whatever its neck and the region is one part.  With
+    # 2551 parts this took 28 s when every merge rescanned every border (O(parts x borders)); the
+    # queued merges take ~0.1 s.
+    import scipy.ndimage
+    import skimage.morphology
+
+    from activecontour.objects import MIN_SPLIT_RADIUS, NECK_RATIO, _neck_parts
+
+    n = 150
+    region = np.pad(np.ones((n, n), dtype=bool), 1)
+    r, c = np.mgrid[0: n + 2, 0: n + 2] * (2 * np.pi / 3)
+    distance = np.where(region, 1.0 + 0.5 * np.cos(r) * np.cos(c) ** 2 + 0.25 * np.cos(c), 0.0)
+    assert distance.max() < MIN_SPLIT_RADIUS
+    assert scipy.ndimage.label(skimage.morphology.local_maxima(distance) & region)[1] > 2000
+    parts = _neck_parts(region, np.full(region.shape, -1.0), distance, NECK_RATIO, MIN_SPLIT_RADIUS)
+    np.testing.assert_array_equal(parts, region)
+
+
+def test_merged_part_shapes_are_those_of_regionprops():
+    # the blob test of merged parts adds up moments and merges hulls: the solidity and the axes
+    # of regionprops on the merged pixels
+    import scipy.ndimage
+
+    from activecontour.objects import MAX_PART_ASPECT, MIN_PART_SOLIDITY, _PartShapes
+
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        parts, count = scipy.ndimage.label(rng.random((30, 40)) < 0.6)
+        members = {k: [k] for k in range(1, count + 1)}
+        shapes = _PartShapes(parts, members)
+        for gone in rng.permutation(np.arange(2, count + 1))[: count // 2]:
+            members[1] += members.pop(int(gone))
+            shapes.merge(1, int(gone))
+        for root, numbers in members.items():
+            (props,) = skimage.measure.regionprops(np.isin(parts, numbers).astype(np.uint8))
+            blob, solidity = shapes.blob(root)
+            assert solidity == props.solidity
+            major, minor = props.axis_major_length, props.axis_minor_length
+            assert blob == (solidity >= MIN_PART_SOLIDITY and major <= MAX_PART_ASPECT * max(minor, 1e-9))
+
+
+def test_a_constant_image_has_no_contrast_to_split():
+    # the least contrast of a split is 0 there: a range of 0 must not reach Otsu (whose upper
+    # class is then empty: a mean of nothing)
+    import warnings
+
+    from activecontour.objects import split_touching
+
+    square = [ac.rectangle((1.5, 1.5), (18.5, 18.5))]  # 289 px: enough for two pieces
+    labels = label_image([square], (20, 20))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(split_touching([square], labels, np.zeros((20, 20)))) == 1

@@ -65,6 +65,17 @@ def test_nested_curves_do_not_cross():
     assert topology.repair(*stack_curves([outer, inner])) is None
 
 
+def test_repair_drops_curves_turned_over_without_a_crossing():
+    # no edges cross, but a positive curve inside a positive one bounds w = 2 and a negative one
+    # alone w = -1: neither separates {w > 0} from the rest, so only the outer curve is left
+    outer = ac.circle((50.0, 50.0), 20.0, 300)
+    nested = ac.circle((50.0, 50.0), 8.0, 120)
+    alone = ac.circle((10.0, 10.0), 3.0, 40)[::-1]
+    for extra in (nested, alone):
+        (kept,) = topology.repair(*stack_curves([outer, extra]))
+        np.testing.assert_array_equal(kept, outer)
+
+
 def test_winding_number_counts_orientation():
     outer = ac.circle((0.0, 0.0), 10.0, 100)
     hole = ac.circle((0.0, 0.0), 4.0, 50)[::-1]

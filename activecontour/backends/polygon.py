@@ -162,8 +162,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     shape = model.shape
     # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
     # exactly: resampling it would cut its corners and move it off its minimum
-    geometry = stack_curves([c if _healthy(c, spacing) else resample(c, spacing)
-                             for c in initial_curves(init, shape, model.image, params.mu)])
+    geometry = _resampled(initial_curves(init, shape, model.image, params.mu), spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
@@ -200,7 +199,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
             break
         if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
             last_remesh = k
-            remeshed = stack_curves([resample(c, spacing) for c in _split(*new_geometry[::2])])
+            remeshed = _resampled(_split(*new_geometry[::2]), spacing, every=True)
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
@@ -253,7 +252,7 @@ def _global_move(model, params, geometry, energy, spacing):
     chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
     if not chosen:
         return None
-    moved = stack_curves([c if _healthy(c, spacing) else resample(c, spacing) for c in chosen])
+    moved = _resampled(chosen, spacing)
     new = evaluate(model, *moved[:2], params, gradient=True)
     return (moved, new) if new.energy < energy else None
 
@@ -332,13 +331,15 @@ class _Flow:
     def _settle(self, curves):
         """Stack curves, resolving any overlap, and evaluate them."""
         geometry = stack_curves(curves)
+        # a seed clipped to the border can run along a curve's stretch of it: edges that coincide,
+        # which the repair cannot resolve (see step)
+        if topology.border_overlap(*geometry[:2], self.bounds):
+            return None
         repaired = topology.repair(*geometry, min_area=self.min_area)
         if repaired is not None:
             if not repaired:
                 return None
             geometry = stack_curves(repaired)
-        if topology.border_overlap(*geometry[:2], self.bounds):
-            return None
         new = evaluate(self.model, *geometry[:2], self.params, gradient=True)
         return (geometry, new) if np.isfinite(new.energy) else None
 
@@ -350,7 +351,10 @@ class _Flow:
         merges or opens a hole is accepted only if the repaired curves satisfy the same descent
         condition as any other step.  A trial that runs two edges along the same stretch of the
         image border (:func:`activecontour.topology.border_overlap`) is no region: it is
-        rejected as a step too long.
+        rejected as a step too long, before the repair: the repair keeps an edge by the winding
+        number on its right, taking the one on its left to be one more, which an edge that another
+        covers does not separate (such a trial once ended as a hole outside every curve, a region
+        of winding number -1 along the border).
         """
         points, next_index, offsets = geometry
         # Vertices on the image border that the force pushes out of the image cannot follow it:
@@ -375,13 +379,14 @@ class _Flow:
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
-            candidate = (trial, next_index, offsets)
-            repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
-            if repaired is not None:
-                candidate = stack_curves(repaired) if repaired else None
             # clipping can run two pieces of curve along the same stretch of the border
-            if candidate is not None and predicted < 0 and not topology.border_overlap(
-                    candidate[0], candidate[1], self.bounds):
+            candidate = None
+            if predicted < 0 and not topology.border_overlap(trial, next_index, self.bounds):
+                candidate = (trial, next_index, offsets)
+                repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
+                if repaired is not None:
+                    candidate = stack_curves(repaired) if repaired else None
+            if candidate is not None:
                 new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
                 if new.energy <= current.energy + _ARMIJO * predicted:
                     if accelerated is None:
@@ -520,6 +525,17 @@ class _Memory:
 def _dot(a, b):
     """``a . b`` of two long vectors without BLAS (its threads cost more than the product here)."""
     return float(np.einsum("i,i->", a, b))
+
+
+def _resampled(curves, spacing, every=False):
+    """Curves resampled at equal arc length ``spacing`` (with ``every``, else those whose vertices
+    are not about that far apart already), stacked.  A chord of the resampling can cut across a
+    narrow neck or a notch and cross the curve: the result is then the boundary of {w > 0}
+    (:func:`activecontour.topology.repair`), so that its energy is that of a region."""
+    geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
+                             for c in curves])
+    repaired = topology.repair(*geometry)
+    return geometry if repaired is None else stack_curves(repaired)
 
 
 def _unhealthy(geometry, spacing):

@@ -122,6 +122,10 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         ``energy`` (6.38) of the contours by the common evaluator, ``energies`` the same energy
         before the first and after every iteration (not increasing), and ``phi`` the final
         signed distance (clipped to the band; ``-band`` everywhere when the result is empty).
+        The first energy is that of the start as the level set holds it: the zero set of the
+        start's phi (a drawn curve through pixel centres, sampled on the grid), which the
+        scheme starts from; the drawn curve's own (6.38) can be lower, and with
+        ``max_num_iter=0`` the result is that zero set, not the curve.
 
     Raises
     ------
@@ -177,15 +181,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             problem.recycle(trial.phi)
             step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
-            if not smooth_force:
-                if rechecks < _RECHECKS:
-                    rechecks, pending, smooth_force = rechecks + 1, 4, True
-                    step = ceiling = first_step
-                    stage_start, streak = len(moves), 0
-                    continue
-                status = 4
-                break
-            if pending is not None and len(moves) == stage_start:
+            if smooth_force and pending is not None and len(moves) == stage_start:
                 status = pending  # the recheck found no descent: the end stands
                 break
             evaluation = None
@@ -207,7 +203,20 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
                     status = 2
                     break
         window = moves[stage_start:][-_WINDOW:]
-        if smooth_force:
+        ended = None  # the end status of the unsmoothed stage, when it ends here
+        if not smooth_force:
+            if evaluation is None:
+                ended = 4  # no descent down to max_backtracks halvings: stationary
+            elif len(window) == _WINDOW and np.mean(window) < tol:
+                ended = 0  # converged
+        if ended is not None:
+            if rechecks >= _RECHECKS:
+                status = ended
+                break
+            rechecks, pending, smooth_force = rechecks + 1, ended, True
+            step = ceiling = first_step
+            stage_start, streak = len(moves), 0
+        elif smooth_force:
             # a smoothed-force stage has settled when Gamma moves by less than a small fraction
             # of the step (or 10 tol) per iteration; its fixed point is biased by the smoothing
             # of width sqrt(tau mu), so go on with a 4x smaller step, then unsmoothed
@@ -224,14 +233,6 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
             elif grow or streak >= 2:
                 # accepted at once: speed up, doubling until the first rejection
                 step = min(step * (2.0 if grow else 1.25), ceiling)
-        elif len(window) == _WINDOW and np.mean(window) < tol:
-            if rechecks < _RECHECKS:
-                rechecks, pending, smooth_force = rechecks + 1, 0, True
-                step = ceiling = first_step
-                stage_start, streak = len(moves), 0
-                continue
-            status = 0
-            break
         elif streak >= 2:
             step = min(1.25 * step, settings["dt_min"])
     phi = state.phi
