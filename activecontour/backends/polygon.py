@@ -37,7 +37,7 @@ import numpy as np
 
 from activecontour import fem, topology
 from activecontour.backends.options import option, parse_options
-from activecontour.curve import edge_lengths, resample
+from activecontour.curve import edge_lengths, resample, signed_area
 from activecontour.energy import evaluate, stack_curves
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
@@ -376,6 +376,7 @@ class _Flow:
             v = accelerated
             dt = min(1.0, self.max_step / np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2)))
         dt = min(dt, _size_limit(geometry, v))
+        areas = topology.curve_areas(*geometry)  # the iterate bounds a region: see repair
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
@@ -383,7 +384,8 @@ class _Flow:
             candidate = None
             if predicted < 0 and not topology.border_overlap(trial, next_index, self.bounds):
                 candidate = (trial, next_index, offsets)
-                repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area)
+                repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area,
+                                           before=areas)
                 if repaired is not None:
                     candidate = stack_curves(repaired) if repaired else None
             if candidate is not None:
@@ -534,7 +536,7 @@ def _resampled(curves, spacing, every=False):
     (:func:`activecontour.topology.repair`), so that its energy is that of a region."""
     geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
                              for c in curves])
-    repaired = topology.repair(*geometry)
+    repaired = topology.repair(*geometry, before=[signed_area(c) for c in curves])
     return geometry if repaired is None else stack_curves(repaired)
 
 
