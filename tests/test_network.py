@@ -248,3 +248,31 @@ def test_n_region_results_obey_the_invariants(backend, seed, rows, cols, kind, n
         assert all(len(curve) >= 3 and shapely.LinearRing(curve).is_simple for curve in curves)
         if k:
             assert np.array_equal(rasterize(curves, image.shape), res.classes == k)
+
+
+@pytest.mark.slow
+def test_random_crops_of_real_images_obey_the_invariants():
+    # 40 crops of scikit-image's pictures, 3-5 regions, gray or colour, several mu, default start
+    import shapely
+    import skimage.data
+
+    rng = np.random.default_rng(1)
+    names = ["camera", "coins", "page", "text", "moon", "cell", "astronaut", "chelsea",
+             "immunohistochemistry", "hubble_deep_field"]
+    for _ in range(40):
+        picture = getattr(skimage.data, names[rng.integers(len(names))])()
+        rows, cols = int(rng.integers(24, 120)), int(rng.integers(24, 120))
+        r0, c0 = int(rng.integers(0, picture.shape[0] - rows)), int(rng.integers(0, picture.shape[1] - cols))
+        crop = picture[r0:r0 + rows, c0:c0 + cols]
+        n_regions = int(rng.integers(3, 6))
+        color = "vector" if crop.ndim == 3 and rng.random() < 0.5 else "gray"
+        mu = "auto" if rng.random() < 0.7 else float(rng.choice([0.0, 0.005, 0.05]))
+        res = ac.segment(crop, n_regions=n_regions, mu=mu, color=color)
+        assert res.success, res.message
+        assert res.energy == pytest.approx(
+            ac.chan_vese_energy(crop, regions=res.class_contours, mu=res.mu, color=color), rel=1e-9, abs=1e-9)
+        assert np.all(np.diff(res.energies) <= 1e-9 * np.maximum(np.abs(res.energies[1:]), 1.0))
+        for k, curves in enumerate(res.class_contours):
+            assert all(len(curve) >= 3 and shapely.LinearRing(curve).is_simple for curve in curves)
+            if k:
+                assert np.array_equal(rasterize(curves, crop.shape[:2]), res.classes == k)
