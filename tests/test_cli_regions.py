@@ -70,13 +70,14 @@ def test_two_regions_by_default_write_no_classes_image_and_say_nothing(nested, t
     assert np.array_equal(read_label_image(out / "rings_classes.png"), (mask > 0).astype(int))
 
 
-def test_fit_reaches_the_library(nested, tmp_path, capsys):
+@pytest.mark.parametrize("option, name, value", [("--fit", "fit", "smooth"), ("--noise", "noise", "poisson")])
+def test_model_options_reach_the_library(nested, tmp_path, capsys, option, name, value):
     path, _ = nested
     out = tmp_path / "out"
-    status, _, stderr = run(capsys, "segment", path, "-o", out, "--fit", "smooth")
+    status, _, stderr = run(capsys, "segment", path, "-o", out, option, value)
     assert status == 0, stderr
     meta = json.loads((out / "rings_contours.json").read_text())["metadata"]
-    assert meta["parameters"]["fit"] == "smooth"
+    assert meta["parameters"][name] == value
 
 
 @pytest.mark.parametrize(
@@ -105,14 +106,6 @@ def test_help_lists_regions_and_fit(capsys):
     assert "--regions K|auto" in stdout and "--fit {constant,smooth}" in stdout
     assert "--noise {gaussian,poisson}" in stdout
 
-
-def test_noise_reaches_the_library(nested, tmp_path, capsys):
-    path, _ = nested
-    out = tmp_path / "out"
-    status, _, stderr = run(capsys, "segment", path, "-o", out, "--noise", "poisson")
-    assert status == 0, stderr
-    meta = json.loads((out / "rings_contours.json").read_text())["metadata"]
-    assert meta["parameters"]["noise"] == "poisson"
 
 
 def test_the_overlay_draws_each_region_in_its_own_colour(nested, tmp_path, capsys):

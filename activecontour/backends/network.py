@@ -410,9 +410,10 @@ class Network:
                                           (np.arange(0, 2 * count + 1, 2), np.array([0, count])))[0]
         return bool(shapely.is_simple(lines))
 
-    def admissible(self, before, after):
+    def admissible(self, before, after, orientation=None):
         """No segment reversed or collapsed, every vertex in the image domain (cheap tests before
-        the energy; :meth:`simple` is the exact one)."""
+        the energy; :meth:`simple` is the exact one).  ``orientation``: the signs of the faces'
+        areas at ``before``, when the caller has them."""
         a, b = self.start, self.end
         old, new = before[b] - before[a], after[b] - after[a]
         kept = np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old)
@@ -421,7 +422,8 @@ class Network:
                   & (after[:, 1] >= -0.5) & (after[:, 1] <= n - 0.5))
         if not (kept.all() and inside.all()):
             return False
-        return bool(np.all(np.sign(self.face_areas(after)) == np.sign(self.face_areas(before))))
+        orientation = np.sign(self.face_areas(before)) if orientation is None else orientation
+        return bool(np.all(np.sign(self.face_areas(after)) == orientation))
 
 
 def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callback):
@@ -555,10 +557,10 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_last is None else min(2.0 * dt_last, _MAX_STEP / spread)
-            crossed = None
+            crossed, orientation = None, np.sign(network.face_areas(nodes))
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
-                if network.admissible(nodes, trial):
+                if network.admissible(nodes, trial, orientation):
                     candidate = self.evaluate(network, trial)
                     if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                         if network.simple(trial):
