@@ -160,8 +160,17 @@ def border_overlap(points, next_index, bounds):
     Vertices clipped to the domain's border can run along it twice, forwards and back, or in the
     same direction: collinear overlaps, which :func:`crossings` (proper crossings only) does not
     see, and which make a winding number of 2 (a double-counted strip) or a zero-width slit.  A
-    region's boundary covers every point of the border at most once.
+    region's boundary covers every point of the border at most once, and each corner at most once.
     """
+    # passing a corner twice (two vertices clipped onto it) makes a curve that touches itself
+    # there, a lobe of which can be turned over without any crossing
+    previous = np.empty_like(next_index)
+    previous[next_index] = np.arange(len(next_index))
+    for corner_r in bounds[:, 0]:
+        for corner_c in bounds[:, 1]:
+            at = (points[:, 0] == corner_r) & (points[:, 1] == corner_c)
+            if np.count_nonzero(at & ~at[previous]) > 1:  # arrivals at the corner
+                return True
     start, end = points, points[next_index]
     for axis in (0, 1):
         along = 1 - axis

@@ -182,6 +182,15 @@ REGRESSIONS = {
         "1111110101111", "1111011101111", "1100110011011"),
         {"mu": "auto", "omega": 0.0, "lambda_in": 1.0, "lambda_out": 1.0, "normalize": "range",
          "max_num_iter": 1}),
+    # Two vertices clipped onto the domain's bottom-right corner: a curve touching itself there,
+    # one lobe turned over with no crossing; the result's region was 0.33 above the iterate.
+    "corner passed twice": ("polygon", np.array(
+        [[0, 0, 0, 0, 163, 163, 163, 163, 0, 0, 0, 0, 163]] * 4
+        + [[163, 163, 163, 163, 0, 0, 0, 0, 163, 163, 163, 163, 0]] * 4
+        + [[0, 0, 0, 0, 163, 163, 163, 163, 0, 0, 0, 0, 163]] * 4
+        + [[163, 163, 163, 163, 0, 0, 0, 0, 163, 163, 163, 163, 0]], dtype=np.uint8), None,
+        {"mu": "auto", "omega": -0.2, "lambda_in": 0.5, "lambda_out": 2.0, "normalize": "range",
+         "max_num_iter": 5}),
 }
 
 
