@@ -553,7 +553,10 @@ class _Flow:
             if np.sum(force * normal) < 0:  # still a descent direction (it nearly always is)
                 velocity = normal
             slope = float(np.sum(force * velocity))
-            spread = np.sqrt(np.mean(np.sum(velocity[network.free[0] | network.free[1]] ** 2, axis=1)))
+            moving = network.free[0] | network.free[1]
+            if not moving.any():  # no interface left inside the image: nothing can move
+                return 0, n_iter
+            spread = np.sqrt(np.mean(np.sum(velocity[moving] ** 2, axis=1)))
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_last is None else min(2.0 * dt_last, _MAX_STEP / spread)
