@@ -14,11 +14,8 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport ceil, floor, sqrt
-from libc.stdlib cimport free, malloc
+from libc.stdlib cimport calloc, free, malloc
 
-#: rows between two stored rows of the antiderivative tables (see :func:`build_tables`)
-ANCHOR_ROWS = 8
-cdef Py_ssize_t _ANCHOR = 8
 cdef Py_ssize_t _POLL_ROWS = 256
 
 
@@ -36,8 +33,8 @@ cdef inline double _padded(const double[:, :, ::1] values, Py_ssize_t a, Py_ssiz
     return values[_clamp(a - 1, values.shape[0]), _clamp(j - 1, values.shape[1]), ch]
 
 
-def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, double[::1] total1,
-                 double[::1] total2):
+def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_ssize_t anchor,
+                 double[::1] total1, double[::1] total2):
     """One pass over the image: the row-antiderivative tables and the domain totals.
 
     In padded coordinates ``(u, v) = (r + 1, c + 1)`` (the image padded by one replicated pixel,
@@ -46,9 +43,10 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, dou
         t1[a, j] = int_0^a P(s, j) ds,  t2[a, j] = int_0^a P(s, j)^2 ds,
         t3[a, j] = int_0^a P(s, j) P(s, j + 1) ds.
 
-    Only every ``ANCHOR_ROWS``-th row ``a = k ANCHOR_ROWS`` is stored, ``table[k, j, ch] = (t1, t2,
-    t3)``; :func:`edge_integrals` adds the few increments from there to the row it needs, from the
-    image itself.  That keeps the tables at 3/8 of a float64 per pixel and channel, in float64:
+    Only every ``anchor``-th row ``a = k anchor`` is stored, ``table[k, j, ch] = (t1, t2, t3)``
+    (``table`` has ``(M + 1) // anchor + 1`` rows); :func:`edge_integrals` adds the few increments
+    from there to the row it needs, from the image itself.  ``anchor = 8`` keeps the tables at 3/8 of
+    a float64 per pixel and channel, ``anchor = 1`` (3 float64) saves those increments.  Float64:
     t1 grows to M, and float32 would carry an absolute error of ~M * 6e-8 into every boundary
     integral, far above the rounding level that makes (6.41) the exact gradient of (6.38).
 
@@ -89,11 +87,11 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, dou
                         acc[index + 1] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
                         acc[index + 2] += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo
                                            + 2.0 * p_hi * q_hi) / 6.0
-            if (a + 1) % _ANCHOR == 0:
+            if (a + 1) % anchor == 0:
                 for j in range(width):
                     for ch in range(channels):
                         for index in range(3):
-                            table[(a + 1) // _ANCHOR, j, ch, index] = acc[(j * channels + ch) * 3 + index]
+                            table[(a + 1) // anchor, j, ch, index] = acc[(j * channels + ch) * 3 + index]
         for ch in range(channels):
             table[:, width - 1, ch, 2] = 0.0  # t3 of the last column has no right neighbour
         for a in range(m):  # domain totals, image row by image row
@@ -129,25 +127,31 @@ cdef (double, double) _row_forms(const double[:, :, ::1] values, Py_ssize_t a, P
 
 
 cdef struct Cell:
-    # interpolation cell [a, a + 1] x [j, j + 1]: corner values, and the antiderivatives at row a
-    double p0, q0, dp, dq
-    double t1, t2, t3   # column j
-    double r1, r2       # column j + 1
+    # interpolation cell [a, a + 1] x [j, j + 1] in local coordinates (t, w) in [0, 1]^2: the image
+    # I = (1 - w) P(t) + w Q(t), P = p0 + t dp on column j and Q = q0 + t dq on column j + 1, and the
+    # row-antiderivatives from padded row 0 as polynomials in t (Horner coefficients):
+    #   int P = t1 + t (p0 + t hp),               int Q = r1 + t (q0 + t hq),
+    #   int P^2 = t2 + t (pp1 + t (pp2 + t pp3)),  int Q^2 = r2 + t (qq1 + t (qq2 + t qq3)),
+    #   int P Q = t3 + t (pq1 + t (pq2 + t pq3))
+    double p0, q0, dp, dq, hp, hq, t1, r1
+    double t2, pp1, pp2, pp3
+    double r2, qq1, qq2, qq3
+    double t3, pq1, pq2, pq3
 
 
-cdef inline void _cell(const double[:, :, ::1] values, const double[:, :, :, ::1] table,
+cdef inline void _cell(const double[:, :, ::1] values, const double[:, :, :, ::1] table, Py_ssize_t anchor,
                        Py_ssize_t a, Py_ssize_t j, Py_ssize_t ch, Cell *cell) noexcept nogil:
-    """The cell's data: the stored row below a, plus the increments from there up to a."""
-    cdef Py_ssize_t k = a // _ANCHOR, i
+    """The cell's data: the stored row at or below a, plus the increments from there up to a."""
+    cdef Py_ssize_t k = a // anchor, i
     cdef double p_lo, q_lo, p_hi, q_hi
     cell.t1 = table[k, j, ch, 0]
     cell.t2 = table[k, j, ch, 1]
     cell.t3 = table[k, j, ch, 2]
     cell.r1 = table[k, j + 1, ch, 0]
     cell.r2 = table[k, j + 1, ch, 1]
-    p_lo = _padded(values, k * _ANCHOR, j, ch)
-    q_lo = _padded(values, k * _ANCHOR, j + 1, ch)
-    for i in range(k * _ANCHOR, a):
+    p_lo = _padded(values, k * anchor, j, ch)
+    q_lo = _padded(values, k * anchor, j + 1, ch)
+    for i in range(k * anchor, a):
         p_hi = _padded(values, i + 1, j, ch)
         q_hi = _padded(values, i + 1, j + 1, ch)
         cell.t1 += 0.5 * (p_lo + p_hi)
@@ -159,33 +163,67 @@ cdef inline void _cell(const double[:, :, ::1] values, const double[:, :, :, ::1
     cell.p0, cell.q0 = p_lo, q_lo
     cell.dp = _padded(values, a + 1, j, ch) - p_lo
     cell.dq = _padded(values, a + 1, j + 1, ch) - q_lo
+    cell.hp, cell.hq = 0.5 * cell.dp, 0.5 * cell.dq
+    cell.pp1, cell.pp2, cell.pp3 = cell.p0 * cell.p0, cell.p0 * cell.dp, cell.dp * cell.dp / 3.0
+    cell.qq1, cell.qq2, cell.qq3 = cell.q0 * cell.q0, cell.q0 * cell.dq, cell.dq * cell.dq / 3.0
+    cell.pq1 = cell.p0 * cell.q0
+    cell.pq2 = 0.5 * (cell.p0 * cell.dq + cell.q0 * cell.dp)
+    cell.pq3 = cell.dp * cell.dq / 3.0
 
 
 def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
-                   const double[:, :, ::1] values, const double[:, :, :, ::1] table, int stage,
-                   const double[::1] linear, const double[::1] square, double constant, double mu,
-                   double[::1] s1, double[::1] s2, double[::1] sums, double[:, ::1] load):
-    """Exact integrals along every edge, split where it crosses a grid line.
+                   const double[:, :, ::1] values, const double[:, :, :, ::1] table, Py_ssize_t anchor,
+                   bint moments, double[::1] s1, double[::1] s2, double[::1] sums, double[:, :, ::1] parts):
+    """Exact integrals along every edge, split where it crosses a grid line, in one pass.
 
-    ``stage`` 0 accumulates the moments ``closed integral of G dc`` into s1, s2 and the signed area
-    and length into ``sums``; stage 1 adds the load (6.41) into ``load``, for the integrand
-    ``g(I) = constant + sum_ch (linear[ch] I_ch + square[ch] I_ch^2)``: the difference of the
-    quadratic forms of the regions on the two sides of the curve
-    (:class:`activecontour.models.base.QuadraticForm`), inside minus outside.  Each piece between grid
-    lines lies in one interpolation cell [a, a + 1] x [j, j + 1], read once: there, with local
-    coordinates (t, w), I is bilinear and its row-antiderivatives are the table values at row a
-    plus the exact integral from a to u, so the integrands are polynomials of degree <= 5 in the
-    edge parameter and 3-point Gauss-Legendre is exact.
+    With ``moments`` it adds the moments ``closed integral of G dc`` (Green's theorem, the region
+    integrals of I and I^2 per channel) into s1, s2 and the signed area and length into ``sums``.
+    With ``parts`` of shape (K, 2, 2 + 2C) (a (0, 2, 0) array for none) it adds the derivatives of
+    the terms of (6.38) with respect to every vertex X_j, component d, whose combination with the
+    weights ``(mu, constant, linear_1..C, square_1..C)`` of a quadratic form g
+    (:class:`activecontour.models.base.QuadraticForm`) is the load (6.41) (:func:`combine_load`):
+
+        parts[j, d, 0]          = (tau_{j-1} - tau_j)_d      (the derivative of the length)
+        parts[j, d, 1]          = int_Gamma phi_j nu_d ds
+        parts[j, d, 2 + ch]     = int_Gamma I_ch phi_j nu_d ds
+        parts[j, d, 2 + C + ch] = int_Gamma I_ch^2 phi_j nu_d ds.
+
+    Each piece between grid lines lies in one interpolation cell [a, a + 1] x [j, j + 1]: there,
+    with local coordinates (t, w), I is bilinear and its row-antiderivatives are the table values at
+    row a plus the exact integral from a to u, so the integrands are polynomials of degree <= 5 in
+    the edge parameter and 3-point Gauss-Legendre is exact.  The table stores every ``anchor``-th
+    padded row (:func:`build_tables`); a cell is read once for consecutive pieces in it (the end of
+    one edge and the start of the next).
     """
     cdef Py_ssize_t channels = values.shape[2], rows = values.shape[0], cols = values.shape[1]
-    cdef Py_ssize_t e, b, ch, g, a, j, count = points.shape[0]
+    cdef Py_ssize_t e, b, ch, g, a, j, p, count = points.shape[0], last_a = -1, last_j = -1
+    cdef Py_ssize_t n_parts = parts.shape[2] if parts.shape[0] > 0 else 0
     cdef double nodes[3]
     cdef double weights[3]
-    cdef double density[3]
-    cdef double u0, v0, du, dv, k_u, k_v, at_start, at_end, t_prev, t_u, t_v, t_next, span, t_mid
-    cdef double t_edge, t, w, w0, intensity, half, third, g1, g2, b_pp, b_qq, b_pq, weight, length
-    cdef double tangent_r, tangent_c, step_u, step_v
-    cdef Cell cell
+    cdef double at_t[3]
+    cdef double to_start[3]
+    cdef double to_end[3]
+    cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid
+    cdef double t, w, w0, intensity, g1, g2, weight, length, area = 0.0, total_length = 0.0
+    cdef double tangent_r, tangent_c, step_u, step_v, inverse_u, inverse_v
+    cdef Cell *cell
+    cdef Cell *cells = <Cell *> malloc(channels * sizeof(Cell))
+    cdef double *acc = <double *> calloc(2 * channels, sizeof(double))  # int I, int I^2
+    cdef double *at_start = <double *> malloc((n_parts + 1) * sizeof(double))
+    cdef double *at_end = <double *> malloc((n_parts + 1) * sizeof(double))
+    if cells == NULL or at_start == NULL or at_end == NULL or acc == NULL:
+        free(acc)
+        free(cells)
+        free(at_start)
+        free(at_end)
+        raise MemoryError()
+    if n_parts and (parts.shape[0] != count or parts.shape[1] != 2 or n_parts != 2 + 2 * channels):
+        free(acc)
+        free(cells)
+        free(at_start)
+        free(at_end)
+        raise ValueError(f"parts must have shape ({count}, 2, {2 + 2 * channels}), got "
+                         f"({parts.shape[0]}, {parts.shape[1]}, {parts.shape[2]})")
     nodes[0], nodes[1], nodes[2] = 0.5 - 0.5 * sqrt(0.6), 0.5, 0.5 + 0.5 * sqrt(0.6)
     weights[0], weights[1], weights[2] = 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0
     with nogil:
@@ -193,75 +231,107 @@ def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index
             b = next_index[e]
             u0, v0 = points[e, 0] + 1.0, points[e, 1] + 1.0
             du, dv = points[b, 0] + 1.0 - u0, points[b, 1] + 1.0 - v0
+            inverse_u = 1.0 / du if du != 0.0 else 0.0
+            inverse_v = 1.0 / dv if dv != 0.0 else 0.0
             # next grid lines in the direction of travel
             step_u = 1.0 if du > 0 else -1.0
             step_v = 1.0 if dv > 0 else -1.0
             k_u = floor(u0) + 1.0 if du > 0 else ceil(u0) - 1.0
             k_v = floor(v0) + 1.0 if dv > 0 else ceil(v0) - 1.0
-            at_start, at_end = 0.0, 0.0
+            for p in range(n_parts):
+                at_start[p] = 0.0
+                at_end[p] = 0.0
             t_prev = 0.0
             while True:
-                t_u = (k_u - u0) / du if du != 0.0 else 2.0
-                t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
+                t_u = (k_u - u0) * inverse_u if du != 0.0 else 2.0
+                t_v = (k_v - v0) * inverse_v if dv != 0.0 else 2.0
                 t_next = min(t_u, t_v, 1.0)
                 span = t_next - t_prev
                 if span > 0.0:
                     t_mid = t_prev + 0.5 * span
                     a = <Py_ssize_t> min(max(floor(u0 + t_mid * du), 0.0), <double> rows)
                     j = <Py_ssize_t> min(max(floor(v0 + t_mid * dv), 0.0), <double> cols)
-                    density[0] = constant
-                    density[1] = constant
-                    density[2] = constant
+                    if a != last_a or j != last_j:
+                        for ch in range(channels):
+                            _cell(values, table, anchor, a, j, ch, &cells[ch])
+                        last_a, last_j = a, j
+                    for g in range(3):
+                        at_t[g] = t_prev + span * nodes[g]
+                        weight = span * weights[g]
+                        to_start[g] = weight * (1.0 - at_t[g])
+                        to_end[g] = weight * at_t[g]
+                    if n_parts:
+                        for g in range(3):
+                            at_start[1] += to_start[g]
+                            at_end[1] += to_end[g]
                     for ch in range(channels):
-                        _cell(values, table, a, j, ch, &cell)
+                        cell = &cells[ch]
                         for g in range(3):
-                            t_edge = t_prev + span * nodes[g]
-                            t = u0 + t_edge * du - a
-                            w = v0 + t_edge * dv - j
+                            t = u0 + at_t[g] * du - a
+                            w = v0 + at_t[g] * dv - j
                             w0 = 1.0 - w
-                            if stage == 0:
-                                half, third = 0.5 * t * t, t * t * t / 3.0
-                                g1 = (w0 * (cell.t1 + t * cell.p0 + half * cell.dp)
-                                      + w * (cell.r1 + t * cell.q0 + half * cell.dq))
-                                b_pp = (cell.t2 + cell.p0 * cell.p0 * t + 2.0 * cell.p0 * cell.dp * half
-                                        + cell.dp * cell.dp * third)
-                                b_qq = (cell.r2 + cell.q0 * cell.q0 * t + 2.0 * cell.q0 * cell.dq * half
-                                        + cell.dq * cell.dq * third)
-                                b_pq = (cell.t3 + cell.p0 * cell.q0 * t
-                                        + (cell.p0 * cell.dq + cell.q0 * cell.dp) * half
-                                        + cell.dp * cell.dq * third)
-                                g2 = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
+                            if moments:
+                                g1 = (w0 * (cell.t1 + t * (cell.p0 + t * cell.hp))
+                                      + w * (cell.r1 + t * (cell.q0 + t * cell.hq)))
+                                g2 = (w0 * w0 * (cell.t2 + t * (cell.pp1 + t * (cell.pp2 + t * cell.pp3)))
+                                      + 2.0 * w * w0 * (cell.t3 + t * (cell.pq1 + t * (cell.pq2 + t * cell.pq3)))
+                                      + w * w * (cell.r2 + t * (cell.qq1 + t * (cell.qq2 + t * cell.qq3))))
                                 weight = span * weights[g] * dv
-                                s1[ch] += weight * g1
-                                s2[ch] += weight * g2
-                            else:
+                                acc[ch] += weight * g1
+                                acc[channels + ch] += weight * g2
+                            if n_parts:
                                 intensity = w0 * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
-                                density[g] += (linear[ch] + square[ch] * intensity) * intensity
-                    if stage == 1:
-                        for g in range(3):
-                            t_edge = t_prev + span * nodes[g]
-                            weight = span * weights[g] * density[g]
-                            at_start += weight * (1.0 - t_edge)
-                            at_end += weight * t_edge
+                                at_start[2 + ch] += to_start[g] * intensity
+                                at_end[2 + ch] += to_end[g] * intensity
+                                intensity *= intensity
+                                at_start[2 + channels + ch] += to_start[g] * intensity
+                                at_end[2 + channels + ch] += to_end[g] * intensity
                 if t_next >= 1.0:
                     break
-                if t_u <= t_next:
-                    k_u += step_u
-                if t_v <= t_next:
-                    k_v += step_v
+                k_u += step_u * (t_u <= t_next)  # branch-free: which line comes next is a coin toss
+                k_v += step_v * (t_v <= t_next)
                 t_prev = t_next
             length = sqrt(du * du + dv * dv)
-            if stage == 0:
-                sums[0] += 0.5 * ((u0 - 1.0) * (v0 - 1.0 + dv) - (u0 - 1.0 + du) * (v0 - 1.0))
-                sums[1] += length
-            else:
+            if moments:
+                area += 0.5 * ((u0 - 1.0) * (v0 - 1.0 + dv) - (u0 - 1.0 + du) * (v0 - 1.0))
+                total_length += length
+            if n_parts:
                 # nu |e| = (dv, -du): the edge normal (section 4.5.2) times its length
                 tangent_r = du / length if length > 0.0 else 0.0
                 tangent_c = dv / length if length > 0.0 else 0.0
-                load[e, 0] += at_start * dv - mu * tangent_r
-                load[e, 1] += -at_start * du - mu * tangent_c
-                load[b, 0] += at_end * dv + mu * tangent_r
-                load[b, 1] += -at_end * du + mu * tangent_c
+                parts[e, 0, 0] -= tangent_r
+                parts[e, 1, 0] -= tangent_c
+                parts[b, 0, 0] += tangent_r
+                parts[b, 1, 0] += tangent_c
+                for p in range(1, n_parts):
+                    parts[e, 0, p] += at_start[p] * dv
+                    parts[e, 1, p] -= at_start[p] * du
+                    parts[b, 0, p] += at_end[p] * dv
+                    parts[b, 1, p] -= at_end[p] * du
+        if moments:
+            for ch in range(channels):
+                s1[ch] += acc[ch]
+                s2[ch] += acc[channels + ch]
+            sums[0] += area
+            sums[1] += total_length
+    free(acc)
+    free(cells)
+    free(at_start)
+    free(at_end)
+
+
+def combine_load(const double[:, :, ::1] parts, const double[::1] weights, double[:, ::1] load):
+    """``load[j, d] = sum_p weights[p] parts[j, d, p]``: the load (6.41) of the quadratic form
+    with these weights from the parts of :func:`edge_integrals`."""
+    cdef Py_ssize_t j, d, p
+    cdef double total
+    with nogil:
+        for j in range(parts.shape[0]):
+            for d in range(2):
+                total = 0.0
+                for p in range(parts.shape[2]):
+                    total += weights[p] * parts[j, d, p]
+                load[j, d] = total
 
 
 def cyclic_thomas(const double[::1] diagonal, const double[::1] off, const double[:, ::1] rhs,
@@ -325,95 +395,200 @@ def cyclic_thomas(const double[::1] diagonal, const double[::1] off, const doubl
     free(y)
 
 
-cdef inline Py_ssize_t _slot(long long key, long long *keys, Py_ssize_t mask, int shift) noexcept nogil:
-    """Open-addressing slot of ``key`` (its own, or the empty one where it would go): Fibonacci
-    hashing, the top bits of key times 2^64 / golden ratio."""
-    cdef Py_ssize_t slot = <Py_ssize_t> ((<unsigned long long> key * 11400714819323198485ULL) >> shift)
-    while keys[slot] != key and keys[slot] != -1:
-        slot = (slot + 1) & mask
-    return slot
+cdef struct Grid:
+    # square cells of side ``size`` from (low_r, low_c), ``rows`` x ``cols`` of them; the items
+    # filed in cell c are ``items[start[c]:start[c + 1]]``
+    double low_r, low_c, size
+    Py_ssize_t rows, cols
+    Py_ssize_t *start
+    Py_ssize_t *items
 
 
-def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index):
-    """Pairs of non-adjacent crossing edges as a list of ``(e, other, s, t)``, ``e < other``.
+cdef inline Py_ssize_t _cell_of(double x, double low, double size, Py_ssize_t count) noexcept nogil:
+    """The index of the cell of coordinate x (clamped to the grid)."""
+    cdef double k = (x - low) / size
+    if k <= 0.0:
+        return 0
+    if k >= <double> (count - 1):
+        return count - 1
+    return <Py_ssize_t> k
 
-    Spatial hashing: every edge is filed, in a linked list per cell, under the cell of its
-    bounding box's low corner.  Cells are as large as the largest edge extent, so edges whose boxes
-    overlap sit in the same or neighbouring cells; only those pairs are tested.  The occupied cells
-    live in a hash table of about 2 K slots, so a long curve on a large image still costs O(K), not
-    O(K * edges per cell of a fixed grid).
+
+cdef int _file_edges(const double[:, ::1] points, const Py_ssize_t[::1] next_index, double size,
+                     bint rows_only, Grid *grid) noexcept nogil:
+    """File every edge under each cell its bounding box meets (under each band of rows it meets,
+    with ``rows_only``; horizontal edges then under none): a counting sort, O(edges + cells).
+    Returns -1 when out of memory."""
+    cdef Py_ssize_t n = points.shape[0], e, b, r, c, r0, r1, c0, c1, cells, total, position
+    cdef double high_r = points[0, 0], high_c = points[0, 1]
+    grid.low_r, grid.low_c, grid.size = points[0, 0], points[0, 1], size
+    for e in range(n):
+        grid.low_r = min(grid.low_r, points[e, 0])
+        grid.low_c = min(grid.low_c, points[e, 1])
+        high_r = max(high_r, points[e, 0])
+        high_c = max(high_c, points[e, 1])
+    grid.rows = <Py_ssize_t> ((high_r - grid.low_r) / size) + 1
+    grid.cols = 1 if rows_only else <Py_ssize_t> ((high_c - grid.low_c) / size) + 1
+    cells = grid.rows * grid.cols
+    grid.start = <Py_ssize_t *> calloc(cells + 1, sizeof(Py_ssize_t))
+    grid.items = NULL
+    if grid.start == NULL:
+        return -1
+    for e in range(n):  # count the entries of every cell (shifted by one: start[c + 1])
+        b = next_index[e]
+        if rows_only and points[e, 0] == points[b, 0]:
+            continue
+        r0 = _cell_of(min(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
+        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
+        c0 = 0 if rows_only else _cell_of(min(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
+        c1 = 0 if rows_only else _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
+        for r in range(r0, r1 + 1):
+            for c in range(c0, c1 + 1):
+                grid.start[r * grid.cols + c + 1] += 1
+    for c in range(cells):
+        grid.start[c + 1] += grid.start[c]
+    total = grid.start[cells]
+    grid.items = <Py_ssize_t *> malloc(max(total, 1) * sizeof(Py_ssize_t))
+    if grid.items == NULL:
+        free(grid.start)
+        grid.start = NULL
+        return -1
+    for e in range(n):  # fill, in edge order within each cell; start[c] ends as the next cell's start
+        b = next_index[e]
+        if rows_only and points[e, 0] == points[b, 0]:
+            continue
+        r0 = _cell_of(min(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
+        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
+        c0 = 0 if rows_only else _cell_of(min(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
+        c1 = 0 if rows_only else _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
+        for r in range(r0, r1 + 1):
+            for c in range(c0, c1 + 1):
+                position = grid.start[r * grid.cols + c]
+                grid.items[position] = e
+                grid.start[r * grid.cols + c] = position + 1
+    for c in range(cells, 0, -1):
+        grid.start[c] = grid.start[c - 1]
+    grid.start[0] = 0
+    return 0
+
+
+cdef double _cell_size(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
+                       bint rows_only) noexcept nogil:
+    """A cell side for :func:`_file_edges`: the mean edge extent (along the rows, with
+    ``rows_only``), at least what makes about one cell per edge, so the grid has O(edges) cells
+    and each edge meets a few."""
+    cdef Py_ssize_t n = points.shape[0], e, b
+    cdef double extent = 0.0, low_r = points[0, 0], high_r = points[0, 0]
+    cdef double low_c = points[0, 1], high_c = points[0, 1], size
+    for e in range(n):
+        b = next_index[e]
+        low_r, high_r = min(low_r, points[e, 0]), max(high_r, points[e, 0])
+        low_c, high_c = min(low_c, points[e, 1]), max(high_c, points[e, 1])
+        if rows_only:
+            extent += abs(points[b, 0] - points[e, 0])
+        else:
+            extent += max(abs(points[b, 0] - points[e, 0]), abs(points[b, 1] - points[e, 1]))
+    size = extent / n
+    if rows_only:
+        size = max(size, (high_r - low_r) / n)
+    else:
+        size = max(size, sqrt((high_r - low_r) * (high_c - low_c) / n),
+                   ((high_r - low_r) + (high_c - low_c)) / n)
+    # a grid of no extent (every point the same) still needs a positive cell
+    return max(size, 1e-12 * max(1.0, max(abs(low_r), abs(high_r), abs(low_c), abs(high_c))))
+
+
+def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index, Py_ssize_t[::1] first,
+              Py_ssize_t[::1] second, double[::1] s_out, double[::1] t_out):
+    """The pairs of non-adjacent edges that cross properly: ``first[k] < second[k]`` with the
+    crossing at parameter ``s_out[k]`` on the first and ``t_out[k]`` on the second, both in (0, 1).
+
+    Returns the number of pairs; only as many as the output arrays hold are stored (call again
+    with longer ones when the count exceeds them).  The order is the grid's, not sorted.
+
+    Every edge is filed under each cell of a uniform grid that its bounding box meets (cells
+    about the mean edge extent, about one per edge: :func:`_cell_size`); two edges can cross only
+    when their boxes meet, so only edges sharing a cell are tested, each pair once: in the cell
+    of the low corner of the intersection of their boxes.  O(edges) for curves of even spacing,
+    whatever their number.
     """
-    cdef Py_ssize_t n = points.shape[0], e, b, k, f, other, c, d, slot, mask, size = 1
-    cdef int shift = 64
-    cdef long long cell_row, cell_col, key
-    cdef double cell = 1e-9, origin_r, origin_c, r0, r1, u0, u1, q0, q1, denominator, s, t
-    found = []
+    cdef Py_ssize_t n = points.shape[0], capacity = first.shape[0], found = 0
+    cdef Py_ssize_t cell, i, k, e, f, b, d, row, col
+    cdef double r0, r1, u0, u1, q0, q1, denominator, s, t, corner_r, corner_c
+    cdef Grid grid
     if n < 4:
-        return found
-    while size < 2 * n:
-        size *= 2
-        shift -= 1
-    mask = size - 1
-    cdef long long *keys = <long long *> malloc(size * sizeof(long long))
-    cdef Py_ssize_t *head = <Py_ssize_t *> malloc(size * sizeof(Py_ssize_t))
-    cdef Py_ssize_t *following = <Py_ssize_t *> malloc(n * sizeof(Py_ssize_t))
-    cdef long long *row = <long long *> malloc(n * sizeof(long long))
-    cdef long long *column = <long long *> malloc(n * sizeof(long long))
-    try:
-        if keys == NULL or head == NULL or following == NULL or row == NULL or column == NULL:
-            raise MemoryError()
-        origin_r, origin_c = points[0, 0], points[0, 1]
-        for e in range(n):
-            b = next_index[e]
-            origin_r, origin_c = min(origin_r, points[e, 0]), min(origin_c, points[e, 1])
-            for k in range(2):
-                cell = max(cell, abs(points[b, k] - points[e, k]))
-        cell *= 1.0001
-        for slot in range(size):
-            keys[slot] = -1
-        with nogil:
-            for e in range(n):
-                b = next_index[e]
-                row[e] = <long long> ((min(points[e, 0], points[b, 0]) - origin_r) / cell)
-                column[e] = <long long> ((min(points[e, 1], points[b, 1]) - origin_c) / cell)
-                key = row[e] * 4294967296LL + column[e]
-                slot = _slot(key, keys, mask, shift)
-                if keys[slot] == -1:
-                    keys[slot] = key
-                    head[slot] = -1
-                following[e] = head[slot]
-                head[slot] = e
-        for e in range(n):
-            b = next_index[e]
-            r0, r1 = points[b, 0] - points[e, 0], points[b, 1] - points[e, 1]
-            for cell_row in range(row[e] - 1, row[e] + 2):
-                for cell_col in range(column[e] - 1, column[e] + 2):
-                    if cell_row < 0 or cell_col < 0:
+        return 0
+    with nogil:
+        if _file_edges(points, next_index, _cell_size(points, next_index, False), False, &grid) != 0:
+            with gil:
+                raise MemoryError()
+        for cell in range(grid.rows * grid.cols):
+            row, col = cell // grid.cols, cell % grid.cols
+            for i in range(grid.start[cell], grid.start[cell + 1]):
+                for k in range(i + 1, grid.start[cell + 1]):
+                    e, f = grid.items[i], grid.items[k]  # e < f: filed in edge order
+                    b, d = next_index[e], next_index[f]
+                    if b == f or d == e:
                         continue
-                    slot = _slot(cell_row * 4294967296LL + cell_col, keys, mask, shift)
-                    f = head[slot] if keys[slot] != -1 else -1
-                    while f >= 0:
-                        other = f
-                        f = following[f]
-                        if other <= e or next_index[e] == other or next_index[other] == e:
-                            continue
-                        c, d = other, next_index[other]
-                        u0, u1 = points[d, 0] - points[c, 0], points[d, 1] - points[c, 1]
-                        denominator = r0 * u1 - r1 * u0
-                        if denominator == 0.0:
-                            continue
-                        q0, q1 = points[c, 0] - points[e, 0], points[c, 1] - points[e, 1]
-                        s = (q0 * u1 - q1 * u0) / denominator
-                        t = (q0 * r1 - q1 * r0) / denominator
-                        if 0.0 < s < 1.0 and 0.0 < t < 1.0:
-                            found.append((e, other, s, t))
-    finally:
-        free(keys)
-        free(head)
-        free(following)
-        free(row)
-        free(column)
+                    # the boxes meet, and this is the cell of the low corner of their intersection
+                    corner_r = max(min(points[e, 0], points[b, 0]), min(points[f, 0], points[d, 0]))
+                    corner_c = max(min(points[e, 1], points[b, 1]), min(points[f, 1], points[d, 1]))
+                    if (corner_r > min(max(points[e, 0], points[b, 0]), max(points[f, 0], points[d, 0]))
+                            or corner_c > min(max(points[e, 1], points[b, 1]), max(points[f, 1], points[d, 1]))
+                            or _cell_of(corner_r, grid.low_r, grid.size, grid.rows) != row
+                            or _cell_of(corner_c, grid.low_c, grid.size, grid.cols) != col):
+                        continue
+                    r0, r1 = points[b, 0] - points[e, 0], points[b, 1] - points[e, 1]
+                    u0, u1 = points[d, 0] - points[f, 0], points[d, 1] - points[f, 1]
+                    denominator = r0 * u1 - r1 * u0
+                    if denominator == 0.0:
+                        continue
+                    q0, q1 = points[f, 0] - points[e, 0], points[f, 1] - points[e, 1]
+                    s = (q0 * u1 - q1 * u0) / denominator
+                    t = (q0 * r1 - q1 * r0) / denominator
+                    if 0.0 < s < 1.0 and 0.0 < t < 1.0:
+                        if found < capacity:
+                            first[found], second[found], s_out[found], t_out[found] = e, f, s, t
+                        found += 1
+        free(grid.start)
+        free(grid.items)
     return found
+
+
+def winding_banded(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
+                   const double[:, ::1] probes, long long[::1] out):
+    """:func:`winding` through bands of rows: every edge is filed under the bands its rows meet
+    (:func:`_file_edges`), and a probe meets only the edges of its band.  The same count, in
+    O(probes x edges per band + edges) instead of O(probes x edges)."""
+    cdef Py_ssize_t i, k, e, count, band
+    cdef double r, c, r0, r1, t, high_r
+    cdef bint upward
+    cdef Grid grid
+    if points.shape[0] == 0:
+        out[:] = 0
+        return
+    with nogil:
+        if _file_edges(points, next_index, _cell_size(points, next_index, True), True, &grid) != 0:
+            with gil:
+                raise MemoryError()
+        high_r = grid.low_r + grid.rows * grid.size
+        for i in range(probes.shape[0]):
+            r, c = probes[i, 0], probes[i, 1]
+            count = 0
+            if grid.low_r <= r <= high_r:
+                band = _cell_of(r, grid.low_r, grid.size, grid.rows)
+                for k in range(grid.start[band], grid.start[band + 1]):
+                    e = grid.items[k]
+                    r0, r1 = points[e, 0], points[next_index[e], 0]
+                    upward = r0 <= r < r1
+                    if not (upward or r1 <= r < r0):
+                        continue
+                    t = (r - r0) / (r1 - r0)
+                    if points[e, 1] + t * (points[next_index[e], 1] - points[e, 1]) > c:
+                        count += -1 if upward else 1  # as in :func:`winding`
+            out[i] = count
+        free(grid.start)
+        free(grid.items)
 
 
 def winding(const double[:, ::1] points, const Py_ssize_t[::1] next_index,

@@ -27,7 +27,12 @@ __all__ = [
     "length",
     "orient",
     "resample",
+    "resample_stacked",
     "signed_area",
+    "split_curves",
+    "stack_curves",
+    "stacked_next",
+    "take_curves",
     "tangential_gradient",
     "to_xy",
     "from_xy",
@@ -252,6 +257,71 @@ def resample(points, spacing, *, min_vertices=8):
     return np.column_stack(
         [np.interp(targets, s, closed[:, 0]), np.interp(targets, s, closed[:, 1])]
     )
+
+
+def stack_curves(curves):
+    """Stack a list of (K_i, 2) curves into one vertex array and the index of each edge's end.
+
+    Returns ``points (sum K_i, 2)``, ``next_index`` with edge e joining ``e`` and ``next_index[e]``,
+    and the start offset of every curve (length ``len(curves) + 1``).
+    """
+    counts = np.array([len(c) for c in curves], dtype=np.intp)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+    points = np.concatenate(curves, axis=0) if curves else np.zeros((0, 2))
+    return points, stacked_next(offsets), offsets
+
+
+def stacked_next(offsets):
+    """``next_index`` of curves stacked with these offsets (``[0, K_0, K_0 + K_1, ..., K]``): edge e
+    joins vertex e and ``next_index[e]``, which is e + 1 but for each curve's last vertex, whose
+    edge closes the curve at its first."""
+    offsets = np.asarray(offsets, dtype=np.intp)
+    next_index = np.arange(1, offsets[-1] + 1, dtype=np.intp)
+    next_index[offsets[1:] - 1] = offsets[:-1]
+    return next_index
+
+
+def take_curves(points, offsets, keep):
+    """The stacked curves that ``keep`` (a bool per curve) selects, as ``(points, next_index,
+    offsets)``, in their order, without a loop over the curves."""
+    counts = np.diff(offsets)
+    kept = np.concatenate([[0], np.cumsum(counts[keep])]).astype(np.intp)
+    return points[np.repeat(keep, counts)], stacked_next(kept), kept
+
+
+def split_curves(points, offsets):
+    """The list of (K_i, 2) curves of a stacked vertex array (copies)."""
+    return [points[a:b].copy() for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+
+
+def resample_stacked(points, next_index, offsets, spacing, which, *, min_vertices=8):
+    """:func:`resample` of the stacked curves that ``which`` (a bool per curve) selects, the others
+    kept as they are, in one pass over all vertices (no loop over the curves).
+
+    Returns ``(points, next_index, offsets)``.
+    """
+    d = points[next_index] - points
+    h = np.hypot(d[:, 0], d[:, 1])
+    counts = np.diff(offsets)
+    if not which.any():
+        return points, next_index, offsets
+    total = np.add.reduceat(h, offsets[:-1])
+    n_new = np.where(which, np.maximum(min_vertices, np.round(total / spacing).astype(np.intp)), counts)
+    new_offsets = np.concatenate([[0], np.cumsum(n_new)]).astype(np.intp)
+    out = np.empty((new_offsets[-1], 2))
+    out[np.repeat(~which, n_new)] = points[np.repeat(~which, counts)]
+    chosen = np.flatnonzero(which)
+    m = n_new[chosen]
+    owner = np.repeat(chosen, m)
+    k = np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m)  # the vertex's number in its curve
+    # arc length along all curves; each curve's vertices at equal steps of its own length
+    cumulative = np.cumsum(h)
+    arc = k * (total[owner] / n_new[owner]) + (cumulative - h)[offsets[:-1]][owner]
+    edge = np.clip(np.searchsorted(cumulative, arc, side="right"), offsets[owner], offsets[owner + 1] - 1)
+    along = arc - (cumulative[edge] - h[edge])
+    fraction = np.divide(along, h[edge], out=np.zeros_like(along), where=h[edge] > 0)
+    out[np.repeat(which, n_new)] = points[edge] + fraction[:, None] * d[edge]
+    return out, stacked_next(new_offsets), new_offsets
 
 
 def to_xy(points):

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.curve import as_curve
+from activecontour.curve import as_curve, stack_curves
 from activecontour.models import ChanVeseParameters
 from activecontour.models.two_region import EMPTY_FRACTION, PARAMETER_LIMIT
 
@@ -96,18 +96,7 @@ class Evaluation:
     load: np.ndarray | None = None
 
 
-def stack_curves(curves):
-    """Stack a list of (K_i, 2) curves into one vertex array and the index of each edge's end.
-
-    Returns ``points (sum K_i, 2)``, ``next_index`` with edge e joining ``e`` and ``next_index[e]``,
-    and the start offset of every curve (length ``len(curves) + 1``).
-    """
-    counts = np.array([len(c) for c in curves], dtype=np.intp)
-    offsets = np.concatenate([[0], np.cumsum(counts)])
-    points = np.concatenate(curves, axis=0) if curves else np.zeros((0, 2))
-    next_index = np.arange(offsets[-1]) + 1
-    next_index[offsets[1:] - 1] = offsets[:-1]
-    return points, next_index, offsets
+_NO_PARTS = np.zeros((0, 2, 0))
 
 
 def region_moments(model, curves):
@@ -120,15 +109,25 @@ def region_moments(model, curves):
     return area, s1, s2
 
 
-def _moments(model, points, next_index):
-    next_index = np.ascontiguousarray(next_index, dtype=np.intp)
+def _moments(model, points, next_index, parts=None):
+    """``(area, length, int I, int I^2)`` of stacked curves; with ``parts`` (K, 2, 2 + 2C), zeros,
+    also the parts of the load in the same pass (:func:`activecontour._kernels.edge_integrals`)."""
     channels = model.n_channels
     s1, s2 = np.zeros(channels), np.zeros(channels)
     sums = np.zeros(2)  # area, length
-    unused = np.zeros(channels)
-    _kernels.edge_integrals(np.ascontiguousarray(points), next_index, model.values, model.table, 0,
-                            unused, unused, 0.0, 0.0, s1, s2, sums, np.zeros((0, 2)))
+    _kernels.edge_integrals(np.ascontiguousarray(points, dtype=np.float64),
+                            np.ascontiguousarray(next_index, dtype=np.intp), model.values, model.table,
+                            model.anchor, True, s1, s2, sums, _NO_PARTS if parts is None else parts)
     return sums[0], sums[1], s1, s2
+
+
+def _load(parts, form, mu):
+    """The load (6.41), (K, 2), of the integrand ``form`` and length weight ``mu`` from the parts
+    of :func:`activecontour._kernels.edge_integrals`."""
+    weights = np.concatenate([[mu, form.constant], form.linear, form.square])
+    load = np.empty(parts.shape[:2])
+    _kernels.combine_load(parts, weights, load)
+    return load
 
 
 def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=False):
@@ -157,7 +156,10 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
     -------
     Evaluation
     """
-    area, length, s1, s2 = _moments(model, points, next_index)
+    # one pass along the edges: the moments, and with the gradient the load's parts, which the
+    # constants (6.42) from those moments then combine
+    parts = np.zeros((len(points), 2, 2 + 2 * model.n_channels)) if gradient else None
+    area, length, s1, s2 = _moments(model, points, next_index, parts)
     total_area, total1, total2 = model.totals
     constants = params.fit_constants(area, s1, s2, model.totals, empty_ok=empty_ok)
     if constants is None:
@@ -169,13 +171,7 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
               + outside.integral(total_area - area, total1 - s1, total2 - s2))
     result = Evaluation(float(energy), c_in, c_out, area, length)
     if gradient:
-        form = inside - outside  # the integrand of (6.41)
-        load = np.zeros_like(points)
-        _kernels.edge_integrals(np.ascontiguousarray(points), np.ascontiguousarray(next_index, dtype=np.intp),
-                                model.values, model.table, 1, np.ascontiguousarray(form.linear),
-                                np.ascontiguousarray(form.square), form.constant, float(params.mu),
-                                s1, s2, np.zeros(2), load)
-        result.load = load
+        result.load = _load(parts, inside - outside, float(params.mu))  # the integrand of (6.41)
     return result
 
 
@@ -273,11 +269,9 @@ def partition_load(model, boundary, params, constants):
         points = np.empty((2 * chosen.size, 2))
         points[0::2], points[1::2] = boundary.start[chosen], boundary.end[chosen]
         next_index = np.repeat(np.arange(1, len(points), 2), 2)
-        out = np.zeros_like(points)
-        _kernels.edge_integrals(points, next_index, model.values, model.table, 1,
-                                np.ascontiguousarray(form.linear), np.ascontiguousarray(form.square),
-                                form.constant, float(mu), np.zeros(model.n_channels),
-                                np.zeros(model.n_channels), np.zeros(2), out)
+        parts = np.zeros((len(points), 2, 2 + 2 * model.n_channels))
+        _moments(model, points, next_index, parts)
+        out = _load(parts, form, float(mu))
         load[chosen, 0], load[chosen, 1] = out[0::2], out[1::2]
     return load
 

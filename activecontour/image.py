@@ -7,8 +7,8 @@ integer (row, col), extended by a constant over the half-pixel margin, on the do
 Region integrals of 1, I and I^2 over Omega_i turn into boundary integrals by Green's theorem,
 ``int_Omega g = closed integral of G(r, c) dc``, with ``G(r, c) = int^r g(s, c) ds`` the
 antiderivative of g along the rows.  :class:`ImageModel` precomputes G at the pixel centres of
-every 8th row in one pass; G at any other point is a few increments from the stored row below plus
-a short polynomial evaluation.  Because the bilinear
+every row (of every 8th row on a large image) in one pass; G at any other point is a short
+polynomial evaluation (after a few increments from the stored row below).  Because the bilinear
 interpolant is a polynomial on each grid cell, both G and I are integrated *exactly* along the
 pieces of a polygon edge between grid lines, which is what makes the discrete energy and its shape
 derivative consistent to rounding error (see :mod:`activecontour.energy`).
@@ -34,6 +34,10 @@ __all__ = ["CHANNEL_COUNTS", "MAX_PIXELS", "NORMALIZATIONS", "ImageModel", "Size
            "intensity_scale", "load_image", "normalize_image", "single_image"]
 
 _COLOR_MODES = ("gray", "vector")
+#: bytes up to which :class:`ImageModel` stores the antiderivatives at every row (3 float64 per
+#: pixel and channel: a 1600^2 gray image); above, at every ``_SPARSE_ANCHOR``-th row (3/8 float64)
+_FULL_TABLE_BYTES = 1 << 26
+_SPARSE_ANCHOR = 8
 #: The choices of ``normalize``: the image's own range (default), its dtype's range, or as given.
 NORMALIZATIONS = ("range", "dtype", None)
 
@@ -397,11 +401,14 @@ class ImageModel:
         self.shape = values.shape[:2]
         self.n_channels = values.shape[2]
         m, n = self.shape
-        #: (M // ANCHOR_ROWS + 1, N + 2, C, 3): the row-antiderivatives (t1, t2, t3) at every
-        #: ANCHOR_ROWS-th padded row, built in one pass without temporaries
+        full = 24 * (m + 2) * (n + 2) * self.n_channels <= _FULL_TABLE_BYTES
+        #: padded rows between two stored rows of ``table``
+        self.anchor = 1 if full else _SPARSE_ANCHOR
+        #: ((M + 1) // anchor + 1, N + 2, C, 3): the row-antiderivatives (t1, t2, t3) at every
+        #: anchor-th padded row, built in one pass without temporaries
         #: (:func:`activecontour._kernels.build_tables`, which also says why float64)
-        self.table = np.empty(((m + 1) // _kernels.ANCHOR_ROWS + 1, n + 2, self.n_channels, 3))
+        self.table = np.empty(((m + 1) // self.anchor + 1, n + 2, self.n_channels, 3))
         total1, total2 = np.empty(self.n_channels), np.empty(self.n_channels)
-        _kernels.build_tables(values, self.table, total1, total2)
+        _kernels.build_tables(values, self.table, self.anchor, total1, total2)
         self.bounds = np.array([[-0.5, -0.5], [m - 0.5, n - 0.5]])
         self.totals = (float(m * n), total1, total2)

@@ -13,8 +13,10 @@ its boundary, which splits curves, merges them, and opens or closes holes in one
 * kept chains are linked at the crossings into closed curves, which keep their orientation.
 
 The geometry is exact (crossing points are computed, nothing is resampled), so the region changes
-only where the winding number was not 0 or 1.  Crossings are found through a uniform grid of cells
-as large as the longest edge: an iteration costs O(K) on average, not O(K^2).
+only where the winding number was not 0 or 1.  The curves stay stacked (one vertex array, the
+offsets of the curves) throughout: crossings are found in compiled code through a uniform grid of
+cells about one edge long, winding numbers through bands of rows, and only the curves that cross
+are cut into chains, so an iteration costs O(K) on average, however many curves there are.
 """
 
 from __future__ import annotations
@@ -22,73 +24,62 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.curve import signed_area
+from activecontour.curve import signed_area, split_curves, stack_curves, take_curves
 
 __all__ = ["border_overlap", "crossings", "curve_areas", "nucleation_sites", "region_problem",
-           "region_union", "repair", "winding_number"]
+           "region_union", "repair", "repair_stacked", "winding_number"]
 
 #: pixels per band of rows in :func:`nucleation_sites` (a few float32 arrays of 16 MB)
 _BAND_PIXELS = 1 << 22
-#: probe-vertex pairs below which :func:`winding_number` makes one pass over every curve
-_DIRECT_WORK = 1 << 18
+#: probe-vertex pairs below which :func:`winding_number` makes one pass over every edge
+_DIRECT_WORK = 1 << 12
 #: pixels: a chain's first segment shorter than this does not place its probe (:func:`_right_probes`)
 _SHORT_SEGMENT = 1e-3
-#: curves per block of the box-in-box test of :func:`_right_windings` (a bool array of 4 MB)
-_BOX_BLOCK = 1024
+#: crossings the output arrays of :func:`crossings` hold at first
+_CROSSINGS = 64
 
 
 def crossings(points, next_index):
     """Pairs of non-adjacent edges that cross, with the crossing's parameter on each edge.
 
+    Found in compiled code (:func:`activecontour._kernels.crossings`: a uniform grid, O(K)).
+
     Returns
     -------
     first, second : ndarray of int
-        Edge indices (edge e joins ``e`` and ``next_index[e]``), ``first < second``.
+        Edge indices (edge e joins ``e`` and ``next_index[e]``), ``first < second``, sorted.
     s, t : ndarray of float
         The crossing is ``X[first] + s (X[next[first]] - X[first])``, likewise t on ``second``;
         both strictly inside (0, 1).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    found = _kernels.crossings(points, np.ascontiguousarray(next_index, dtype=np.intp))
-    first = np.array([f[0] for f in found], dtype=np.intp)
-    second = np.array([f[1] for f in found], dtype=np.intp)
-    s = np.array([f[2] for f in found], dtype=np.float64)
-    t = np.array([f[3] for f in found], dtype=np.float64)
-    return first, second, s, t
+    next_index = np.ascontiguousarray(next_index, dtype=np.intp)
+    capacity = _CROSSINGS
+    while True:
+        first, second = np.empty(capacity, dtype=np.intp), np.empty(capacity, dtype=np.intp)
+        s, t = np.empty(capacity), np.empty(capacity)
+        found = _kernels.crossings(points, next_index, first, second, s, t)
+        if found <= capacity:
+            break
+        capacity = found
+    order = np.lexsort((second[:found], first[:found]))
+    return first[order], second[order], s[order], t[order]
 
 
-def winding_number(points, next_index, probes, offsets=None):
+def winding_number(points, next_index, probes):
     """Winding number of each probe point (P, 2) with respect to the oriented curves.
 
-    With the curves' ``offsets`` (as from :func:`activecontour.energy.stack_curves`) only the
-    curves whose bounding box holds a probe are visited for it: a curve contributes 0 to every
-    point outside its box, so many small curves cost O(P + K) instead of O(P K).  (Below
-    ``_DIRECT_WORK`` probe-vertex pairs one compiled pass over all is cheaper than the visits.)
+    Many probes go through bands of rows (:func:`activecontour._kernels.winding_banded`): a probe
+    meets the edges of its band only, so many curves cost O(P + K), not O(P K).
     """
     probes = np.ascontiguousarray(np.atleast_2d(probes), dtype=np.float64)
     points = np.ascontiguousarray(points, dtype=np.float64)
     next_index = np.ascontiguousarray(next_index, dtype=np.intp)
-    if offsets is None or len(offsets) <= 2 or len(probes) * len(points) <= _DIRECT_WORK:
-        return _winding(points, next_index, probes)
-    out = np.zeros(len(probes), dtype=np.int64)
-    low = np.minimum.reduceat(points, offsets[:-1], axis=0)
-    high = np.maximum.reduceat(points, offsets[:-1], axis=0)
-    order = np.argsort(probes[:, 0], kind="stable")
-    rows = probes[order, 0]
-    first = np.searchsorted(rows, low[:, 0], side="left")
-    last = np.searchsorted(rows, high[:, 0], side="right")
-    for curve in np.flatnonzero(last > first):
-        near = order[first[curve]:last[curve]]
-        near = near[(probes[near, 1] >= low[curve, 1]) & (probes[near, 1] <= high[curve, 1])]
-        if near.size:
-            a, b = offsets[curve], offsets[curve + 1]
-            out[near] += _winding(points[a:b], next_index[a:b] - a, probes[near])
-    return out
-
-
-def _winding(points, next_index, probes):
     out = np.empty(len(probes), dtype=np.int64)
-    _kernels.winding(points, next_index, probes, out)
+    if len(probes) * len(points) <= _DIRECT_WORK:
+        _kernels.winding(points, next_index, probes, out)
+    else:
+        _kernels.winding_banded(points, next_index, probes, out)
     return out
 
 
@@ -102,11 +93,23 @@ def curve_areas(points, next_index, offsets):
 def repair(points, next_index, offsets, *, min_area=0.0, before=None):
     """Rebuild the curves as the boundary of {w > 0}; None when they already are.
 
+    :func:`repair_stacked`, as a list of (K, 2) curves.
+    """
+    repaired = repair_stacked(points, next_index, offsets, min_area=min_area, before=before)
+    return None if repaired is None else split_curves(repaired[0], repaired[2])
+
+
+def repair_stacked(points, next_index, offsets, *, min_area=0.0, before=None):
+    """Rebuild the curves as the boundary of {w > 0}; None when they already are.
+
     They are when no edges cross and every curve has w = 0 on its right.  A step can turn a
     whole curve over without any crossing left at its end (a sliver whose sides pass each other,
     a small curve jumped across itself): alone it bounds a region of w = -1, inside an object
     (positive, within another positive curve) one of w = 2; such a curve is no boundary of
     {w > 0} and is dropped, like any chain between crossings.
+
+    Only the curves that cross are cut into chains (a Python loop over those); every other curve
+    is one closed chain, kept or dropped whole in the stacked arrays.
 
     Parameters
     ----------
@@ -116,42 +119,51 @@ def repair(points, next_index, offsets, *, min_area=0.0, before=None):
     before : ndarray or None
         The signed areas of the same curves in a state that bounded a region (the iterate a
         step starts from, the curves a resampling starts from).  Without crossings, only the
-        curves whose orientation changed are then probed: O(K), where probing every hole and
-        nested curve costs O(curves x probes) on an image of a thousand curves.  (A curve that
-        jumps whole into or out of another in one step, keeping its orientation, is not looked
-        for then.)
+        curves whose orientation changed are then probed.  (A curve that jumps whole into or out
+        of another in one step, keeping its orientation, is not looked for then.)
 
     Returns
     -------
-    list of ndarray (K, 2) or None
+    (points, next_index, offsets) or None
+        The repaired curves stacked: the curves that were kept whole, in their order, then the
+        curves linked from chains.
     """
     first, second, s, t = crossings(points, next_index)
-    n_points = len(points)
-    n_cross = first.size
-    if n_cross == 0:  # every curve is one closed chain: the common case, vectorised
+    n_points, n_cross, n_curves = len(points), first.size, len(offsets) - 1
+    if n_cross == 0:  # every curve is one closed chain: the common case
         turned = _right_windings(points, next_index, offsets, before) != 0
         if not turned.any():
             return None
-        return [points[a:b] for a, b, out in zip(offsets[:-1], offsets[1:], turned, strict=True)
-                if not out and b - a >= 3 and abs(signed_area(points[a:b])) > min_area]
+        areas = curve_areas(points, next_index, offsets)
+        return take_curves(points, offsets, ~turned & (np.diff(offsets) >= 3) & (np.abs(areas) > min_area))
+    owner = np.repeat(np.arange(n_curves), np.diff(offsets))
+    cut = np.zeros(n_curves, dtype=bool)
+    cut[owner[first]] = cut[owner[second]] = True
     cross_points = points[first] + s[:, None] * (points[next_index[first]] - points[first])
     nodes = np.vstack([points, cross_points])
-    # Every curve's node sequence with its crossings inserted in order along each edge: vertex e
-    # sorts at key e, a crossing at parameter s of edge e at e + s (curves are stacked in order).
+    # Every cut curve's node sequence with its crossings inserted in order along each edge: vertex
+    # e sorts at key e, a crossing at parameter s of edge e at e + s (curves are stacked in order).
+    vertices = np.flatnonzero(cut[owner])
     cut_edge = np.concatenate([first, second])
-    keys = np.concatenate([np.arange(n_points, dtype=np.float64), cut_edge + np.concatenate([s, t])])
-    node_ids = np.concatenate([np.arange(n_points), np.tile(np.arange(n_cross), 2) + n_points])
+    keys = np.concatenate([vertices.astype(np.float64), cut_edge + np.concatenate([s, t])])
+    node_ids = np.concatenate([vertices, np.tile(np.arange(n_cross), 2) + n_points])
     order = np.argsort(keys, kind="stable")
     sequence = node_ids[order]
-    bounds = np.searchsorted(keys[order], offsets[:-1].astype(np.float64))
-    bounds = np.append(bounds, len(sequence))
+    bounds = np.append(np.searchsorted(keys[order], offsets[:-1][cut].astype(np.float64)), len(sequence))
     chains = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         chains.extend(_chains(sequence[a:b], n_points))
-    windings = winding_number(points, next_index, _right_probes(chains, nodes), offsets)
-    kept = [chain for chain, w in zip(chains, windings, strict=True) if w == 0]
-    curves = _link(kept, nodes, n_points)
-    return [c for c in curves if len(c) >= 3 and abs(signed_area(c)) > min_area]
+    whole = np.flatnonzero(~cut)  # closed chains, probed by the same rule as the chains
+    probes = np.vstack([_right_probes(chains, nodes), _closed_probes(points, next_index, offsets, whole)])
+    windings = winding_number(points, next_index, probes)
+    kept = np.zeros(n_curves, dtype=bool)
+    kept[whole] = windings[len(chains):] == 0
+    linked = _link([chain for chain, w in zip(chains, windings[:len(chains)], strict=True) if w == 0], nodes,
+                   n_points)
+    kept_points, _, kept_offsets = take_curves(points, offsets, kept)
+    repaired = stack_curves(split_curves(kept_points, kept_offsets) + linked)
+    areas = curve_areas(*repaired)
+    return take_curves(repaired[0], repaired[2], (np.diff(repaired[2]) >= 3) & (np.abs(areas) > min_area))
 
 
 def border_overlap(points, next_index, bounds):
@@ -162,24 +174,27 @@ def border_overlap(points, next_index, bounds):
     see, and which make a winding number of 2 (a double-counted strip) or a zero-width slit.  A
     region's boundary covers every point of the border at most once, and each corner at most once.
     """
+    # only vertices on the border take part: one pass over the points finds them
+    on = np.flatnonzero(np.any((points == bounds[0]) | (points == bounds[1]), axis=1))
+    if on.size < 2:
+        return False
+    start, end = points[on], points[next_index[on]]
     # passing a corner twice (two vertices clipped onto it) makes a curve that touches itself
     # there, a lobe of which can be turned over without any crossing
-    previous = np.empty_like(next_index)
-    previous[next_index] = np.arange(len(next_index))
     for corner_r in bounds[:, 0]:
         for corner_c in bounds[:, 1]:
-            at = (points[:, 0] == corner_r) & (points[:, 1] == corner_c)
-            if np.count_nonzero(at & ~at[previous]) > 1:  # arrivals at the corner
+            at = (start[:, 0] == corner_r) & (start[:, 1] == corner_c)
+            leaves = at & ~((end[:, 0] == corner_r) & (end[:, 1] == corner_c))
+            if np.count_nonzero(leaves) > 1:  # departures from the corner, one per visit
                 return True
-    start, end = points, points[next_index]
     for axis in (0, 1):
         along = 1 - axis
         for side in bounds[:, axis]:
-            on = (start[:, axis] == side) & (end[:, axis] == side)
-            if np.count_nonzero(on) < 2:
+            edge_on = (start[:, axis] == side) & (end[:, axis] == side)
+            if np.count_nonzero(edge_on) < 2:
                 continue
-            low = np.minimum(start[on, along], end[on, along])
-            high = np.maximum(start[on, along], end[on, along])
+            low = np.minimum(start[edge_on, along], end[edge_on, along])
+            high = np.maximum(start[edge_on, along], end[edge_on, along])
             order = np.argsort(low, kind="stable")
             low, high = low[order], high[order]
             reach = np.maximum.accumulate(high)[:-1]  # the farthest any earlier edge gets
@@ -291,34 +306,43 @@ def _chains(sequence, n_points):
 
 
 def _right_windings(points, next_index, offsets, before=None):
-    """The winding number just right of every stacked curve, beside its longest edge (as
-    :func:`_right_probes` for the closed chains of curves without crossings).
+    """The winding number just right of every stacked curve, beside its longest edge (for the
+    closed chains of curves without crossings).
 
-    It is 0 for a positive curve that lies in no other curve: only holes and curves whose box
-    lies in another's are probed (in a segmentation, the holes and the islands in them); with
-    the areas ``before`` of :func:`repair`, only the curves whose orientation changed.
+    Without ``before`` every curve is probed (a positive curve in no other has 0 there); with the
+    areas ``before`` of :func:`repair_stacked`, only the curves whose orientation changed.
     """
     n_curves = len(offsets) - 1
     out = np.zeros(n_curves, dtype=np.int64)
-    areas = curve_areas(points, next_index, offsets)
-    if before is not None:
-        suspect = (areas > 0) != (np.asarray(before) > 0)
+    if before is None:
+        suspect = np.ones(n_curves, dtype=bool)
     else:
-        suspect = areas <= 0
-        low = np.minimum.reduceat(points, offsets[:-1], axis=0)
-        high = np.maximum.reduceat(points, offsets[:-1], axis=0)
-        for start in range(0, n_curves, _BOX_BLOCK):  # blocks of curves: bounded memory
-            block = slice(start, start + _BOX_BLOCK)
-            inside = np.all(low[None, :] <= low[block, None], axis=2) & np.all(
-                high[None, :] >= high[block, None], axis=2)
-            inside[np.arange(inside.shape[0]), np.arange(start, start + inside.shape[0])] = False
-            suspect[block] |= inside.any(axis=1)
+        suspect = (curve_areas(points, next_index, offsets) > 0) != (np.asarray(before) > 0)
     if suspect.any():
         edges = np.flatnonzero(np.repeat(suspect, np.diff(offsets)))
         owner = np.repeat(np.arange(n_curves), np.diff(offsets))[edges]
         probes = _beside_longest(points[edges], points[next_index[edges]], owner)
-        out[suspect] = winding_number(points, next_index, probes, offsets)
+        out[suspect] = winding_number(points, next_index, probes)
     return out
+
+
+def _closed_probes(points, next_index, offsets, which):
+    """A point just right of each stacked curve ``which`` (indices), by the rule of
+    :func:`_right_probes` for the closed chain of the curve: beside its first edge, or where that
+    is shorter than ``_SHORT_SEGMENT``, its longest."""
+    if len(which) == 0:
+        return np.zeros((0, 2))
+    starts = offsets[:-1][which]
+    ends = next_index[starts]
+    probes = _beside_longest(points[starts], points[ends], np.arange(len(which)))
+    direction = points[ends] - points[starts]
+    short = np.flatnonzero(np.hypot(direction[:, 0], direction[:, 1]) < _SHORT_SEGMENT)
+    if short.size:
+        counts = np.diff(offsets)[which[short]]
+        owner = np.repeat(np.arange(short.size), counts)
+        edges = np.arange(counts.sum()) + np.repeat(starts[short] - np.cumsum(counts) + counts, counts)
+        probes[short] = _beside_longest(points[edges], points[next_index[edges]], owner)
+    return probes
 
 
 def _right_probes(chains, nodes):

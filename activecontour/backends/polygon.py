@@ -31,14 +31,13 @@ stall at the finest l is convergence; the run also stops at ``max_num_iter``.
 from __future__ import annotations
 
 import dataclasses
-from itertools import pairwise
 
 import numpy as np
 
 from activecontour import fem, topology
 from activecontour.backends.options import option, parse_options
-from activecontour.curve import edge_lengths, resample, signed_area
-from activecontour.energy import evaluate, stack_curves
+from activecontour.curve import resample_stacked, split_curves, stack_curves, take_curves
+from activecontour.energy import evaluate
 from activecontour.initial import circle, initial_curves
 from activecontour.raster import rasterize
 from activecontour.result import FlowState, build_result
@@ -162,7 +161,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     shape = model.shape
     # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
     # exactly: resampling it would cut its corners and move it off its minimum
-    geometry = _resampled(initial_curves(init, shape, model.image, params.mu), spacing)
+    geometry = _resampled(stack_curves(initial_curves(init, shape, model.image, params.mu)), spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
@@ -177,9 +176,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     if jumped:
         (geometry, current), n_iter = moved, 1
         energies.append(current.energy)
-        if callback is not None and callback(FlowState(n_iter, _split(*geometry[::2]), current.energy,
+        if callback is not None and callback(FlowState(n_iter, split_curves(*geometry[::2]), current.energy,
                                                        current.c_in, current.c_out, shape, max_num_iter)):
-            return build_result(model, params, _split(*geometry[::2]), energies=energies, n_iter=n_iter,
+            return build_result(model, params, split_curves(*geometry[::2]), energies=energies, n_iter=n_iter,
                                 status=2, backend="polygon")
     if smoothing is None:
         # the default start, a result and the global move lie on the objects' boundaries already
@@ -199,7 +198,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
             break
         if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
             last_remesh = k
-            remeshed = _resampled(_split(*new_geometry[::2]), spacing, every=True)
+            remeshed = _resampled(new_geometry, spacing, every=True)
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
@@ -207,7 +206,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
         geometry, current, n_iter = new_geometry, new, k + 1
         energies.append(current.energy)
         if callback is not None:
-            state = FlowState(n_iter, _split(*geometry[::2]), current.energy, current.c_in,
+            state = FlowState(n_iter, split_curves(*geometry[::2]), current.energy, current.c_in,
                               current.c_out, shape, max_num_iter)
             if callback(state):
                 status = 2
@@ -225,7 +224,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
                 status = 0
                 break
             movement.clear()
-    return build_result(model, params, _split(*geometry[::2]), energies=energies, n_iter=n_iter,
+    return build_result(model, params, split_curves(*geometry[::2]), energies=energies, n_iter=n_iter,
                         status=status, backend="polygon")
 
 
@@ -242,7 +241,7 @@ def _global_move(model, params, geometry, energy, spacing):
     """
     from activecontour.initial import threshold_starts
 
-    given = rasterize(_split(*geometry[::2]), model.shape)
+    given = rasterize(split_curves(*geometry[::2]), model.shape)
     objects, background = threshold_starts(model.values, params.mu, background=True)
     shares = []
     for curves in (objects, background):
@@ -252,7 +251,7 @@ def _global_move(model, params, geometry, energy, spacing):
     chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
     if not chosen:
         return None
-    moved = _resampled(chosen, spacing)
+    moved = _resampled(stack_curves(chosen), spacing)
     new = evaluate(model, *moved[:2], params, gradient=True)
     return (moved, new) if new.energy < energy else None
 
@@ -306,7 +305,7 @@ class _Flow:
         All proposed circles are tried together, then (if that does not lower the energy) one at
         a time, best first.  Returns (geometry, evaluation) or None.
         """
-        curves = _split(*geometry[::2])
+        curves = split_curves(*geometry[::2])
         inside = rasterize(curves, self.model.shape)
         sites = topology.nucleation_sites(self.model.values, inside,
                                           self.params.load_form(current.c_in, current.c_out),
@@ -335,11 +334,11 @@ class _Flow:
         # which the repair cannot resolve (see step)
         if topology.border_overlap(*geometry[:2], self.bounds):
             return None
-        repaired = topology.repair(*geometry, min_area=self.min_area)
+        repaired = topology.repair_stacked(*geometry, min_area=self.min_area)
         if repaired is not None:
-            if not repaired:
+            if len(repaired[2]) == 1:  # nothing left
                 return None
-            geometry = stack_curves(repaired)
+            geometry = repaired
         new = evaluate(self.model, *geometry[:2], self.params, gradient=True)
         return (geometry, new) if np.isfinite(new.energy) else None
 
@@ -384,10 +383,10 @@ class _Flow:
             candidate = None
             if predicted < 0 and not topology.border_overlap(trial, next_index, self.bounds):
                 candidate = (trial, next_index, offsets)
-                repaired = topology.repair(trial, next_index, offsets, min_area=self.min_area,
-                                           before=areas)
+                repaired = topology.repair_stacked(trial, next_index, offsets, min_area=self.min_area,
+                                                   before=areas)
                 if repaired is not None:
-                    candidate = stack_curves(repaired) if repaired else None
+                    candidate = repaired if len(repaired[2]) > 1 else None
             if candidate is not None:
                 new = evaluate(self.model, *candidate[:2], self.params, gradient=True)
                 if new.energy <= current.energy + _ARMIJO * predicted:
@@ -416,7 +415,7 @@ class _Flow:
             empty = evaluate(self.model, np.zeros((0, 2)), np.zeros(0, dtype=np.intp), self.params,
                              empty_ok=True)
             return geometry, (None if empty.energy <= current.energy else current)
-        reduced = stack_curves([c for c, k in zip(_split(points, offsets), keep, strict=True) if k])
+        reduced = take_curves(points, offsets, keep)
         candidate = evaluate(self.model, *reduced[:2], self.params, gradient=True)
         if candidate.energy <= current.energy:
             return reduced, candidate
@@ -529,30 +528,30 @@ def _dot(a, b):
     return float(np.einsum("i,i->", a, b))
 
 
-def _resampled(curves, spacing, every=False):
-    """Curves resampled at equal arc length ``spacing`` (with ``every``, else those whose vertices
-    are not about that far apart already), stacked.  A chord of the resampling can cut across a
-    narrow neck or a notch and cross the curve: the result is then the boundary of {w > 0}
-    (:func:`activecontour.topology.repair`), so that its energy is that of a region."""
-    geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
-                             for c in curves])
-    repaired = topology.repair(*geometry, before=[signed_area(c) for c in curves])
-    return geometry if repaired is None else stack_curves(repaired)
+def _resampled(geometry, spacing, every=False):
+    """Stacked curves resampled at equal arc length ``spacing`` (with ``every``, else those whose
+    vertices are not about that far apart already: fewer than 8, or an edge outside half to twice
+    ``spacing``).  A chord of the resampling can cut across a narrow neck or a notch and cross the
+    curve: the result is then the boundary of {w > 0} (:func:`activecontour.topology.repair_stacked`),
+    so that its energy is that of a region."""
+    points, next_index, offsets = geometry
+    if len(offsets) == 1:
+        return geometry
+    if every:
+        which = np.ones(len(offsets) - 1, dtype=bool)
+    else:
+        d = points[next_index] - points
+        h = np.hypot(d[:, 0], d[:, 1])
+        which = ~((np.diff(offsets) >= 8) & (np.maximum.reduceat(h, offsets[:-1]) <= 2.0 * spacing)
+                  & (np.minimum.reduceat(h, offsets[:-1]) >= 0.5 * spacing))
+    resampled = resample_stacked(points, next_index, offsets, spacing, which)
+    repaired = topology.repair_stacked(*resampled, before=topology.curve_areas(*geometry))
+    return resampled if repaired is None else repaired
 
 
 def _unhealthy(geometry, spacing):
     points, next_index, _ = geometry
     d = points[next_index] - points
-    return not _spacing_ok(np.hypot(d[:, 0], d[:, 1]), spacing)
+    h = np.hypot(d[:, 0], d[:, 1])
+    return not (h.max() <= 2.0 * spacing and h.min() >= 0.5 * spacing)
 
-
-def _healthy(curve, spacing):
-    return len(curve) >= 8 and _spacing_ok(edge_lengths(curve), spacing)
-
-
-def _spacing_ok(h, spacing):
-    return h.max() <= 2.0 * spacing and h.min() >= 0.5 * spacing
-
-
-def _split(points, offsets):
-    return [points[a:b].copy() for a, b in pairwise(offsets)]
