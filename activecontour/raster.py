@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.curve import signed_area
+from activecontour.curve import curve_areas, split_curves, stack_curves, take_curves, take_vertices
 
 __all__ = ["level_curves", "mask_to_curves", "rasterize"]
 
@@ -50,28 +50,24 @@ def rasterize(curves, shape):
 
 
 def _row_crossings(curves, m, n):
-    """Where the edges cross the row lines r = 0..M-1: row, first pixel column to the right, +-1."""
-    rows, firsts, directions = [np.zeros(0, np.intp)], [np.zeros(0, np.intp)], [np.zeros(0, np.int32)]
-    for curve in curves:
-        start = np.asarray(curve, dtype=np.float64)
-        end = np.roll(start, -1, axis=0)
-        r0, r1 = start[:, 0], end[:, 0]
-        # half-open rule [min, max) on rows avoids counting a vertex twice
-        low = np.ceil(np.minimum(r0, r1))
-        high = np.ceil(np.maximum(r0, r1))
-        count = np.clip(high, 0, m) - np.clip(low, 0, m)
-        count = np.maximum(count, 0).astype(np.intp)
-        edge = np.repeat(np.arange(len(start)), count)
-        if edge.size == 0:
-            continue
-        rank = np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)
-        row = np.clip(low, 0, m)[edge] + rank
-        t = (row - r0[edge]) / (r1 - r0)[edge]
-        col = start[edge, 1] + t * (end[edge, 1] - start[edge, 1])
-        rows.append(row.astype(np.intp))
-        firsts.append(np.clip(np.ceil(col), 0, n).astype(np.intp))
-        directions.append(np.where(r1[edge] > r0[edge], 1, -1).astype(np.int32))
-    return np.concatenate(rows), np.concatenate(firsts), np.concatenate(directions)
+    """Where the edges cross the row lines r = 0..M-1: row, first pixel column to the right, +-1
+    (all curves stacked, in the order of the curves and their edges)."""
+    start, next_index, _ = stack_curves([np.asarray(c, dtype=np.float64) for c in curves])
+    end = np.take(start, next_index, axis=0)
+    r0, r1 = start[:, 0], end[:, 0]
+    # half-open rule [min, max) on rows avoids counting a vertex twice
+    low = np.ceil(np.minimum(r0, r1))
+    high = np.ceil(np.maximum(r0, r1))
+    count = np.maximum(np.clip(high, 0, m) - np.clip(low, 0, m), 0).astype(np.intp)
+    edge = np.repeat(np.arange(len(start)), count)
+    if edge.size == 0:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0, np.int32)
+    rank = np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)
+    row = np.clip(low, 0, m)[edge] + rank
+    t = (row - r0[edge]) / (r1 - r0)[edge]
+    col = start[edge, 1] + t * (end[edge, 1] - start[edge, 1])
+    return (row.astype(np.intp), np.clip(np.ceil(col), 0, n).astype(np.intp),
+            np.where(r1[edge] > r0[edge], 1, -1).astype(np.int32))
 
 
 def mask_to_curves(mask, *, min_area=0.0):
@@ -98,10 +94,18 @@ def level_curves(padded, level, *, min_area=0.0):
     """
     import skimage.measure
 
-    curves = []
-    for contour in skimage.measure.find_contours(padded, level, positive_orientation="high"):
-        curve = contour[:-1] - 1.0
-        curve = curve[np.any(curve != np.roll(curve, 1, axis=0), axis=1)]
-        if len(curve) >= 3 and abs(signed_area(curve)) > min_area:
-            curves.append(curve)
-    return curves
+    contours = skimage.measure.find_contours(padded, level, positive_orientation="high")
+    if not contours:
+        return []
+    points, _, offsets = stack_curves([contour[:-1] for contour in contours])
+    points -= 1.0
+    # drop every vertex equal to the one before it (cyclically), all curves at once
+    previous = np.arange(-1, len(points) - 1)
+    filled = np.diff(offsets) > 0
+    previous[offsets[:-1][filled]] = offsets[1:][filled] - 1
+    distinct = np.any(points != points[previous], axis=1)
+    points, next_index, offsets = take_vertices(points, offsets, distinct)
+    areas = curve_areas(points, next_index, offsets)
+    keep = (np.diff(offsets) >= 3) & (np.abs(areas) > min_area)
+    points, _, offsets = take_curves(points, offsets, keep)
+    return split_curves(points, offsets)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from activecontour.curve import clean
+from activecontour.curve import clean_curves
 from activecontour.energy import evaluate, stack_curves
 from activecontour.raster import rasterize
 from activecontour.topology import region_problem, region_union
@@ -189,9 +189,9 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     n_iter, status, backend, phi
         As in :class:`SegmentationResult`.
     """
-    cleaned = [c for c in map(clean, contours) if c is not None]
+    cleaned = clean_curves(contours)
     if cleaned and region_problem(cleaned) is not None:  # e.g. a ring that touches itself
-        cleaned = [c for c in map(clean, region_union(cleaned, signed=True)) if c is not None]
+        cleaned = clean_curves(region_union(cleaned, signed=True))
     final = _evaluate(model, params, cleaned)
     empty = _evaluate(model, params, [])
     if cleaned and (status == 3 or status in (0, 4)) and empty.energy <= final.energy:

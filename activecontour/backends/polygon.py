@@ -196,7 +196,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
         if new is None:
             geometry, status = new_geometry, 3
             break
-        if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
+        if k - last_remesh >= _REMESH_COOLDOWN and _unhealthy(flow.edge_lengths(new_geometry), spacing):
             last_remesh = k
             remeshed = _resampled(new_geometry, spacing, every=True)
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
@@ -269,15 +269,24 @@ class _Flow:
         self.low, self.high = bounds
         self.dt = np.inf
         self.memory = _Memory(accelerate)
+        # of the last geometry seen (the arrays are never changed in place): identity, values
+        self._metric = self._lengths = self._areas = None
 
     def velocity(self, geometry, load):
         """Solve b(V, Y) = -f (6.40) for all curves at once (block-cyclic, O(K))."""
+        diagonal, off = self.metric(geometry)
+        return -fem.cyclic_solve(diagonal, off, load, geometry[2])
+
+    def metric(self, geometry):
+        """The cyclic tridiagonal matrix of b (6.39) or (6.25) on these curves, as (diagonal, off):
+        assembled once per geometry and smoothing length (a step solves with it up to three times)."""
         points, next_index, offsets = geometry
-        previous = np.empty_like(next_index)
-        previous[next_index] = np.arange(len(next_index))
-        d = points[next_index] - points
+        if self._metric is not None and self._metric[0] is points and self._metric[1] == self.smoothing:
+            return self._metric[2]
+        previous = np.arange(-1, len(points) - 1)
+        previous[offsets[:-1]] = offsets[1:] - 1
         # a crossing repair can leave an edge of (nearly) zero length: keep 1/h finite
-        h = np.maximum(np.hypot(d[:, 0], d[:, 1]), _MIN_EDGE)
+        h = np.maximum(self.edge_lengths(geometry), _MIN_EDGE)
         diagonal, off = fem.mass_diagonals(h, previous)
         if self.h1:
             # per curve, l is at most half its radius L / 2 pi: a larger l would damp a small
@@ -288,7 +297,22 @@ class _Flow:
             stiff_diagonal, stiff_off = fem.stiffness_diagonals(h, previous)
             diagonal = diagonal + weight * stiff_diagonal
             off = off + weight * stiff_off
-        return -fem.cyclic_solve(diagonal, off, load, offsets)
+        self._metric = (points, self.smoothing, (diagonal, off))
+        return diagonal, off
+
+    def edge_lengths(self, geometry):
+        """The length of every edge of these curves (computed once per geometry)."""
+        points, next_index, _ = geometry
+        if self._lengths is None or self._lengths[0] is not points:
+            d = np.take(points, next_index, axis=0) - points  # (take: ~10x a fancy index here)
+            self._lengths = (points, np.hypot(d[:, 0], d[:, 1]))
+        return self._lengths[1]
+
+    def areas(self, geometry):
+        """The signed area of every curve (computed once per geometry)."""
+        if self._areas is None or self._areas[0] is not geometry[0]:
+            self._areas = (geometry[0], topology.curve_areas(*geometry))
+        return self._areas[1]
 
     def refine(self, min_smoothing):
         """Next, finer smoothing length; the step memory restarts with the new metric."""
@@ -374,8 +398,8 @@ class _Flow:
             # a quasi-Newton step in the same metric: its natural length is 1
             v = accelerated
             dt = min(1.0, self.max_step / np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2)))
-        dt = min(dt, _size_limit(geometry, v))
-        areas = topology.curve_areas(*geometry)  # the iterate bounds a region: see repair
+        dt = min(dt, _size_limit(geometry, self.edge_lengths(geometry), v))
+        areas = self.areas(geometry)  # the iterate bounds a region: see repair
         for _ in range(_MAX_HALVINGS):
             trial = np.clip(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
@@ -404,7 +428,7 @@ class _Flow:
         is left inside and the empty set's energy is not above the curves' (the collapse).
         """
         points, _, offsets = geometry
-        areas = topology.curve_areas(*geometry)
+        areas = self.areas(geometry)
         keep = np.abs(areas) >= self.min_area
         if keep.all():
             return geometry, current
@@ -447,11 +471,12 @@ class _Movement:
         if self.count < _WINDOW:
             return
         start = self.start
-        d = start[next_index] - start
+        d = np.take(start, next_index, axis=0) - start
         previous = np.empty_like(next_index)
         previous[next_index] = np.arange(len(next_index))
         edge_normal = np.column_stack([d[:, 1], -d[:, 0]])  # nu |e|
-        vertex_normal = 0.5 * (edge_normal + edge_normal[previous])  # nu times the vertex's share
+        # nu times the vertex's share
+        vertex_normal = 0.5 * (edge_normal + np.take(edge_normal, previous, axis=0))
         swept = np.abs(np.einsum("ij,ij->i", points - start, vertex_normal)).sum()
         self.last = swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count
         self.start, self.count = points.copy(), 0
@@ -460,15 +485,14 @@ class _Movement:
         self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
 
 
-def _size_limit(geometry, v):
+def _size_limit(geometry, edge_lengths, v):
     """The largest dt that moves no curve by more than a quarter of its radius (RMS).
 
     A first trial that jumps a small curve across itself (or shrinks it to nothing in one go)
     can pass the descent test and still land far from where the flow was going.
     """
-    points, next_index, offsets = geometry
-    d = points[next_index] - points
-    radius = np.add.reduceat(np.hypot(d[:, 0], d[:, 1]), offsets[:-1]) / (2 * np.pi)
+    offsets = geometry[2]
+    radius = np.add.reduceat(edge_lengths, offsets[:-1]) / (2 * np.pi)
     rms = np.sqrt(np.add.reduceat(v[:, 0] ** 2 + v[:, 1] ** 2, offsets[:-1]) / np.diff(offsets))
     moving = rms > 0
     return float(np.min(_CURVE_STEP * radius[moving] / rms[moving])) if moving.any() else np.inf
@@ -540,7 +564,7 @@ def _resampled(geometry, spacing, every=False):
     if every:
         which = np.ones(len(offsets) - 1, dtype=bool)
     else:
-        d = points[next_index] - points
+        d = np.take(points, next_index, axis=0) - points
         h = np.hypot(d[:, 0], d[:, 1])
         which = ~((np.diff(offsets) >= 8) & (np.maximum.reduceat(h, offsets[:-1]) <= 2.0 * spacing)
                   & (np.minimum.reduceat(h, offsets[:-1]) >= 0.5 * spacing))
@@ -549,9 +573,6 @@ def _resampled(geometry, spacing, every=False):
     return resampled if repaired is None else repaired
 
 
-def _unhealthy(geometry, spacing):
-    points, next_index, _ = geometry
-    d = points[next_index] - points
-    h = np.hypot(d[:, 0], d[:, 1])
-    return not (h.max() <= 2.0 * spacing and h.min() >= 0.5 * spacing)
-
+def _unhealthy(edge_lengths, spacing):
+    """Whether an edge is shorter than half or longer than twice ``spacing``."""
+    return not (edge_lengths.max() <= 2.0 * spacing and edge_lengths.min() >= 0.5 * spacing)
