@@ -27,12 +27,6 @@ cdef inline Py_ssize_t _clamp(Py_ssize_t i, Py_ssize_t size) noexcept nogil:
     return i
 
 
-cdef inline double _padded(const double[:, :, ::1] values, Py_ssize_t a, Py_ssize_t j,
-                           Py_ssize_t ch) noexcept nogil:
-    """The image padded by one replicated pixel, at padded (row, col) = (a, j)."""
-    return values[_clamp(a - 1, values.shape[0]), _clamp(j - 1, values.shape[1]), ch]
-
-
 cdef inline double _floor(double x) noexcept nogil:
     """floor(x) for |x| < 2^63 in a few instructions (for the generic x86-64 target, without SSE4.1's
     rounding instruction, the compiler spends about twenty on libm's floor)."""
@@ -146,36 +140,47 @@ cdef struct Cell:
     double t3, pq1, pq2, pq3
 
 
-cdef inline void _cell(const double[:, :, ::1] values, const double[:, :, :, ::1] table, Py_ssize_t anchor,
-                       Py_ssize_t a, Py_ssize_t j, Py_ssize_t ch, Cell *cell) noexcept nogil:
-    """The cell's data: the stored row at or below a, plus the increments from there up to a."""
-    cdef Py_ssize_t k = a // anchor, i
+cdef inline void _cells(const double[:, :, ::1] values, const double[:, :, :, ::1] table, Py_ssize_t anchor,
+                        Py_ssize_t a, Py_ssize_t j, Cell *cells) noexcept nogil:
+    """The data of cell (a, j) of every channel: the stored row at or below a, plus the increments
+    from there up to a."""
+    cdef Py_ssize_t k = a if anchor == 1 else a // anchor, i, ch, channels = values.shape[2]
+    cdef Py_ssize_t rows = values.shape[0], cols = values.shape[1]
+    # the padded image's columns j and j + 1, rows a and a + 1: image indices, clamped
+    cdef Py_ssize_t left = _clamp(j - 1, cols), right = _clamp(j, cols)
+    cdef Py_ssize_t low = _clamp(a - 1, rows), high = _clamp(a, rows)
     cdef double p_lo, q_lo, p_hi, q_hi
-    cell.t1 = table[k, j, ch, 0]
-    cell.t2 = table[k, j, ch, 1]
-    cell.t3 = table[k, j, ch, 2]
-    cell.r1 = table[k, j + 1, ch, 0]
-    cell.r2 = table[k, j + 1, ch, 1]
-    p_lo = _padded(values, k * anchor, j, ch)
-    q_lo = _padded(values, k * anchor, j + 1, ch)
-    for i in range(k * anchor, a):
-        p_hi = _padded(values, i + 1, j, ch)
-        q_hi = _padded(values, i + 1, j + 1, ch)
-        cell.t1 += 0.5 * (p_lo + p_hi)
-        cell.t2 += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
-        cell.t3 += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo + 2.0 * p_hi * q_hi) / 6.0
-        cell.r1 += 0.5 * (q_lo + q_hi)
-        cell.r2 += (q_lo * q_lo + q_lo * q_hi + q_hi * q_hi) / 3.0
-        p_lo, q_lo = p_hi, q_hi
-    cell.p0, cell.q0 = p_lo, q_lo
-    cell.dp = _padded(values, a + 1, j, ch) - p_lo
-    cell.dq = _padded(values, a + 1, j + 1, ch) - q_lo
-    cell.hp, cell.hq = 0.5 * cell.dp, 0.5 * cell.dq
-    cell.pp1, cell.pp2, cell.pp3 = cell.p0 * cell.p0, cell.p0 * cell.dp, cell.dp * cell.dp / 3.0
-    cell.qq1, cell.qq2, cell.qq3 = cell.q0 * cell.q0, cell.q0 * cell.dq, cell.dq * cell.dq / 3.0
-    cell.pq1 = cell.p0 * cell.q0
-    cell.pq2 = 0.5 * (cell.p0 * cell.dq + cell.q0 * cell.dp)
-    cell.pq3 = cell.dp * cell.dq / 3.0
+    cdef Cell *cell
+    for ch in range(channels):
+        cell = &cells[ch]
+        cell.t1 = table[k, j, ch, 0]
+        cell.t2 = table[k, j, ch, 1]
+        cell.t3 = table[k, j, ch, 2]
+        cell.r1 = table[k, j + 1, ch, 0]
+        cell.r2 = table[k, j + 1, ch, 1]
+        if k * anchor == a:
+            p_lo, q_lo = values[low, left, ch], values[low, right, ch]
+        else:
+            p_lo = values[_clamp(k * anchor - 1, rows), left, ch]
+            q_lo = values[_clamp(k * anchor - 1, rows), right, ch]
+            for i in range(k * anchor, a):
+                p_hi = values[_clamp(i, rows), left, ch]
+                q_hi = values[_clamp(i, rows), right, ch]
+                cell.t1 += 0.5 * (p_lo + p_hi)
+                cell.t2 += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
+                cell.t3 += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo + 2.0 * p_hi * q_hi) / 6.0
+                cell.r1 += 0.5 * (q_lo + q_hi)
+                cell.r2 += (q_lo * q_lo + q_lo * q_hi + q_hi * q_hi) / 3.0
+                p_lo, q_lo = p_hi, q_hi
+        cell.p0, cell.q0 = p_lo, q_lo
+        cell.dp = values[high, left, ch] - p_lo
+        cell.dq = values[high, right, ch] - q_lo
+        cell.hp, cell.hq = 0.5 * cell.dp, 0.5 * cell.dq
+        cell.pp1, cell.pp2, cell.pp3 = cell.p0 * cell.p0, cell.p0 * cell.dp, cell.dp * cell.dp / 3.0
+        cell.qq1, cell.qq2, cell.qq3 = cell.q0 * cell.q0, cell.q0 * cell.dq, cell.dq * cell.dq / 3.0
+        cell.pq1 = cell.p0 * cell.q0
+        cell.pq2 = 0.5 * (cell.p0 * cell.dq + cell.q0 * cell.dp)
+        cell.pq3 = cell.dp * cell.dq / 3.0
 
 
 def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
@@ -267,8 +272,7 @@ def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index
                     a = <Py_ssize_t> min(max(u0 + t_mid * du, 0.0), <double> rows)
                     j = <Py_ssize_t> min(max(v0 + t_mid * dv, 0.0), <double> cols)
                     if a != last_a or j != last_j:
-                        for ch in range(channels):
-                            _cell(values, table, anchor, a, j, ch, &cells[ch])
+                        _cells(values, table, anchor, a, j, cells)
                         last_a, last_j = a, j
                     for g in range(3):
                         at = t_prev + span * nodes[g]

@@ -72,7 +72,7 @@ def winding_number(points, next_index, probes):
     Many probes go through bands of rows (:func:`activecontour._kernels.winding_banded`): a probe
     meets the edges of its band only, so many curves cost O(P + K), not O(P K).
     """
-    probes = np.ascontiguousarray(np.atleast_2d(probes), dtype=np.float64)
+    probes = np.ascontiguousarray(probes, dtype=np.float64).reshape(-1, 2)
     points = np.ascontiguousarray(points, dtype=np.float64)
     next_index = np.ascontiguousarray(next_index, dtype=np.intp)
     out = np.empty(len(probes), dtype=np.int64)
