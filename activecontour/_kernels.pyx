@@ -434,17 +434,20 @@ def curve_areas(const double[:, ::1] points, const Py_ssize_t[::1] next_index, c
 
 
 cdef struct Grid:
-    # square cells of side ``size`` from (low_r, low_c), ``rows`` x ``cols`` of them; the items
-    # filed in cell c are ``items[start[c]:start[c + 1]]``
-    double low_r, low_c, size
+    # square cells of side 1 / scale from (low_r, low_c), ``rows`` x ``cols`` of them; the edges
+    # filed in cell c are ``items[start[c]:start[c + 1]]``, in edge order; edge e meets the cells
+    # from (first_row[e], first_col[e]) on
+    double low_r, low_c, scale
     Py_ssize_t rows, cols
     Py_ssize_t *start
     Py_ssize_t *items
+    Py_ssize_t *first_row
+    Py_ssize_t *first_col
 
 
-cdef inline Py_ssize_t _cell_of(double x, double low, double size, Py_ssize_t count) noexcept nogil:
+cdef inline Py_ssize_t _cell_of(double x, double low, double scale, Py_ssize_t count) noexcept nogil:
     """The index of the cell of coordinate x (clamped to the grid)."""
-    cdef double k = (x - low) / size
+    cdef double k = (x - low) * scale
     if k <= 0.0:
         return 0
     if k >= <double> (count - 1):
@@ -452,55 +455,65 @@ cdef inline Py_ssize_t _cell_of(double x, double low, double size, Py_ssize_t co
     return <Py_ssize_t> k
 
 
+cdef void _free_grid(Grid *grid) noexcept nogil:
+    free(grid.start)
+    free(grid.items)
+    free(grid.first_row)
+    free(grid.first_col)
+
+
 cdef int _file_edges(const double[:, ::1] points, const Py_ssize_t[::1] next_index, double size,
                      bint rows_only, Grid *grid) noexcept nogil:
     """File every edge under each cell its bounding box meets (under each band of rows it meets,
     with ``rows_only``; horizontal edges then under none): a counting sort, O(edges + cells).
-    Returns -1 when out of memory."""
-    cdef Py_ssize_t n = points.shape[0], e, b, r, c, r0, r1, c0, c1, cells, total, position
+    Returns -1 when out of memory (the grid is then freed)."""
+    cdef Py_ssize_t n = points.shape[0], e, b, r, c, r1, c1, cells, position
     cdef double high_r = points[0, 0], high_c = points[0, 1]
-    grid.low_r, grid.low_c, grid.size = points[0, 0], points[0, 1], size
+    grid.low_r, grid.low_c, grid.scale = points[0, 0], points[0, 1], 1.0 / size
     for e in range(n):
         grid.low_r = min(grid.low_r, points[e, 0])
         grid.low_c = min(grid.low_c, points[e, 1])
         high_r = max(high_r, points[e, 0])
         high_c = max(high_c, points[e, 1])
-    grid.rows = <Py_ssize_t> ((high_r - grid.low_r) / size) + 1
-    grid.cols = 1 if rows_only else <Py_ssize_t> ((high_c - grid.low_c) / size) + 1
+    grid.rows = <Py_ssize_t> ((high_r - grid.low_r) * grid.scale) + 1
+    grid.cols = 1 if rows_only else <Py_ssize_t> ((high_c - grid.low_c) * grid.scale) + 1
     cells = grid.rows * grid.cols
     grid.start = <Py_ssize_t *> calloc(cells + 1, sizeof(Py_ssize_t))
+    grid.first_row = <Py_ssize_t *> malloc(n * sizeof(Py_ssize_t))
+    grid.first_col = <Py_ssize_t *> malloc(n * sizeof(Py_ssize_t))
     grid.items = NULL
-    if grid.start == NULL:
+    if grid.start == NULL or grid.first_row == NULL or grid.first_col == NULL:
+        _free_grid(grid)
         return -1
     for e in range(n):  # count the entries of every cell (shifted by one: start[c + 1])
         b = next_index[e]
         if rows_only and points[e, 0] == points[b, 0]:
+            grid.first_row[e] = -1
             continue
-        r0 = _cell_of(min(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
-        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
-        c0 = 0 if rows_only else _cell_of(min(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
-        c1 = 0 if rows_only else _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
-        for r in range(r0, r1 + 1):
-            for c in range(c0, c1 + 1):
+        grid.first_row[e] = _cell_of(min(points[e, 0], points[b, 0]), grid.low_r, grid.scale, grid.rows)
+        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, grid.scale, grid.rows)
+        if rows_only:
+            grid.first_col[e], c1 = 0, 0
+        else:
+            grid.first_col[e] = _cell_of(min(points[e, 1], points[b, 1]), grid.low_c, grid.scale, grid.cols)
+            c1 = _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, grid.scale, grid.cols)
+        for r in range(grid.first_row[e], r1 + 1):
+            for c in range(grid.first_col[e], c1 + 1):
                 grid.start[r * grid.cols + c + 1] += 1
     for c in range(cells):
         grid.start[c + 1] += grid.start[c]
-    total = grid.start[cells]
-    grid.items = <Py_ssize_t *> malloc(max(total, 1) * sizeof(Py_ssize_t))
+    grid.items = <Py_ssize_t *> malloc(max(grid.start[cells], 1) * sizeof(Py_ssize_t))
     if grid.items == NULL:
-        free(grid.start)
-        grid.start = NULL
+        _free_grid(grid)
         return -1
     for e in range(n):  # fill, in edge order within each cell; start[c] ends as the next cell's start
-        b = next_index[e]
-        if rows_only and points[e, 0] == points[b, 0]:
+        if grid.first_row[e] < 0:
             continue
-        r0 = _cell_of(min(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
-        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, size, grid.rows)
-        c0 = 0 if rows_only else _cell_of(min(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
-        c1 = 0 if rows_only else _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, size, grid.cols)
-        for r in range(r0, r1 + 1):
-            for c in range(c0, c1 + 1):
+        b = next_index[e]
+        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, grid.scale, grid.rows)
+        c1 = 0 if rows_only else _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, grid.scale, grid.cols)
+        for r in range(grid.first_row[e], r1 + 1):
+            for c in range(grid.first_col[e], c1 + 1):
                 position = grid.start[r * grid.cols + c]
                 grid.items[position] = e
                 grid.start[r * grid.cols + c] = position + 1
@@ -552,7 +565,7 @@ def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index, Py_
     """
     cdef Py_ssize_t n = points.shape[0], capacity = first.shape[0], found = 0
     cdef Py_ssize_t cell, i, k, e, f, b, d, row, col
-    cdef double r0, r1, u0, u1, q0, q1, denominator, s, t, corner_r, corner_c
+    cdef double r0, r1, u0, u1, q0, q1, denominator, s, t
     cdef Grid grid
     if n < 4:
         return 0
@@ -565,16 +578,12 @@ def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index, Py_
             for i in range(grid.start[cell], grid.start[cell + 1]):
                 for k in range(i + 1, grid.start[cell + 1]):
                     e, f = grid.items[i], grid.items[k]  # e < f: filed in edge order
+                    # each pair once: in the first cell both meet
+                    if (max(grid.first_row[e], grid.first_row[f]) != row
+                            or max(grid.first_col[e], grid.first_col[f]) != col):
+                        continue
                     b, d = next_index[e], next_index[f]
                     if b == f or d == e:
-                        continue
-                    # the boxes meet, and this is the cell of the low corner of their intersection
-                    corner_r = max(min(points[e, 0], points[b, 0]), min(points[f, 0], points[d, 0]))
-                    corner_c = max(min(points[e, 1], points[b, 1]), min(points[f, 1], points[d, 1]))
-                    if (corner_r > min(max(points[e, 0], points[b, 0]), max(points[f, 0], points[d, 0]))
-                            or corner_c > min(max(points[e, 1], points[b, 1]), max(points[f, 1], points[d, 1]))
-                            or _cell_of(corner_r, grid.low_r, grid.size, grid.rows) != row
-                            or _cell_of(corner_c, grid.low_c, grid.size, grid.cols) != col):
                         continue
                     r0, r1 = points[b, 0] - points[e, 0], points[b, 1] - points[e, 1]
                     u0, u1 = points[d, 0] - points[f, 0], points[d, 1] - points[f, 1]
@@ -588,8 +597,7 @@ def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index, Py_
                         if found < capacity:
                             first[found], second[found], s_out[found], t_out[found] = e, f, s, t
                         found += 1
-        free(grid.start)
-        free(grid.items)
+        _free_grid(&grid)
     return found
 
 
@@ -609,12 +617,12 @@ def winding_banded(const double[:, ::1] points, const Py_ssize_t[::1] next_index
         if _file_edges(points, next_index, _cell_size(points, next_index, True), True, &grid) != 0:
             with gil:
                 raise MemoryError()
-        high_r = grid.low_r + grid.rows * grid.size
+        high_r = grid.low_r + grid.rows / grid.scale
         for i in range(probes.shape[0]):
             r, c = probes[i, 0], probes[i, 1]
             count = 0
             if grid.low_r <= r <= high_r:
-                band = _cell_of(r, grid.low_r, grid.size, grid.rows)
+                band = _cell_of(r, grid.low_r, grid.scale, grid.rows)
                 for k in range(grid.start[band], grid.start[band + 1]):
                     e = grid.items[k]
                     r0, r1 = points[e, 0], points[next_index[e], 0]
@@ -625,8 +633,7 @@ def winding_banded(const double[:, ::1] points, const Py_ssize_t[::1] next_index
                     if points[e, 1] + t * (points[next_index[e], 1] - points[e, 1]) > c:
                         count += -1 if upward else 1  # as in :func:`winding`
             out[i] = count
-        free(grid.start)
-        free(grid.items)
+        _free_grid(&grid)
 
 
 def winding(const double[:, ::1] points, const Py_ssize_t[::1] next_index,

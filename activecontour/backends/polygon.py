@@ -165,7 +165,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
-    energies = [evaluate(model, *geometry[:2], params, empty_ok=True).energy]
+    energies = [current.energy if np.isfinite(current.energy)
+                else evaluate(model, *geometry[:2], params, empty_ok=True).energy]
     n_iter = 0
     jumped = global_start and init is not None and not from_result and max_num_iter > 0 and (
         moved := _global_move(model, params, geometry, energies[0], spacing)) is not None
