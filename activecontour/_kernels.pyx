@@ -6,7 +6,9 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`build_tables`, :func:`edge_integrals` -- :mod:`activecontour.image`, :mod:`activecontour.energy`
   (the row-antiderivative tables and the exact integrals along the edges, (6.38) and (6.41));
 * :func:`cyclic_thomas` -- :mod:`activecontour.fem` (the block-cyclic tridiagonal solve of (6.40));
-* :func:`crossings`, :func:`winding` -- :mod:`activecontour.topology`.
+* :func:`crossings`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas` --
+  :mod:`activecontour.topology`, :mod:`activecontour.curve`;
+* :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
@@ -14,7 +16,7 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport sqrt
-from libc.stdlib cimport calloc, free, malloc
+from libc.stdlib cimport calloc, free, malloc, realloc
 
 cdef Py_ssize_t _POLL_ROWS = 256
 
@@ -731,3 +733,284 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
         begin = end
         PyErr_CheckSignals()
     return count
+
+
+cdef struct Tracer:
+    # the open ends of the contours being assembled, by point: a contour id or -1.  Horizontal
+    # points H(r, c) = padded (r, c + 1/2) of the square rows' top and bottom lines (two lines,
+    # by the parity of r), vertical points V(r, c) = (r + 1/2, c) of the current square row.
+    Py_ssize_t width, row
+    Py_ssize_t *start_h
+    Py_ssize_t *end_h
+    Py_ssize_t *start_v
+    Py_ssize_t *end_v
+    # per contour its first and last node (first = -1: merged into another); per node its
+    # successor and its point as doubled padded coordinates (2r, 2c + 1) or (2r + 1, 2c)
+    Py_ssize_t *first
+    Py_ssize_t *last
+    Py_ssize_t contours, contour_capacity
+    Py_ssize_t *following
+    int *point_r
+    int *point_c
+    Py_ssize_t nodes, node_capacity
+
+
+cdef Py_ssize_t *_end_slot(Tracer *tracer, bint start, int point_r, int point_c) noexcept nogil:
+    """Where the open end at a point (doubled coordinates) is kept; NULL for a point outside the
+    current square row, which no later segment can meet."""
+    cdef Py_ssize_t r
+    if point_r % 2 == 0:  # horizontal: line r, column (point_c - 1) / 2
+        r = point_r // 2
+        if r != tracer.row and r != tracer.row + 1:
+            return NULL
+        return &(tracer.start_h if start else tracer.end_h)[(r % 2) * tracer.width + (point_c - 1) // 2]
+    if (point_r - 1) // 2 != tracer.row:
+        return NULL
+    return &(tracer.start_v if start else tracer.end_v)[point_c // 2]
+
+
+cdef Py_ssize_t _pop(Tracer *tracer, bint start, int point_r, int point_c) noexcept nogil:
+    cdef Py_ssize_t *slot = _end_slot(tracer, start, point_r, point_c)
+    cdef Py_ssize_t found = -1
+    if slot != NULL:
+        found = slot[0]
+        slot[0] = -1
+    return found
+
+
+cdef void _put(Tracer *tracer, bint start, Py_ssize_t node, Py_ssize_t contour) noexcept nogil:
+    cdef Py_ssize_t *slot = _end_slot(tracer, start, tracer.point_r[node], tracer.point_c[node])
+    if slot != NULL:
+        slot[0] = contour
+
+
+cdef Py_ssize_t _node(Tracer *tracer, int point_r, int point_c) noexcept nogil:
+    """A new node at the point; -1 when out of memory."""
+    cdef Py_ssize_t capacity
+    cdef void *grown
+    if tracer.nodes == tracer.node_capacity:
+        capacity = 2 * tracer.node_capacity + 64
+        grown = realloc(tracer.following, capacity * sizeof(Py_ssize_t))
+        if grown == NULL:
+            return -1
+        tracer.following = <Py_ssize_t *> grown
+        grown = realloc(tracer.point_r, capacity * sizeof(int))
+        if grown == NULL:
+            return -1
+        tracer.point_r = <int *> grown
+        grown = realloc(tracer.point_c, capacity * sizeof(int))
+        if grown == NULL:
+            return -1
+        tracer.point_c = <int *> grown
+        tracer.node_capacity = capacity
+    tracer.following[tracer.nodes] = -1
+    tracer.point_r[tracer.nodes] = point_r
+    tracer.point_c[tracer.nodes] = point_c
+    tracer.nodes += 1
+    return tracer.nodes - 1
+
+
+cdef int _segment(Tracer *tracer, int from_r, int from_c, int to_r, int to_c) noexcept nogil:
+    """Add the segment from -> to to the contours, as scikit-image's ``_assemble_contours`` does
+    (the same joins in the same order, so the same contours start at the same points): extend
+    the contour ending at ``from`` and/or the one starting at ``to``, close a contour, join two
+    (into the older one), or open a new one.  Returns -1 when out of memory."""
+    cdef Py_ssize_t tail = _pop(tracer, True, to_r, to_c), head = _pop(tracer, False, from_r, from_c)
+    cdef Py_ssize_t node, other, capacity
+    cdef void *grown
+    if tail >= 0 and head >= 0:
+        if tail == head:  # closed: the end point repeats the first
+            node = _node(tracer, to_r, to_c)
+            if node < 0:
+                return -1
+            tracer.following[tracer.last[head]] = node
+            tracer.last[head] = node
+        elif tail > head:  # the tail contour appended to the head contour
+            tracer.following[tracer.last[head]] = tracer.first[tail]
+            tracer.last[head] = tracer.last[tail]
+            tracer.first[tail] = -1
+            _put(tracer, True, tracer.first[head], head)
+            _put(tracer, False, tracer.last[head], head)
+        else:  # the head contour prepended to the tail contour
+            tracer.following[tracer.last[head]] = tracer.first[tail]
+            tracer.first[tail] = tracer.first[head]
+            tracer.first[head] = -1
+            _put(tracer, True, tracer.first[tail], tail)
+            _put(tracer, False, tracer.last[tail], tail)
+        return 0
+    if tail < 0 and head < 0:  # a new contour
+        if tracer.contours == tracer.contour_capacity:
+            capacity = 2 * tracer.contour_capacity + 16
+            grown = realloc(tracer.first, capacity * sizeof(Py_ssize_t))
+            if grown == NULL:
+                return -1
+            tracer.first = <Py_ssize_t *> grown
+            grown = realloc(tracer.last, capacity * sizeof(Py_ssize_t))
+            if grown == NULL:
+                return -1
+            tracer.last = <Py_ssize_t *> grown
+            tracer.contour_capacity = capacity
+        node, other = _node(tracer, from_r, from_c), _node(tracer, to_r, to_c)
+        if node < 0 or other < 0:
+            return -1
+        tracer.following[node] = other
+        tracer.first[tracer.contours], tracer.last[tracer.contours] = node, other
+        _put(tracer, True, node, tracer.contours)
+        _put(tracer, False, other, tracer.contours)
+        tracer.contours += 1
+        return 0
+    if head < 0:  # prepend to the contour starting at ``to``
+        node = _node(tracer, from_r, from_c)
+        if node < 0:
+            return -1
+        tracer.following[node] = tracer.first[tail]
+        tracer.first[tail] = node
+        _put(tracer, True, node, tail)
+        return 0
+    node = _node(tracer, to_r, to_c)  # append to the contour ending at ``from``
+    if node < 0:
+        return -1
+    tracer.following[tracer.last[head]] = node
+    tracer.last[head] = node
+    _put(tracer, False, node, head)
+    return 0
+
+
+cdef void _free_tracer(Tracer *tracer) noexcept nogil:
+    free(tracer.start_h)
+    free(tracer.end_h)
+    free(tracer.start_v)
+    free(tracer.end_v)
+    free(tracer.first)
+    free(tracer.last)
+    free(tracer.following)
+    free(tracer.point_r)
+    free(tracer.point_c)
+
+
+def mask_contours(const unsigned char[:, ::1] mask):
+    """The closed 1/2-level curves of a boolean mask padded by one pixel of False: exactly the
+    curves of ``skimage.measure.find_contours(padded, 0.5, positive_orientation="high")`` (its
+    fully_connected="low"), in its order, each without its repeated closing vertex and shifted
+    back by the padding (:func:`activecontour.raster.mask_to_curves`).
+
+    Marching squares over the padded mask, row by row, every segment joined to the contours as
+    it is made: only the ends on the current row of squares are kept, so the memory beyond the
+    curves is O(N).  Returns ``(points, offsets)`` as bytearrays: float64 (row, col) pairs and
+    the Py_ssize_t start of every curve (one more than the curves).
+    """
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], r, c, k, node, total, count
+    cdef int case, top_r, top_c, bottom_r, left_r, left_c, right_c
+    cdef Tracer tracer
+    cdef double *points
+    cdef Py_ssize_t *offsets
+    cdef unsigned char[::1] points_view, offsets_view
+    cdef int failed = 0
+    tracer.width, tracer.row = n + 2, -1
+    tracer.start_h = <Py_ssize_t *> malloc(2 * (n + 2) * sizeof(Py_ssize_t))
+    tracer.end_h = <Py_ssize_t *> malloc(2 * (n + 2) * sizeof(Py_ssize_t))
+    tracer.start_v = <Py_ssize_t *> malloc((n + 2) * sizeof(Py_ssize_t))
+    tracer.end_v = <Py_ssize_t *> malloc((n + 2) * sizeof(Py_ssize_t))
+    tracer.first, tracer.last, tracer.following, tracer.point_r, tracer.point_c = NULL, NULL, NULL, NULL, NULL
+    tracer.contours, tracer.contour_capacity, tracer.nodes, tracer.node_capacity = 0, 0, 0, 0
+    if tracer.start_h == NULL or tracer.end_h == NULL or tracer.start_v == NULL or tracer.end_v == NULL:
+        _free_tracer(&tracer)
+        raise MemoryError()
+    for k in range(2 * (n + 2)):
+        tracer.start_h[k] = -1
+        tracer.end_h[k] = -1
+    try:
+        for r in range(m + 1):  # square rows of the padded mask: padded rows r and r + 1
+            if r % _POLL_ROWS == 0:
+                PyErr_CheckSignals()
+            with nogil:
+                tracer.row = r
+                for k in range((n + 2) * ((r + 1) % 2), (n + 2) * ((r + 1) % 2 + 1)):
+                    tracer.start_h[k] = -1  # the bottom line's slots held the line of row r - 1
+                    tracer.end_h[k] = -1
+                for k in range(n + 2):
+                    tracer.start_v[k] = -1
+                    tracer.end_v[k] = -1
+                for c in range(n + 1):
+                    # corners upper left 1, upper right 2, lower left 4, lower right 8 (padded
+                    # (i, j) is mask[i - 1, j - 1], outside it False)
+                    case = ((1 if 0 < r and 0 < c and mask[r - 1, c - 1] else 0)
+                            | (2 if 0 < r and c < n and mask[r - 1, c] else 0)
+                            | (4 if r < m and 0 < c and mask[r, c - 1] else 0)
+                            | (8 if r < m and c < n and mask[r, c] else 0))
+                    if case == 0 or case == 15:
+                        continue
+                    # doubled coordinates: top (2r, 2c + 1), bottom (2r + 2, 2c + 1),
+                    # left (2r + 1, 2c), right (2r + 1, 2c + 2)
+                    top_r, top_c, bottom_r = 2 * r, 2 * c + 1, 2 * r + 2
+                    left_r, left_c, right_c = 2 * r + 1, 2 * c, 2 * c + 2
+                    if case == 1:
+                        failed = _segment(&tracer, top_r, top_c, left_r, left_c)
+                    elif case == 2:
+                        failed = _segment(&tracer, left_r, right_c, top_r, top_c)
+                    elif case == 3:
+                        failed = _segment(&tracer, left_r, right_c, left_r, left_c)
+                    elif case == 4:
+                        failed = _segment(&tracer, left_r, left_c, bottom_r, top_c)
+                    elif case == 5:
+                        failed = _segment(&tracer, top_r, top_c, bottom_r, top_c)
+                    elif case == 6:
+                        failed = _segment(&tracer, left_r, right_c, top_r, top_c)
+                        if failed == 0:
+                            failed = _segment(&tracer, left_r, left_c, bottom_r, top_c)
+                    elif case == 7:
+                        failed = _segment(&tracer, left_r, right_c, bottom_r, top_c)
+                    elif case == 8:
+                        failed = _segment(&tracer, bottom_r, top_c, left_r, right_c)
+                    elif case == 9:
+                        failed = _segment(&tracer, top_r, top_c, left_r, left_c)
+                        if failed == 0:
+                            failed = _segment(&tracer, bottom_r, top_c, left_r, right_c)
+                    elif case == 10:
+                        failed = _segment(&tracer, bottom_r, top_c, top_r, top_c)
+                    elif case == 11:
+                        failed = _segment(&tracer, bottom_r, top_c, left_r, left_c)
+                    elif case == 12:
+                        failed = _segment(&tracer, left_r, left_c, left_r, right_c)
+                    elif case == 13:
+                        failed = _segment(&tracer, top_r, top_c, left_r, right_c)
+                    else:
+                        failed = _segment(&tracer, left_r, left_c, top_r, top_c)
+                    if failed != 0:
+                        break
+            if failed != 0:
+                raise MemoryError()
+        # every live contour in the order of creation, reversed (positive_orientation="high"),
+        # without its last point then (the first one again), in unpadded coordinates
+        total = 0
+        for k in range(tracer.contours):
+            if tracer.first[k] >= 0:
+                node = tracer.first[k]
+                while node != tracer.last[k]:
+                    total += 1
+                    node = tracer.following[node]
+        points_out = bytearray(total * 2 * sizeof(double))
+        offsets_out = bytearray((tracer.contours + 1) * sizeof(Py_ssize_t))
+        points_view, offsets_view = points_out, offsets_out
+        points = <double *> (&points_view[0] if total else NULL)
+        offsets = <Py_ssize_t *> &offsets_view[0]
+        offsets[0], count = 0, 0
+        for k in range(tracer.contours):
+            if tracer.first[k] < 0:
+                continue
+            # its nodes from the second to the last, written from the end backwards
+            total = offsets[count]
+            node = tracer.first[k]
+            while node != tracer.last[k]:
+                node = tracer.following[node]
+                total += 1
+            offsets[count + 1] = total
+            node = tracer.following[tracer.first[k]]
+            for r in range(offsets[count + 1] - 1, offsets[count] - 1, -1):
+                points[2 * r] = 0.5 * tracer.point_r[node] - 1.0
+                points[2 * r + 1] = 0.5 * tracer.point_c[node] - 1.0
+                node = tracer.following[node]
+            count += 1
+        return points_out, offsets_out[:(count + 1) * sizeof(Py_ssize_t)]
+    finally:
+        _free_tracer(&tracer)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.curve import curve_areas, split_curves, stack_curves, take_curves, take_vertices
 
 __all__ = ["level_curves", "mask_to_curves", "rasterize"]
@@ -73,15 +74,17 @@ def _row_crossings(curves, m, n):
 def mask_to_curves(mask, *, min_area=0.0):
     """Closed curves around the components (positive) and holes (negative) of a boolean mask.
 
-    The curves are the 0.5 iso-lines of the mask (marching squares,
-    ``skimage.measure.find_contours``), so they pass half-way between inside and outside pixel
-    centres and :func:`rasterize` of the result gives the mask back.  With
-    ``positive_orientation="high"`` the mask lies on the same side of every curve, which makes
-    outer boundaries positive and holes negative in our convention.  Curves with
-    ``|area| <= min_area`` are dropped.
+    The curves are the 0.5 iso-lines of the mask padded by one pixel of False (marching squares:
+    exactly ``skimage.measure.find_contours(padded, 0.5, positive_orientation="high")``, in its
+    order, traced in compiled code by :func:`activecontour._kernels.mask_contours`), so they pass
+    half-way between inside and outside pixel centres and :func:`rasterize` of the result gives
+    the mask back.  With ``positive_orientation="high"`` the mask lies on the same side of every
+    curve, which makes outer boundaries positive and holes negative in our convention.  Curves
+    with ``|area| <= min_area`` are dropped.
     """
-    padded = np.pad(np.asarray(mask, dtype=bool), 1).astype(np.float64)
-    return level_curves(padded, 0.5, min_area=min_area)
+    points, offsets = _kernels.mask_contours(np.ascontiguousarray(mask, dtype=bool).view(np.uint8))
+    return _closed_curves(np.frombuffer(points, dtype=np.float64).reshape(-1, 2),
+                          np.frombuffer(offsets, dtype=np.intp), min_area)
 
 
 def level_curves(padded, level, *, min_area=0.0):
@@ -98,12 +101,16 @@ def level_curves(padded, level, *, min_area=0.0):
     if not contours:
         return []
     points, _, offsets = stack_curves([contour[:-1] for contour in contours])
-    points -= 1.0
-    # drop every vertex equal to the one before it (cyclically), all curves at once
+    return _closed_curves(points - 1.0, offsets, min_area)
+
+
+def _closed_curves(points, offsets, min_area):
+    """The stacked curves without every vertex equal to the one before it (cyclically), then
+    without those with fewer than 3 vertices or ``|area| <= min_area``, as a list."""
     previous = np.arange(-1, len(points) - 1)
     filled = np.diff(offsets) > 0
     previous[offsets[:-1][filled]] = offsets[1:][filled] - 1
-    distinct = np.any(points != points[previous], axis=1)
+    distinct = np.any(points != np.take(points, previous, axis=0), axis=1)
     points, next_index, offsets = take_vertices(points, offsets, distinct)
     areas = curve_areas(points, next_index, offsets)
     keep = (np.diff(offsets) >= 3) & (np.abs(areas) > min_area)
