@@ -202,9 +202,13 @@ def _object_class(smooth, values=None, mu=0.0, split=None):
         label = smooth[:, :, 0] >= threshold
     else:
         label = smooth @ direction >= threshold
-    if label.all() or not label.any():
+    inside = np.count_nonzero(label)
+    if inside in (0, label.size):
         return np.zeros(smooth.shape[:2], dtype=bool), 0.0
-    low, high = values[~label].mean(axis=0), values[label].mean(axis=0)
+    # the class means without copying either class out of the image (sums where the mask says)
+    high = np.array([np.sum(values[:, :, ch], where=label) for ch in range(values.shape[2])])
+    total = values.reshape(-1, values.shape[2]).sum(axis=0)
+    high, low = high / inside, (total - high) / (label.size - inside)
     border = np.concatenate([label[0], label[-1], label[:, 0], label[:, -1]])
     contrast = float(np.mean((high - low) ** 2))
     return (~label if border.mean() > 0.5 else label), contrast
