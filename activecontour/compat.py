@@ -11,7 +11,7 @@ import inspect
 
 import numpy as np
 
-from activecontour.segment import segment
+from activecontour._segment import segment
 
 __all__ = ["chan_vese"]
 

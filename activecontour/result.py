@@ -6,10 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from activecontour.curve import clean
-from activecontour.energy import evaluate, stack_curves
-from activecontour.raster import rasterize
-from activecontour.topology import region_problem, region_union
+from activecontour.energy import evaluate
+from activecontour.geometry.curve import clean, stack_curves
+from activecontour.geometry.raster import rasterize
+from activecontour.geometry.topology import region_problem, region_union
 
 __all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
@@ -146,7 +146,7 @@ class FlowState:
         """The current inside region, rasterised on demand (not free: O(M N))."""
         if self.phi is not None:
             return self.phi > 0
-        from activecontour.raster import rasterize
+        from activecontour.geometry.raster import rasterize
 
         return rasterize(self.contours, self.shape)
 

@@ -201,8 +201,8 @@ def build_parser():
 def _output_options():
     """The options of ``segment``'s outputs and limits, as ``(flags, add_argument keywords)``: a new
     output option is one row here (a new contour format is one entry of io.CONTOUR_FORMATS)."""
-    from activecontour.image import MAX_PIXELS
     from activecontour.io import COLORS, CONTOUR_FORMATS
+    from activecontour.io.images import MAX_PIXELS
 
     return [
         (("--format",), {
@@ -523,7 +523,7 @@ def _report(progress, line, stream):
 
 def _settings(args):
     """The keyword arguments of activecontour.segment, validated before any work is done."""
-    from activecontour.energy import ChanVeseParameters
+    from activecontour.models import ChanVeseParameters
 
     settings = {name: getattr(args, name) for name in _PARAMETER_OPTIONS}
     if getattr(args, "options", None):
@@ -711,7 +711,7 @@ def _check_image(image_path, init, settings, image=None):
     import numpy as np
 
     import activecontour
-    from activecontour.image import normalize_image
+    from activecontour.imaging.normalize import normalize_image
     from activecontour.initial import initial_curves
 
     if image is None:
@@ -988,7 +988,7 @@ def _formats(text):
 
 
 def _object_formats(text):
-    from activecontour.object_formats import OBJECT_FORMATS
+    from activecontour.io.objects import OBJECT_FORMATS
 
     formats = [f.strip().lower() for f in text.split(",") if f.strip()]
     unknown = [f for f in formats if f not in OBJECT_FORMATS]
@@ -999,7 +999,7 @@ def _object_formats(text):
 
 
 def _inside_choices():
-    from activecontour.segment import INSIDE
+    from activecontour._segment import INSIDE
 
     return INSIDE
 
@@ -1011,7 +1011,7 @@ def _noise_choices():
 
 
 def _fit_choices():
-    from activecontour.segment import FITS
+    from activecontour._segment import FITS
 
     return FITS
 

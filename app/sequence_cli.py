@@ -62,7 +62,8 @@ def parse_frames(text):
 
 def is_stack(path, axis=0):
     """Whether ``path`` holds a sequence of frames: a video, or a TIFF with more than one frame."""
-    from activecontour.sequence import VIDEO_SUFFIXES, tiff_frame_count
+    from activecontour.io.images import tiff_frame_count
+    from activecontour.io.stacks import VIDEO_SUFFIXES
 
     lower = os.fspath(path).lower()
     if lower.endswith(VIDEO_SUFFIXES):
@@ -90,10 +91,10 @@ def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, in
     import numpy as np
 
     import activecontour as ac
-    from activecontour.atomic import temporary_file, write_group
-    from activecontour.image_files import render_overlay
-    from activecontour.object_formats import encode_table
-    from activecontour.sequence import read_frames
+    from activecontour.io.atomic import temporary_file, write_group
+    from activecontour.io.objects import encode_table
+    from activecontour.io.pictures import render_overlay
+    from activecontour.io.stacks import read_frames
 
     from .status_line import duration
 

@@ -59,12 +59,13 @@ from pathlib import Path
 
 import numpy as np
 
-from activecontour.curve import length, to_xy
-from activecontour.image import MAX_PIXELS, load_image, normalize_image
-from activecontour.image_files import REGION_COLORS, display_rgb
+from activecontour._segment import BACKENDS, segment
+from activecontour.geometry.curve import length, to_xy
+from activecontour.imaging.noise import auto_mu, is_auto
+from activecontour.imaging.normalize import normalize_image
 from activecontour.initial import initial_curves
-from activecontour.noise import auto_mu, is_auto
-from activecontour.segment import BACKENDS, segment
+from activecontour.io.images import MAX_PIXELS, load_image
+from activecontour.io.pictures import REGION_COLORS, display_rgb
 
 from .viewer_layout import (
     CONTOUR_COLOR,
@@ -1000,7 +1001,7 @@ def _state_curves(state):
     function (the N-region label field), the outline of that function's inside."""
     if state.contours or state.phi is None:
         return state.contours
-    from activecontour.raster import mask_to_curves
+    from activecontour.geometry.raster import mask_to_curves
 
     return mask_to_curves(state.phi > 0)
 

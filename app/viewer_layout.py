@@ -259,7 +259,7 @@ def contour_color(display):
     """The contour's colour on the display image, as the overlays draw it
     (:func:`activecontour.image_files.contrasting_color`: red on gray, one that stands out on
     colour), as matplotlib RGB in [0, 1]."""
-    from activecontour.image_files import contrasting_color
+    from activecontour.io.pictures import contrasting_color
 
     return tuple(channel / 255.0 for channel in contrasting_color(display))
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.widgets import TextBox
 
-from activecontour.curve import from_xy, orient, to_xy
+from activecontour.geometry.curve import from_xy, orient, to_xy
 from activecontour.initial import circle, rectangle
 
 __all__ = ["INIT_MODES", "MIN_DRAG", "CurveDrawer", "TextField"]

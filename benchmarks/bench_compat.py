@@ -33,7 +33,7 @@ import numpy as np
 
 import activecontour as ac
 from activecontour.compat import _segment_arguments, chan_vese
-from activecontour.raster import level_curves, mask_to_curves
+from activecontour.geometry.raster import level_curves, mask_to_curves
 from activecontour.synthetic import dice
 
 #: scikit-image sample images that load without a download (``--quick``: the first four)

@@ -61,8 +61,8 @@ import numpy as np
 import activecontour as ac
 from activecontour import synthetic as sy
 from activecontour.backends.levelset import checkerboard_level_set, curves_level_set, level_set_contours
+from activecontour.geometry.raster import mask_to_curves, rasterize
 from activecontour.initial import default_init
-from activecontour.raster import mask_to_curves, rasterize
 
 MU = 0.2
 INSIDE, OUTSIDE = 0.75, 0.25

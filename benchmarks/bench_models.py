@@ -180,7 +180,7 @@ def scenes_table(nuclei):
 def auto_table():
     import skimage.data
 
-    from activecontour.image import normalize_image
+    from activecontour.imaging.normalize import normalize_image
     from activecontour.models.modes import choose_regions
 
     rng = np.random.default_rng(4)

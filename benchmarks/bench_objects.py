@@ -37,7 +37,7 @@ import scipy.ndimage
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.metrics import match_instances
+from activecontour.objects.metrics import match_instances
 
 STARDIST_FILES = ("stardist/data/images/img2d.tif", "stardist/data/images/mask2d.tif")
 

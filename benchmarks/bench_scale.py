@@ -155,7 +155,7 @@ def import_profile(cache, top=12):
 
 def sizes(cache, sizes, max_iter):
     from activecontour import synthetic
-    from activecontour.image import load_image
+    from activecontour.io.images import load_image
 
     print(f"\nNoisy disk through the polygon backend, --max-iter {max_iter} ({load()})")
     print("floor: read + one float64 cumulative sum (in-process wall / CPU); CLI: whole process; library")

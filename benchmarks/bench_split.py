@@ -16,8 +16,10 @@ import numpy as np
 import scipy.ndimage
 import skimage.morphology
 
-from activecontour.objects import group_curves, label_image, split_touching
-from activecontour.raster import mask_to_curves
+from activecontour.geometry.raster import mask_to_curves
+from activecontour.geometry.regions import group_curves
+from activecontour.objects.measure import label_image
+from activecontour.objects.split import split_touching
 
 SIDES = (192, 384, 768, 1100)
 

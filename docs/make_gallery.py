@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import activecontour as ac  # noqa: E402
-from activecontour.image_files import render_overlay  # noqa: E402
+from activecontour.io.pictures import render_overlay  # noqa: E402
 
 #: The longest side of a gallery figure, in pixels.
 THUMBNAIL_SIDE = 360

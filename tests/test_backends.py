@@ -10,7 +10,7 @@ from activecontour.backends import BACKENDS
 from activecontour.backends import levelset as levelset_package
 from activecontour.backends.levelset import driver
 from activecontour.backends.options import option
-from activecontour.curve import edge_lengths
+from activecontour.geometry.curve import edge_lengths
 from app import cli
 
 SHAPE = (64, 64)

@@ -32,9 +32,9 @@ import skimage.measure
 
 import activecontour as ac
 from activecontour import io, synthetic
-from activecontour.curve import signed_area
-from activecontour.image import normalize_image
-from activecontour.raster import rasterize
+from activecontour.geometry.curve import signed_area
+from activecontour.geometry.raster import rasterize
+from activecontour.imaging.normalize import normalize_image
 from activecontour.result import STATUS_MESSAGES
 from app import cli
 
@@ -549,7 +549,7 @@ def test_the_line_options_reach_the_overlay(tmp_path, disk_png, capsys):
 
 
 def test_stale_temporaries_of_a_killed_run_are_swept_and_others_kept(tmp_path, disk_png, capsys):
-    from activecontour import atomic
+    from activecontour.io import atomic
 
     out = tmp_path / "out"
     out.mkdir()

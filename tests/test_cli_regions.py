@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from activecontour import io
-from activecontour.object_formats import read_label_image
+from activecontour.io.objects import read_label_image
 from tests.test_cli import assert_one_line_error, run, summary_fields
 
 
@@ -109,7 +109,7 @@ def test_help_lists_regions_and_fit(capsys):
 
 
 def test_the_overlay_draws_each_region_in_its_own_colour(nested, tmp_path, capsys):
-    from activecontour.image_files import COLORS, REGION_COLORS
+    from activecontour.io.pictures import COLORS, REGION_COLORS
 
     path, truth = nested
     out = tmp_path / "out"

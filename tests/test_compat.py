@@ -8,7 +8,7 @@ import skimage.segmentation
 
 import activecontour as ac
 from activecontour.compat import chan_vese
-from activecontour.raster import mask_to_curves
+from activecontour.geometry.raster import mask_to_curves
 from activecontour.synthetic import add_noise, dice, disk_image
 
 

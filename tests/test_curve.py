@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from activecontour import curve
+from activecontour.geometry import curve
 from activecontour.initial import circle
 
 

@@ -9,9 +9,9 @@ import pytest
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.curve import signed_area
-from activecontour.image import normalize_image
-from activecontour.noise import MU_FLOOR, MU_PER_NOISE_VARIANCE, auto_mu, estimate_noise
+from activecontour.geometry.curve import signed_area
+from activecontour.imaging.noise import MU_FLOOR, MU_PER_NOISE_VARIANCE, auto_mu, estimate_noise
+from activecontour.imaging.normalize import normalize_image
 
 
 def disk_scene(size, sigma=0.1, seed=0):

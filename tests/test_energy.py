@@ -5,9 +5,12 @@ import pytest
 import skimage.measure
 
 from activecontour import chan_vese_energy
-from activecontour.energy import ChanVeseParameters, evaluate, region_moments, stack_curves
-from activecontour.image import ImageModel, normalize_image
+from activecontour.energy import evaluate, region_moments
+from activecontour.geometry.curve import stack_curves
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
 from activecontour.initial import circle
+from activecontour.models import ChanVeseParameters
 from tests.helpers import central_differences
 from tests.test_curve import random_smooth_curve
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg
 
-from activecontour import curve, fem
+from activecontour.geometry import curve, fem
 from tests.helpers import central_differences
 from tests.test_curve import random_smooth_curve
 

@@ -5,8 +5,8 @@ import pytest
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.curve import signed_area
-from activecontour.raster import rasterize
+from activecontour.geometry.curve import signed_area
+from activecontour.geometry.raster import rasterize
 
 SIZE = (128, 128)
 CENTER = (63.5, 64.0)

@@ -15,10 +15,10 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import activecontour as ac  # noqa: E402
-from activecontour.curve import signed_area  # noqa: E402
-from activecontour.image import normalize_image  # noqa: E402
-from activecontour.raster import rasterize  # noqa: E402
-from activecontour.topology import region_problem  # noqa: E402
+from activecontour.geometry.curve import signed_area  # noqa: E402
+from activecontour.geometry.raster import rasterize  # noqa: E402
+from activecontour.geometry.topology import region_problem  # noqa: E402
+from activecontour.imaging.normalize import normalize_image  # noqa: E402
 
 _MANY = int(os.environ.get("FUZZ_EXAMPLES", "0"))
 FUZZ = settings(max_examples=_MANY or 120, derandomize=not _MANY, deadline=None, database=None,

@@ -10,9 +10,9 @@ import pytest
 
 import activecontour as ac
 from activecontour import io
-from activecontour.curve import orient, signed_area
-from activecontour.image_files import render_overlay
-from activecontour.raster import rasterize
+from activecontour.geometry.curve import orient, signed_area
+from activecontour.geometry.raster import rasterize
+from activecontour.io.pictures import render_overlay
 from activecontour.result import SegmentationResult
 
 SHAPE = (60, 80)
@@ -282,7 +282,7 @@ def test_sweep_removes_only_orphaned_temporaries(tmp_path):
     import subprocess
     import sys
 
-    from activecontour import atomic
+    from activecontour.io import atomic
 
     io.save_result(ac.segment(np.pad(np.ones((8, 8)), 8)), np.pad(np.ones((8, 8)), 8), tmp_path / "a")
     assert not list(tmp_path.glob(".*"))  # a finished write leaves no temporary
@@ -300,7 +300,7 @@ def test_sweep_removes_only_orphaned_temporaries(tmp_path):
 
 
 def test_display_uses_the_image_s_own_range():
-    from activecontour.image_files import display_rgb
+    from activecontour.io.pictures import display_rgb
 
     image = np.where(np.add.outer(np.arange(32), np.arange(32)) > 31, 200, 20).astype(np.uint16)
     shown = display_rgb(image)
@@ -314,7 +314,7 @@ def test_display_uses_the_image_s_own_range():
 
 
 def test_auto_line_width_follows_the_saved_size():
-    from activecontour.image_files import line_width
+    from activecontour.io.pictures import line_width
 
     assert [line_width((m, m)) for m in (256, 1024, 2048, 4096)] == [1, 1, 2, 4]
     image = np.full((2048, 1024), 0.5)
@@ -331,7 +331,7 @@ def test_auto_line_width_follows_the_saved_size():
 def test_auto_colour_stands_out_from_a_red_image(name, tmp_path):
     import skimage.data
 
-    from activecontour.image_files import COLORS, contrasting_color, display_rgb
+    from activecontour.io.pictures import COLORS, contrasting_color, display_rgb
 
     image = getattr(skimage.data, name)()
     shown = display_rgb(image)

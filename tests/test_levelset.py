@@ -21,9 +21,10 @@ from activecontour.backends.levelset import (
 )
 from activecontour.backends.levelset.redistancing import _redistance
 from activecontour.backends.levelset.scheme import _Problem, _swept_area
-from activecontour.curve import signed_area
-from activecontour.energy import ChanVeseParameters
-from activecontour.image import ImageModel, normalize_image
+from activecontour.geometry.curve import signed_area
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
+from activecontour.models import ChanVeseParameters
 
 MU = 0.5
 
@@ -252,7 +253,8 @@ def test_checkerboard_on_a_ramp_scores_its_start_as_its_contours(shape):
     # the checkerboard's zero lines pass within 1e-16 of pixel centres here; the reinitialised
     # start must score (6.38) as its own marching-squares contours do (a soup of segments
     # through values ~1e-38 once scored -180 where the contours score +30), and never go up
-    from activecontour.energy import evaluate, stack_curves
+    from activecontour.energy import evaluate
+    from activecontour.geometry.curve import stack_curves
 
     image = np.add.outer(np.arange(shape[0]), np.arange(shape[1])).astype(float)
     model = ImageModel(normalize_image(image))
@@ -515,7 +517,8 @@ def test_edge_soup_scores_exactly_as_the_chained_contours():
     # makes (6.38) a sum over edges, so the unchained, oriented soup gives the same energy, area
     # and length as the marching-squares contours
     from activecontour.backends.levelset import zero_set_edges
-    from activecontour.energy import evaluate, stack_curves
+    from activecontour.energy import evaluate
+    from activecontour.geometry.curve import stack_curves
 
     rng = np.random.default_rng(4)
     phi = rng.normal(size=(40, 50))

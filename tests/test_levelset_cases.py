@@ -16,7 +16,7 @@ import scipy.ndimage
 
 import activecontour as ac
 from activecontour import synthetic as sy
-from activecontour.raster import mask_to_curves
+from activecontour.geometry.raster import mask_to_curves
 
 BACKENDS = ("levelset", "polygon")
 DEFAULT_TOL = inspect.signature(ac.segment).parameters["tol"].default

@@ -40,7 +40,8 @@ def test_a_truncated_png_is_called_damaged(tmp_path):
 @pytest.mark.parametrize("suffix", [".png", ".tif", ".jpg", ".bmp"])
 def test_the_size_limit_is_checked_from_the_header_before_decoding(tmp_path, monkeypatch, suffix):
     import activecontour.image as image_module
-    from activecontour.image import SizeLimitError
+
+    from activecontour.io.images import SizeLimitError
 
     path = tmp_path / f"big{suffix}"
     cv2.imwrite(str(path), np.zeros((300, 200), np.uint8))
@@ -58,7 +59,7 @@ def test_the_default_limit_refuses_a_small_file_declaring_a_huge_image(tmp_path)
     import struct
     import zlib
 
-    from activecontour.image import MAX_PIXELS, SizeLimitError
+    from activecontour.io.images import MAX_PIXELS, SizeLimitError
 
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))

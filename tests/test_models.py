@@ -9,9 +9,11 @@ common evaluator.  Dropping a term from any consumer fails one of these.
 import numpy as np
 import pytest
 
-from activecontour import topology
-from activecontour.energy import evaluate, region_moments, stack_curves
-from activecontour.image import ImageModel, normalize_image
+from activecontour.energy import evaluate, region_moments
+from activecontour.geometry import topology
+from activecontour.geometry.curve import stack_curves
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
 from activecontour.initial import circle
 from activecontour.models import ChanVeseParameters, QuadraticForm
 from tests.helpers import central_differences

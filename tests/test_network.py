@@ -10,10 +10,11 @@ from hypothesis import strategies as st
 import activecontour as ac
 from activecontour.backends.network import Network, segment_network
 from activecontour.energy import evaluate_partition
-from activecontour.image import ImageModel, normalize_image
+from activecontour.geometry.partition import chain, class_boundary, class_soup
+from activecontour.geometry.raster import rasterize
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
 from activecontour.models import ChanVeseParameters
-from activecontour.partition import chain, class_boundary, class_soup
-from activecontour.raster import rasterize
 
 
 def _antialiased(shape, classify, levels, factor=8):
@@ -203,7 +204,7 @@ def test_dropping_an_island_merges_it_into_the_region_around_it():
 def test_a_region_pinched_at_a_junction_is_two_simple_curves(backend):
     # region 1 meets itself diagonally at the corner of region 2: its two squares touch at one
     # point, which must not make one curve that touches itself (a figure eight is not a polygon)
-    from activecontour.topology import region_problem
+    from activecontour.geometry.topology import region_problem
 
     truth = np.zeros((30, 30), dtype=int)
     truth[5:15, 5:15] = 1

@@ -11,8 +11,8 @@ import tifffile
 
 import activecontour as ac
 from activecontour import io, synthetic
-from activecontour.curve import to_xy
-from activecontour.object_formats import (
+from activecontour.geometry.curve import to_xy
+from activecontour.io.objects import (
     IMAGEJ_OFFSET,
     OBJECT_FORMATS,
     read_label_image,
@@ -77,7 +77,7 @@ def test_unknown_object_format_is_refused_before_writing(tmp_path, result_and_im
 
 
 def test_labels_png_refuses_more_ids_than_16_bits(result_and_image):
-    from activecontour.object_formats import encode_objects
+    from activecontour.io.objects import encode_objects
 
     res, _ = result_and_image
     big = type("R", (), {"labels": np.array([[0, 70000]], dtype=np.int32)})()

@@ -6,9 +6,10 @@ import skimage.measure
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.curve import orient
-from activecontour.objects import find_objects, group_curves, label_image, measure, polygon_moments
-from activecontour.raster import rasterize
+from activecontour.geometry.curve import orient
+from activecontour.geometry.raster import rasterize
+from activecontour.geometry.regions import group_curves
+from activecontour.objects.measure import find_objects, label_image, measure, polygon_moments
 
 
 def ellipse(center, a, b, angle=0.0, n=2000, hole=False):
@@ -160,7 +161,7 @@ def _pair(distance, radius=12.0, size=(80, 110)):
 def _no_overlap_and_union_is_region(res):
     import shapely
 
-    from activecontour.objects import _to_shapely
+    from activecontour.geometry.regions import _to_shapely
 
     polygons = [_to_shapely(curves) for curves in res.object_contours]
     region = _to_shapely(res.contours)
@@ -178,7 +179,7 @@ def test_touching_pair_is_two_objects_at_every_contact_width(distance):
     image, truth = _pair(distance)
     res = ac.segment(image)
     assert res.labels.max() == 2
-    from activecontour.metrics import match_instances
+    from activecontour.objects.metrics import match_instances
 
     score = match_instances(res.labels, truth)
     assert score["tp"] == 2 and score["mean_iou"] > 0.85
@@ -194,7 +195,7 @@ def test_touching_pair_is_two_objects_at_every_contact_width(distance):
 def test_touching_pair_is_two_objects_from_the_level_set_too(distance):
     image, truth = _pair(distance)
     res = ac.segment(image, backend="levelset")
-    from activecontour.metrics import match_instances
+    from activecontour.objects.metrics import match_instances
 
     assert match_instances(res.labels, truth)["tp"] == 2 and res.labels.max() == 2
     _no_overlap_and_union_is_region(res)
@@ -262,7 +263,7 @@ def _bright_and_dim_halves():
 
 @pytest.mark.parametrize("backend", ["polygon", "levelset"])
 def test_a_bright_and_a_dim_object_touching_without_a_waist_are_two(backend):
-    from activecontour.metrics import match_instances
+    from activecontour.objects.metrics import match_instances
 
     image, truth = _bright_and_dim_halves()
     noisy = synthetic.add_noise(image, 0.5 / 3, seed=1)  # SNR 3 on the step between the halves
@@ -289,7 +290,7 @@ def test_a_single_object_is_never_split_at_snr_3(name):
 def test_touching_clumps_f1(backend):
     import scipy.ndimage
 
-    from activecontour.metrics import match_instances
+    from activecontour.objects.metrics import match_instances
 
     counts = np.zeros(3)
     components = np.zeros(3)
@@ -334,7 +335,7 @@ def test_thousands_of_small_watershed_parts_merge_into_one():
     import scipy.ndimage
     import skimage.morphology
 
-    from activecontour.objects import MIN_SPLIT_RADIUS, NECK_RATIO, _neck_parts
+    from activecontour.objects.split import MIN_SPLIT_RADIUS, NECK_RATIO, _neck_parts
 
     n = 150
     region = np.pad(np.ones((n, n), dtype=bool), 1)
@@ -351,7 +352,7 @@ def test_merged_part_shapes_are_those_of_regionprops():
     # of regionprops on the merged pixels
     import scipy.ndimage
 
-    from activecontour.objects import MAX_PART_ASPECT, MIN_PART_SOLIDITY, _PartShapes
+    from activecontour.objects.split import MAX_PART_ASPECT, MIN_PART_SOLIDITY, _PartShapes
 
     rng = np.random.default_rng(0)
     for _ in range(20):
@@ -374,7 +375,7 @@ def test_a_constant_image_has_no_contrast_to_split():
     # class is then empty: a mean of nothing)
     import warnings
 
-    from activecontour.objects import split_touching
+    from activecontour.objects.split import split_touching
 
     square = [ac.rectangle((1.5, 1.5), (18.5, 18.5))]  # 289 px: enough for two pieces
     labels = label_image([square], (20, 20))

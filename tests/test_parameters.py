@@ -6,8 +6,12 @@ import numpy as np
 import pytest
 
 import activecontour as ac
-from activecontour.energy import EMPTY_FRACTION, ChanVeseParameters, evaluate, stack_curves
-from activecontour.image import ImageModel, normalize_image
+from activecontour.energy import evaluate
+from activecontour.geometry.curve import stack_curves
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
+from activecontour.models import ChanVeseParameters
+from activecontour.models.two_region import EMPTY_FRACTION
 
 IMAGE = np.random.default_rng(0).random((32, 32))
 

@@ -6,7 +6,8 @@ import scipy.optimize
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.energy import evaluate, stack_curves
+from activecontour.energy import evaluate
+from activecontour.geometry.curve import stack_curves
 from activecontour.initial import circle
 from activecontour.models import ChanVeseParameters
 from activecontour.models.poisson import fit_poisson_light, poisson_model

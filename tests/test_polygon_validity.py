@@ -12,7 +12,7 @@ from shapely.geometry import MultiPolygon, Polygon, shape
 
 import activecontour as ac
 from activecontour import io
-from activecontour.curve import to_xy
+from activecontour.geometry.curve import to_xy
 
 
 @pytest.fixture(scope="module", params=["polygon", "levelset"])

@@ -7,8 +7,8 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
 import activecontour as ac
-from activecontour import topology
-from activecontour.curve import signed_area
+from activecontour.geometry import topology
+from activecontour.geometry.curve import signed_area
 
 
 def region_of(curves):

@@ -10,11 +10,12 @@ import skimage.measure
 
 import activecontour as ac
 from activecontour.energy import evaluate_partition, partition_load
-from activecontour.image import ImageModel, normalize_image
+from activecontour.geometry.partition import Boundary, chain, class_boundary, class_soup
+from activecontour.geometry.raster import rasterize
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
 from activecontour.models import ChanVeseParameters
 from activecontour.models.kmeans import histogram_kmeans
-from activecontour.partition import Boundary, chain, class_boundary, class_soup
-from activecontour.raster import rasterize
 
 
 def _blocks():

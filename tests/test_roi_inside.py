@@ -6,8 +6,8 @@ import pytest
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.energy import chan_vese_energy
-from activecontour.object_formats import read_label_image, read_objects_csv
+from activecontour.evaluate import chan_vese_energy
+from activecontour.io.objects import read_label_image, read_objects_csv
 from app import cli
 
 CENTERS = [(25 + 35 * i, 25 + 35 * j) for i in range(3) for j in range(3)]

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 import activecontour as ac
-from activecontour.image import load_image, normalize_image
+from activecontour.imaging.normalize import normalize_image
 from activecontour.initial import initial_curves
+from activecontour.io.images import load_image
 
 IMAGE = np.zeros((40, 50))
 IMAGE[10:30, 15:35] = 1.0

@@ -5,7 +5,8 @@ import pytest
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.energy import evaluate, stack_curves
+from activecontour.energy import evaluate
+from activecontour.geometry.curve import stack_curves
 from activecontour.initial import circle
 from activecontour.models import ChanVeseParameters
 from activecontour.models.smooth import fit_light, light_basis, smooth_light_model

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 import activecontour as ac
-from activecontour import synthetic, topology
-from activecontour.curve import signed_area
-from activecontour.energy import stack_curves
+from activecontour import synthetic
+from activecontour.geometry import topology
+from activecontour.geometry.curve import signed_area, stack_curves
 from activecontour.initial import grid
 
 SIZE = (128, 128)

@@ -18,10 +18,10 @@ from matplotlib.backend_bases import CloseEvent, KeyEvent, MouseEvent, ResizeEve
 
 import activecontour as ac  # noqa: E402
 from activecontour import synthetic  # noqa: E402
-from activecontour.curve import length, signed_area  # noqa: E402
-from activecontour.image_files import display_rgb  # noqa: E402
+from activecontour.geometry.curve import length, signed_area  # noqa: E402
+from activecontour.geometry.raster import mask_to_curves  # noqa: E402
 from activecontour.io import read_contours, read_mask, write_mask  # noqa: E402
-from activecontour.raster import mask_to_curves  # noqa: E402
+from activecontour.io.pictures import display_rgb  # noqa: E402
 from app import viewer as viewer_module  # noqa: E402
 from app.viewer import SHORTCUTS, Viewer, launch  # noqa: E402
 from app.viewer_layout import DEFAULT_SIZE  # noqa: E402

@@ -10,7 +10,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import activecontour as ac  # noqa: E402
-from activecontour.image_files import REGION_COLORS  # noqa: E402
+from activecontour.io.pictures import REGION_COLORS  # noqa: E402
 from app.viewer import REGION_CHOICES  # noqa: E402
 from tests import test_viewer  # noqa: E402
 from tests.test_viewer import drag, key  # noqa: E402
@@ -116,7 +116,7 @@ def test_view_command_passes_regions_and_fit(rings, tmp_path, headless_launch):
 
 
 def test_save_writes_the_classes_image_as_the_command_line_does(rings, make_viewer, tmp_path):
-    from activecontour.object_formats import read_label_image
+    from activecontour.io.objects import read_label_image
 
     image, _ = rings
     viewer = make_viewer(image)

@@ -46,8 +46,8 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour.energy import evaluate_partition
+from activecontour.geometry.partition import chain, class_boundary, class_soup
 from activecontour.models.kmeans import histogram_kmeans
-from activecontour.partition import chain, class_boundary, class_soup
 from activecontour.result import FlowState, SegmentationResult
 
 __all__ = ["initial_classes", "segment_labels"]

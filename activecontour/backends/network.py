@@ -57,8 +57,8 @@ from activecontour.energy import (
     partition_moments,
     soup_moments,
 )
-from activecontour.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
-from activecontour.raster import rasterize
+from activecontour.geometry.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
+from activecontour.geometry.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
 
 __all__ = ["Network", "segment_network"]

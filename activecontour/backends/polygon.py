@@ -35,12 +35,12 @@ from itertools import pairwise
 
 import numpy as np
 
-from activecontour import fem, topology
 from activecontour.backends.options import option, parse_options
-from activecontour.curve import edge_lengths, resample, signed_area
-from activecontour.energy import evaluate, stack_curves
+from activecontour.energy import evaluate
+from activecontour.geometry import fem, topology
+from activecontour.geometry.curve import edge_lengths, resample, signed_area, stack_curves
+from activecontour.geometry.raster import rasterize
 from activecontour.initial import circle, initial_curves
-from activecontour.raster import rasterize
 from activecontour.result import FlowState, build_result
 
 __all__ = ["PolygonOptions", "segment_polygon"]

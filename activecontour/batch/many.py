@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from activecontour._segment import segment
 from activecontour.batch.pool import map_unordered
 from activecontour.result import SegmentationResult
-from activecontour.segment import segment
 
 __all__ = ["BatchResult", "segment_many"]
 

@@ -110,8 +110,8 @@ def choose_regions(values, mu="auto", *, max_regions=MAX_REGIONS):
     -------
     int
     """
-    from activecontour.energy import to_frame, working_frame
-    from activecontour.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
+    from activecontour.imaging.frame import to_frame, working_frame
+    from activecontour.imaging.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
 
     offset, scale = working_frame(values)
     values = to_frame(values, offset, scale)

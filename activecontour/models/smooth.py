@@ -170,7 +170,7 @@ def smooth_light_model(image, light, params):
     """
     import dataclasses
 
-    from activecontour.image import ImageModel
+    from activecontour.imaging.tables import ImageModel
 
     if light is None:  # uniform: the constant fit
         return ImageModel(image), params

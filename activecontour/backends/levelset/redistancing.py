@@ -6,7 +6,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _corners
-from activecontour.raster import rasterize
+from activecontour.geometry.raster import rasterize
 
 _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in float32
 _MIN_DISTANCE = 1e-6  # pixels: the smallest |phi| a reinitialisation writes (see _propagate)

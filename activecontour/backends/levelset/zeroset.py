@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.raster import level_curves
+from activecontour.geometry.raster import level_curves
 
 
 def _cell_segments(a, b, c, d, cell_r, cell_c, width):

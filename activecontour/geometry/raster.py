@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.curve import signed_area
+from activecontour.geometry.curve import signed_area
 
 __all__ = ["level_curves", "mask_to_curves", "rasterize"]
 

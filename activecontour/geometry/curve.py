@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour import fem
+from activecontour.geometry import fem
 
 __all__ = [
     "as_curve",
@@ -262,3 +262,18 @@ def to_xy(points):
 def from_xy(points):
     """(x, y) -> (row, col), the inverse of :func:`to_xy`."""
     return to_xy(points)
+
+
+def stack_curves(curves):
+    """Stack a list of (K_i, 2) curves into one vertex array and the index of each edge's end.
+
+    Returns ``points (sum K_i, 2)``, ``next_index`` with edge e joining ``e`` and ``next_index[e]``,
+    and the start offset of every curve (length ``len(curves) + 1``).
+    """
+    counts = np.array([len(c) for c in curves], dtype=np.intp)
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    points = np.concatenate(curves, axis=0) if curves else np.zeros((0, 2))
+    next_index = np.arange(offsets[-1]) + 1
+    next_index[offsets[1:] - 1] = offsets[:-1]
+    return points, next_index, offsets
+

@@ -32,7 +32,7 @@ import zipfile
 
 import numpy as np
 
-from activecontour.curve import to_xy
+from activecontour.geometry.curve import to_xy
 
 __all__ = ["OBJECT_FORMATS", "encode_objects", "encode_table", "object_paths", "read_label_image",
            "read_objects_csv", "read_objects_geojson"]
@@ -106,7 +106,7 @@ def _label_tiff(labels):
 
 def read_label_image(path):
     """A label image written by :func:`encode_objects` (PNG or TIFF), as int32."""
-    from activecontour.image import load_image
+    from activecontour.io.images import load_image
 
     return np.asarray(load_image(path)).astype(np.int32)
 
@@ -136,7 +136,7 @@ def _geojson(objects, table):
 def read_objects_geojson(path):
     """The objects of a GeoJSON file written by :func:`encode_objects`: (ids, list of curves per
     object in (row, col), oriented as the library's, the properties of each)."""
-    from activecontour.curve import from_xy
+    from activecontour.geometry.curve import from_xy
 
     with open(path, encoding="utf-8") as handle:
         document = json.load(handle)

@@ -1,27 +1,8 @@
-"""Objects: the label image, per-object measurements, and touching objects kept apart.
+"""Touching objects kept apart: an object split where a neck joins two parts.
 
-An *object* is a connected piece of the inside region: one outer boundary with the holes directly
-inside it (a hole belongs to its object; an object inside a hole is another object).  The result's
-contours are grouped into objects (:func:`group_curves`), optionally split where two objects touch
-(:func:`split_touching`), and each object gets an id 1..n in the label image
-(:func:`label_image`) and a row in the measurement table (:func:`measure`).
-
-Exact and pixel columns of :func:`measure` (names as ``skimage.measure.regionprops_table``):
-
-====================================  ===========================================================
-exact, from the sub-pixel polygon     ``area``, ``perimeter`` (outer boundary and holes),
-(Green's theorem, holes subtracted)   ``centroid-0/1``, and from the second moments
-                                      ``eccentricity``, ``orientation``, ``axis_major_length``,
-                                      ``axis_minor_length``; ``area_convex`` and ``solidity``
-                                      (convex hull of the polygon); ``equivalent_diameter_area``
-from the pixels of the label image    ``label``, ``bbox-0..3``, ``num_pixels``,
-                                      ``intensity_mean`` (input units; ``intensity_mean-k`` per
-                                      channel of a colour image)
-====================================  ===========================================================
-
-The exact moments are those of the continuous region; ``regionprops`` sums point masses at pixel
-centres, so its second moments differ by the 1/12 px^2 of a pixel square and by the rasterisation
-(a few per cent on objects of a few pixels, below 1 % beyond a radius of ~10 px).
+:func:`split_touching` cuts an object along the necks of its inside region (the inscribed radius
+falls well below both parts'), or where a contrast ridge separates two blobs; the cut lines are
+shared by both parts, so the parts tile the object exactly.
 """
 
 from __future__ import annotations
@@ -31,232 +12,10 @@ from itertools import pairwise
 
 import numpy as np
 
-from activecontour.curve import clean, signed_area
-from activecontour.raster import rasterize
+from activecontour.geometry.raster import rasterize
+from activecontour.geometry.regions import _from_shapely, _to_shapely
 
-__all__ = ["clip_region", "complement_region", "find_objects", "group_curves", "label_image", "measure",
-           "polygon_moments", "split_touching"]
-
-
-def group_curves(contours):
-    """Group oriented contours into objects: each outer boundary with the holes directly in it.
-
-    Parameters
-    ----------
-    contours : list of ndarray (K, 2)
-        Outer boundaries (positive signed area) and holes (negative), not crossing each other.
-
-    Returns
-    -------
-    list of list of ndarray
-        One list per object: its outer boundary first, then its holes.  Objects are ordered by
-        the (row, col) of their topmost-leftmost vertex, so ids read like text.
-    """
-    from activecontour.energy import stack_curves
-    from activecontour.topology import winding_number
-
-    outers = [c for c in contours if signed_area(c) > 0]
-    holes = [c for c in contours if signed_area(c) < 0]
-    objects = [[c] for c in outers]
-    if holes and outers:
-        points, next_index, offsets = stack_curves(outers)
-        areas = np.array([signed_area(c) for c in outers])
-        for hole in holes:
-            # the smallest outer boundary around the hole is the one it belongs to; every point of
-            # the hole is inside it, its first vertex will do
-            inside = [i for i in np.argsort(areas)
-                      if winding_number(points[offsets[i]:offsets[i + 1]],
-                                        next_index[offsets[i]:offsets[i + 1]] - offsets[i],
-                                        hole[:1])[0] != 0]
-            if inside:
-                objects[inside[0]].append(hole)
-    return _reading_order(objects)
-
-
-def _reading_order(objects):
-    """Objects sorted by the (row, col) of their topmost-leftmost vertex: ids read like text."""
-    return sorted(objects, key=_top_left)
-
-
-def _top_left(curves):
-    outer = curves[0]
-    return tuple(outer[np.lexsort(outer.T[::-1])[0]])
-
-
-def find_objects(contours, shape, image=None, *, separate=True):
-    """The objects of a result: their curves, the label image and the measurement table.
-
-    Parameters
-    ----------
-    contours : list of ndarray (K, 2), or list of such lists
-        The oriented boundary of the inside region (a result's ``contours``), or one such list per
-        non-background class of an N-region partition: objects are the connected pieces of each
-        class, so two touching pieces of different classes are two objects (the table's ``class``
-        column, 1-based, says which).
-    shape : tuple (M, N)
-    image : ndarray (M, N) or (M, N, C), optional
-        The input image in its own units, for ``intensity_mean``.
-    separate : bool
-        Split touching objects along their necks, and by contrast where the image is given
-        (:func:`split_touching`); False keeps the connected pieces.
-
-    Returns
-    -------
-    objects : list of list of ndarray
-        Object k (id k + 1): outer boundary, then holes.  Objects that cover no pixel centre (a
-        sub-pixel speck) have no id and are left out.
-    labels : int32 ndarray (M, N)
-    table : dict of str to ndarray
-        :func:`measure`, with a ``class`` column.
-    """
-    by_class = [contours] if not contours or isinstance(contours[0], np.ndarray) else list(contours)
-    objects, classes = [], []
-    for k, curves in enumerate(by_class):
-        found = group_curves(curves)
-        if separate and found:
-            found = split_touching(found, label_image(found, shape), image)
-        objects += found
-        classes += [k + 1] * len(found)
-    order = sorted(range(len(objects)), key=lambda i: _top_left(objects[i]))
-    objects, classes = [objects[i] for i in order], np.array([classes[i] for i in order], dtype=np.int32)
-    labels = label_image(objects, shape)
-    present = np.bincount(labels.ravel(), minlength=len(objects) + 1)[1:] > 0
-    if not present.all():
-        objects, classes = [o for o, keep in zip(objects, present, strict=True) if keep], classes[present]
-        relabel = np.concatenate([[0], np.cumsum(present) * present]).astype(np.int32)
-        labels = relabel[labels]
-    table = measure(objects, labels, image)
-    table["class"] = classes
-    return objects, labels, table
-
-
-def polygon_moments(curves):
-    """Exact area, first and second moments of the region bounded by oriented polygons.
-
-    By Green's theorem each edge (r_i, c_i) -> (r_j, c_j) with cross product
-    ``w = r_i c_j - r_j c_i`` adds ``w / 2`` to the area, ``(r_i + r_j) w / 6`` to ``int r``,
-    ``(r_i^2 + r_i r_j + r_j^2) w / 12`` to ``int r^2``, and ``(2 r_i c_i + r_i c_j + r_j c_i +
-    2 r_j c_j) w / 24`` to ``int r c``; holes (negative orientation) subtract themselves.
-
-    Returns
-    -------
-    area : float
-    centroid : ndarray (2,)
-        (row, col).
-    central : ndarray (2, 2)
-        Central second moments ``int (x - xbar)(x - xbar)^T dA`` over the region, x = (row, col).
-    """
-    origin = np.asarray(curves[0], dtype=np.float64).mean(axis=0)  # against cancellation
-    sums = np.zeros(6)  # 1, r, c, rr, cc, rc
-    for curve in curves:
-        p = np.asarray(curve, dtype=np.float64) - origin
-        q = np.roll(p, -1, axis=0)
-        r0, c0, r1, c1 = p[:, 0], p[:, 1], q[:, 0], q[:, 1]
-        w = r0 * c1 - r1 * c0
-        sums += [np.sum(w) / 2, np.sum((r0 + r1) * w) / 6, np.sum((c0 + c1) * w) / 6,
-                 np.sum((r0 * r0 + r0 * r1 + r1 * r1) * w) / 12,
-                 np.sum((c0 * c0 + c0 * c1 + c1 * c1) * w) / 12,
-                 np.sum((2 * r0 * c0 + r0 * c1 + r1 * c0 + 2 * r1 * c1) * w) / 24]
-    area = sums[0]
-    mean = sums[1:3] / area
-    central = np.array([[sums[3], sums[5]], [sums[5], sums[4]]]) - area * np.outer(mean, mean)
-    return area, origin + mean, central
-
-
-def label_image(objects, shape):
-    """The int32 label image: pixel centres inside object k's curves get id k + 1, others 0.
-
-    Each object is rasterised in its own bounding box (:func:`activecontour.raster.rasterize`),
-    so the cost is the objects' area, not n times the image.
-    """
-    m, n = shape
-    labels = np.zeros((m, n), dtype=np.int32)
-    for index, curves in enumerate(objects):
-        low = np.floor(np.min([c.min(axis=0) for c in curves], axis=0)).astype(int)
-        high = np.ceil(np.max([c.max(axis=0) for c in curves], axis=0)).astype(int) + 1
-        low, high = np.maximum(low, 0), np.minimum(high, (m, n))
-        if np.any(high <= low):
-            continue
-        inside = rasterize([c - low for c in curves], tuple(high - low))
-        labels[low[0]:high[0], low[1]:high[1]][inside] = index + 1
-    return labels
-
-
-def measure(objects, labels, image=None):
-    """Per-object measurements, a dict of 1-D arrays with ``regionprops_table``'s names.
-
-    Parameters
-    ----------
-    objects : list of list of ndarray
-        Object k (id k + 1 in ``labels``): its outer boundary first, then its holes.
-    labels : int ndarray (M, N)
-        From :func:`label_image`.
-    image : ndarray (M, N) or (M, N, C), optional
-        The input image, in its own units, for ``intensity_mean``.
-
-    Returns
-    -------
-    dict of str to ndarray
-        The columns listed in the module docstring; which are exact and which count pixels is
-        said there.  The second-moment columns follow ``skimage.measure.regionprops``: with the
-        inertia tensor ``T = [[m_cc, -m_rc], [-m_rc, m_rr]] / area`` and its eigenvalues
-        ``l1 >= l2``, ``axis_major_length = 4 sqrt(l1)``, ``eccentricity = sqrt(1 - l2 / l1)``,
-        ``orientation = atan2(-2 T_01, T_11 - T_00) / 2`` (the angle from the row axis to the
-        major axis, in (-pi/2, pi/2]).
-    """
-    import scipy.ndimage
-
-    n = len(objects)
-    ids = np.arange(1, n + 1)
-    table = {"label": ids.astype(np.int32)}
-    area, centroid, tensor, perimeter, convex = (np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2)),
-                                                 np.zeros(n), np.zeros(n))
-    for k, curves in enumerate(objects):
-        area[k], centroid[k], central = polygon_moments(curves)
-        # regionprops' inertia tensor: the moment about each axis is the other coordinate's
-        tensor[k] = np.array([[central[1, 1], -central[0, 1]], [-central[0, 1], central[0, 0]]]) / area[k]
-        perimeter[k] = sum(np.sum(np.hypot(*np.diff(np.vstack([c, c[:1]]), axis=0).T)) for c in curves)
-        convex[k] = _hull_area(np.vstack([c for c in curves if signed_area(c) > 0]))
-    eigen = np.linalg.eigvalsh(tensor)[:, ::-1].clip(min=0)  # descending
-    table["area"] = area
-    table["perimeter"] = perimeter
-    table["centroid-0"], table["centroid-1"] = centroid[:, 0], centroid[:, 1]
-    boxes = scipy.ndimage.find_objects(labels, max_label=n)
-    bbox = np.array([[s[0].start, s[1].start, s[0].stop, s[1].stop] if s is not None else [0, 0, 0, 0]
-                     for s in boxes], dtype=np.int64).reshape(n, 4)
-    for j in range(4):
-        table[f"bbox-{j}"] = bbox[:, j]
-    table["num_pixels"] = np.bincount(labels.ravel(), minlength=n + 1)[1:n + 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        table["eccentricity"] = np.where(eigen[:, 0] > 0,
-                                         np.sqrt(np.clip(1 - eigen[:, 1] / eigen[:, 0], 0, 1)), 0.0)
-    a, b, c = tensor[:, 0, 0], tensor[:, 0, 1], tensor[:, 1, 1]
-    table["orientation"] = np.where(a == c, np.where(b < 0, -np.pi / 4, np.pi / 4),
-                                    0.5 * np.arctan2(-2 * b, c - a))
-    table["axis_major_length"] = 4 * np.sqrt(eigen[:, 0])
-    table["axis_minor_length"] = 4 * np.sqrt(eigen[:, 1])
-    table["area_convex"] = convex
-    table["solidity"] = area / np.maximum(convex, np.finfo(float).tiny)
-    table["equivalent_diameter_area"] = np.sqrt(4 * area / np.pi)
-    if image is not None:
-        image = np.asarray(image)
-        planes = [image] if image.ndim == 2 else [image[:, :, ch] for ch in range(image.shape[2])]
-        for ch, plane in enumerate(planes):
-            name = "intensity_mean" if image.ndim == 2 else f"intensity_mean-{ch}"
-            sums = np.bincount(labels.ravel(), weights=plane.ravel().astype(np.float64), minlength=n + 1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                table[name] = sums[1:n + 1] / table["num_pixels"]
-    return table
-
-
-def _hull_area(points):
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        return float(ConvexHull(points).volume)  # a 2-D hull's "volume" is its area
-    except QhullError:  # all vertices on a line: no area
-        return 0.0
-
+__all__ = ["split_touching"]
 
 #: Two parts of an object are split apart when the half-width of the neck between them is below
 #: this fraction of the smaller part's largest inscribed radius.  Two disks overlapping by a third
@@ -327,7 +86,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
 
     boxes = scipy.ndimage.find_objects(labels, max_label=len(objects))
     if image is not None:
-        from activecontour.noise import estimate_noise
+        from activecontour.imaging.noise import estimate_noise
 
         image = np.asarray(image, dtype=np.float64)
         image = image.mean(axis=2) if image.ndim == 3 else image
@@ -874,7 +633,7 @@ def _cut(curves, parts, low):
     import scipy.ndimage
     import shapely
 
-    from activecontour.raster import mask_to_curves
+    from activecontour.geometry.raster import mask_to_curves
 
     # grow the parts over the whole window so that their cells tile it; each cell is traced
     # and cut on its own box (the work grows with the object, not with its parts times it)
@@ -901,51 +660,3 @@ def _cut(curves, parts, low):
                 if part:
                     pieces.append(part)
     return pieces
-
-
-def _to_shapely(curves):
-    """A (Multi)Polygon from oriented curves in (row, col) (x = row, y = col)."""
-    import shapely
-
-    polygons = [shapely.Polygon(obj[0], holes=obj[1:]) for obj in group_curves(curves)]
-    return shapely.make_valid(shapely.MultiPolygon(polygons) if len(polygons) != 1 else polygons[0])
-
-
-def _from_shapely(polygon):
-    """An outer boundary then holes, oriented, without the closing vertex; [] if degenerate."""
-    import shapely
-
-    polygon = shapely.orient_polygons(polygon) if hasattr(shapely, "orient_polygons") else \
-        shapely.geometry.polygon.orient(polygon, 1.0)
-    outer = clean(np.asarray(polygon.exterior.coords)[:-1])
-    if outer is None:
-        return []
-    holes = [clean(np.asarray(ring.coords)[:-1]) for ring in polygon.interiors]
-    return [outer] + [h for h in holes if h is not None]
-
-
-def complement_region(contours, shape):
-    """The boundary of the image domain minus the region the contours bound (oriented curves).
-
-    The domain is the rectangle [-0.5, M - 0.5] x [-0.5, N - 0.5] of :func:`activecontour.raster`
-    (every pixel square), so the complement's mask is the region's mask inverted.
-    """
-    import shapely
-
-    m, n = shape
-    domain = shapely.box(-0.5, -0.5, m - 0.5, n - 0.5)
-    rest = shapely.difference(domain, _to_shapely(contours)) if contours else domain
-    return [curve for polygon in getattr(rest, "geoms", [rest]) if isinstance(polygon, shapely.Polygon)
-            and polygon.area > 0 for curve in _from_shapely(polygon)]
-
-
-def clip_region(contours, domain):
-    """The boundary of the region the contours bound, intersected with the region of ``domain``
-    (oriented curves too)."""
-    import shapely
-
-    if not contours:
-        return []
-    kept = shapely.intersection(_to_shapely(contours), _to_shapely(domain))
-    return [curve for polygon in getattr(kept, "geoms", [kept]) if isinstance(polygon, shapely.Polygon)
-            and polygon.area > 0 for curve in _from_shapely(polygon)]

@@ -41,10 +41,10 @@ from xml.etree.ElementTree import ParseError
 
 import numpy as np
 
-from activecontour.atomic import write_atomically
-from activecontour.curve import as_curve, clean, signed_area
-from activecontour.image import MAX_PIXELS, SizeLimitError
-from activecontour.vector_formats import geojson_bytes, read_geojson, read_svg, svg_bytes
+from activecontour.geometry.curve import as_curve, clean, signed_area
+from activecontour.io.atomic import write_atomically
+from activecontour.io.images import MAX_PIXELS, SizeLimitError
+from activecontour.io.vector import geojson_bytes, read_geojson, read_svg, svg_bytes
 
 __all__ = [
     "CONTOUR_FORMATS",

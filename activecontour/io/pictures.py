@@ -12,10 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from activecontour.atomic import write_atomically
-from activecontour.contour_files import curve_list
-from activecontour.curve import to_xy
-from activecontour.image import MAX_PIXELS, load_image, normalize_image
+from activecontour.geometry.curve import to_xy
+from activecontour.imaging.normalize import normalize_image
+from activecontour.io.atomic import write_atomically
+from activecontour.io.contours import curve_list
+from activecontour.io.images import MAX_PIXELS, load_image
 
 __all__ = [
     "COLORS",

@@ -10,15 +10,23 @@ import numpy as np
 
 from activecontour.backends import BACKENDS
 from activecontour.backends.options import parse_options
-from activecontour.energy import ChanVeseParameters, to_frame, working_frame
-from activecontour.image import intensity_scale, load_image, normalize_image, single_image
-from activecontour.models import noise_model
+from activecontour.geometry.raster import mask_to_curves
+from activecontour.geometry.regions import clip_region, complement_region
+from activecontour.imaging.frame import to_frame, working_frame
+from activecontour.imaging.noise import auto_mu, is_auto
+from activecontour.imaging.normalize import intensity_scale, normalize_image, single_image
+from activecontour.imaging.roi import (
+    ROI_INIT_MARGIN,
+    crop_init,
+    init_neighbourhood,
+    resolve_roi,
+    restrict_values,
+)
+from activecontour.io.images import load_image
+from activecontour.models import ChanVeseParameters, noise_model
 from activecontour.models.modes import choose_regions
-from activecontour.noise import auto_mu, is_auto
-from activecontour.objects import clip_region, complement_region, find_objects
-from activecontour.raster import mask_to_curves
+from activecontour.objects.measure import find_objects
 from activecontour.result import build_result, scalar_if_gray
-from activecontour.roi import ROI_INIT_MARGIN, crop_init, init_neighbourhood, resolve_roi, restrict_values
 
 __all__ = ["BACKENDS", "FITS", "INSIDE", "segment"]
 
@@ -411,8 +419,8 @@ def _smooth_light(values, init, params, run, build, fit_light):
     and the lowest energy of every run is returned, so the smooth fit never ends above the
     constant fit.  When that is the constant fit's own result, ``result.light`` is None.
     """
+    from activecontour.imaging.noise import MU_PER_NOISE_VARIANCE
     from activecontour.models.smooth import LIGHT_TERMS
-    from activecontour.noise import MU_PER_NOISE_VARIANCE
 
     noise = auto_mu(values) / MU_PER_NOISE_VARIANCE
     worth = noise * (LIGHT_TERMS - 1) * np.log(values.shape[0] * values.shape[1])

@@ -23,8 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from activecontour.atomic import sweep_temporaries, write_group
-from activecontour.contour_files import (
+from activecontour.imaging.normalize import channels_last
+from activecontour.io.atomic import sweep_temporaries, write_group
+from activecontour.io.contours import (
     CONTOUR_FORMATS,
     CONVENTION,
     MAX_POINTS,
@@ -33,8 +34,9 @@ from activecontour.contour_files import (
     read_metadata,
     write_contours,
 )
-from activecontour.image import MAX_PIXELS, SizeLimitError, channels_last
-from activecontour.image_files import (
+from activecontour.io.images import MAX_PIXELS, SizeLimitError
+from activecontour.io.objects import OBJECT_FORMATS, encode_objects, object_paths
+from activecontour.io.pictures import (
     COLORS,
     OVERLAY_MAX_SIDE,
     display_rgb,
@@ -44,7 +46,6 @@ from activecontour.image_files import (
     write_mask,
     write_overlay,
 )
-from activecontour.object_formats import OBJECT_FORMATS, encode_objects, object_paths
 
 __all__ = [
     "COLORS",

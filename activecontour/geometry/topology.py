@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.curve import signed_area
+from activecontour.geometry.curve import signed_area
 
 __all__ = ["border_overlap", "crossings", "curve_areas", "nucleation_sites", "region_problem",
            "region_union", "repair", "winding_number"]

@@ -73,8 +73,8 @@ def init_neighbourhood(init, shape, margin=ROI_INIT_MARGIN):
     equivalent radius ``sqrt(area / pi)``, and by at least ``ROI_INIT_MIN_MARGIN`` pixels."""
     import scipy.ndimage
 
+    from activecontour.geometry.raster import rasterize
     from activecontour.initial import initial_curves
-    from activecontour.raster import rasterize
 
     if init is None or isinstance(init, str):
         raise ValueError("roi='init' needs an init: curves, a mask or a result to draw around")

@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
-from activecontour.curve import from_xy, signed_area, to_xy
+from activecontour.geometry.curve import from_xy, signed_area, to_xy
 
 __all__ = ["geojson_bytes", "read_geojson", "read_svg", "svg_bytes"]
 
@@ -56,7 +56,7 @@ def _group_polygons(curves):
 
 def _contains(outer, inner):
     """Whether most of ``inner``'s vertices (up to 16 of them) lie inside ``outer``."""
-    from activecontour.topology import winding_number
+    from activecontour.geometry.topology import winding_number
 
     points = inner[:: max(1, len(inner) // 16)]
     next_index = np.roll(np.arange(len(outer)), -1)
