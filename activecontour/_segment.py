@@ -48,12 +48,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     Parameters
     ----------
     image : ndarray of shape (M, N) or (M, N, C), or a path
-        Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.image.normalize_image`),
-        or the path of an image file (read by :func:`activecontour.image.load_image`).  A stack
+        Gray, gray + alpha, RGB or RGBA image (see :func:`activecontour.imaging.normalize.normalize_image`),
+        or the path of an image file (read by :func:`activecontour.io.images.load_image`).  A stack
         of frames (a time-lapse, a z-stack, a multi-page TIFF) is refused with one line naming
         :func:`activecontour.segment_sequence`; a (2-4, M, N) array is ambiguous (frames or
         channel-first colour) and needs ``channel_axis`` (the rule:
-        :func:`activecontour.image.single_image`).
+        :func:`activecontour.imaging.normalize.single_image`).
     init : None, ndarray (K, 2), list of ndarray, bool ndarray (M, N), SegmentationResult or str
         Initial contour(s) in (row, col), a mask, or a previous result (of either backend).  None
         (default) starts from the outlines of the two-means threshold of the lightly blurred image
@@ -67,7 +67,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         Length weight (intensity^2 * pixel, intensities normalised), >= 0.  Larger gives smoother,
         shorter contours: features with a radius of curvature below about ``mu / (c_in - c_out)^2``
         pixels are smoothed away.  ``"auto"`` (default) sets it from the image's noise
-        (:func:`activecontour.noise.auto_mu`); ``result.mu`` reports the value used.
+        (:func:`activecontour.imaging.noise.auto_mu`); ``result.mu`` reports the value used.
     omega : float
         Area weight (intensity^2); positive shrinks, negative grows the inside.
     lambda_in, lambda_out : float
@@ -89,7 +89,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         Colour images: convert to gray, or keep the channels (vector-valued functional).
     normalize : {"range", "dtype", None}
         Intensity scaling before the functional is set up: the image's own range onto [0, 1]
-        (default), the dtype's range, or none (see :func:`activecontour.image.normalize_image`).
+        (default), the dtype's range, or none (see :func:`activecontour.imaging.normalize.normalize_image`).
         ``result.c_in``/``c_out`` are in these normalised units; ``result.c_in_image`` and
         ``result.c_out_image`` in the input's own.  Whatever the choice, the backends compute
         where the image spans [0, 1] (:meth:`~activecontour.energy.ChanVeseParameters.in_frame`:
@@ -134,7 +134,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         other way round returns the complement (the rest of the image domain), its energy
         evaluated again.
     roi : None, "init", bool ndarray (M, N), or (r0, c0, r1, c1)
-        Restrict the image domain D of (6.38) to a region of interest (:mod:`activecontour.roi`):
+        Restrict the image domain D of (6.38) to a region of interest (:mod:`activecontour.imaging.roi`):
         a box (exact, by cropping), a mask, or ``"init"``: a neighbourhood of the given curves, so
         that drawing around one object gives that object (grown while the object reaches its
         edge, so a curve drawn inside the object works too).  The result is in the whole image's
@@ -142,7 +142,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         its bounding box.
     separate : bool
         Objects that touch get their own ids in ``result.labels`` (split along the necks of the
-        inside region, :func:`activecontour.objects.split_touching`); False: one id per connected
+        inside region, :func:`activecontour.objects.split.split_touching`); False: one id per connected
         piece.  With ``n_regions > 2`` an object is a piece of one class (touching pieces of two
         classes are two objects; ``result.objects["class"]`` says which).  ``result.mask``,
         ``result.contours`` and the energy do not depend on it.
@@ -160,7 +160,7 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     -------
     SegmentationResult
         With the objects: ``labels``, ``objects`` (measurements), ``object_contours``, ``classes``
-        (:func:`activecontour.objects.find_objects`).
+        (:func:`activecontour.objects.measure.find_objects`).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {backend!r}")
@@ -393,20 +393,19 @@ def _smooth_light(values, init, params, run, build, fit_light):
     Returns the result, its image model and parameters.
 
     When the light is worth its parameters: the light step lowers J by the drop of
-    :func:`~activecontour.models.smooth.fit_light`.  Read (6.38) as :func:`~activecontour.noise.auto_mu`
-    does, a MAP estimate under Gaussian noise of the variance sigma^2 that the default mu
-    assumes (``auto_mu / MU_PER_NOISE_VARIANCE``): the fit term is 2 sigma^2 times a negative
-    log-likelihood, and the Bayesian information criterion admits the light's P - 1 free
-    parameters (P basis functions, less the scale the constants absorb) only when the drop
-    exceeds ``sigma^2 (P - 1) ln(N)``, N the pixels.  Under uniform light and pure noise the drop
-    is ``sigma^2`` times a chi-square with at most P - 1 degrees of freedom (mean <= 9; the
-    constant field is fitted by the constants already), far below that (112 sigma^2 at 512^2);
-    light of 1 % over a 512^2 image of contrast 0.4 is above it.  (The Poisson fit term is
-    scaled to be the squared error at the mean intensity, so the same bound holds to second
-    order.)  The same bound ends the alternation: a later round that moves the light by less
-    than its noise is not worth a run.  So does a round that ends above the J it started from: each step of an
-    alternating minimisation lowers J, so a run that does not (the backend restarts its coarse
-    stages from the previous partition and can settle higher) is not converging.
+    :func:`~activecontour.models.smooth.fit_light`.  Read (6.38) as
+    :func:`~activecontour.imaging.noise.auto_mu` does, a MAP estimate under Gaussian noise of the variance
+    sigma^2 that the default mu assumes (``auto_mu / MU_PER_NOISE_VARIANCE``): the fit term is 2 sigma^2
+    times a negative log-likelihood, and the Bayesian information criterion admits the light's P - 1 free
+    parameters (P basis functions, less the scale the constants absorb) only when the drop exceeds ``sigma^2
+    (P - 1) ln(N)``, N the pixels.  Under uniform light and pure noise the drop is ``sigma^2`` times a
+    chi-square with at most P - 1 degrees of freedom (mean <= 9; the constant field is fitted by the
+    constants already), far below that (112 sigma^2 at 512^2); light of 1 % over a 512^2 image of contrast
+    0.4 is above it.  (The Poisson fit term is scaled to be the squared error at the mean intensity, so the
+    same bound holds to second order.)  The same bound ends the alternation: a later round that moves the
+    light by less than its noise is not worth a run.  So does a round that ends above the J it started from:
+    each step of an alternating minimisation lowers J, so a run that does not (the backend restarts its
+    coarse stages from the previous partition and can settle higher) is not converging.
 
     So the constant fit always runs, and when the light its partition implies is not worth its
     parameters (flat light: the constant fit is then a stationary point of the alternation), it

@@ -6,7 +6,7 @@ For a set of closed polygons Gamma (outer boundaries positive, holes negative) e
                             + lambda_in  int_{Omega_i} mean_ch (I - c_in)^2
                             + lambda_out int_{Omega_o} mean_ch (I - c_out)^2         (6.38)
 
-with I the bilinear image of :class:`~activecontour.image.ImageModel` (the mean over channels for
+with I the bilinear image of :class:`~activecontour.imaging.tables.ImageModel` (the mean over channels for
 a vector-valued image: Chan-Sandberg-Vese's sum with weights 1/C, see
 :meth:`ChanVeseParameters.weights`).  The region integrals expand into the moments
 ``int 1, int I, int I^2`` over Omega_i, which Green's theorem turns into boundary integrals of the
@@ -144,7 +144,7 @@ def partition_moments(model, boundary, n_classes):
     Parameters
     ----------
     model : ImageModel
-    boundary : activecontour.partition.Boundary
+    boundary : activecontour.geometry.partition.Boundary
     n_classes : int
 
     Returns

@@ -22,7 +22,7 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
     ``classes=result.classes`` (a result with ``n_regions > 2``, whose class boundaries are those
-    of its label image, see :mod:`activecontour.partition`).
+    of its label image, see :mod:`activecontour.geometry.partition`).
 
     Parameters
     ----------
@@ -32,7 +32,7 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
         the empty set: J is then the outside term alone.
     classes : int ndarray (M, N), optional
         Instead of ``contours``: a label image, 0 = the background region, 1..K-1 the others.
-        Scored as the partition of the domain it stands for (:mod:`activecontour.partition`:
+        Scored as the partition of the domain it stands for (:mod:`activecontour.geometry.partition`:
         boundaries through the midpoints between pixels of different classes, junctions at cell
         centres) with the N-region functional of :func:`evaluate_partition`; for two classes it
         is (6.38) of the marching-squares contours of ``classes == 1``.
@@ -62,11 +62,11 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
     Raises
     ------
     ValueError
-        For a contour that is not a closed curve (see :func:`activecontour.curve.as_curve`) or has
+        For a contour that is not a closed curve (see :func:`activecontour.geometry.curve.as_curve`) or has
         a vertex outside the image domain ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``, and for contours
         that cross themselves or each other, overlap, repeat a curve, or are oriented against
-        their nesting (:func:`activecontour.topology.region_problem`): they bound no region, and
-        (6.38) is not defined.  :func:`activecontour.topology.region_union` turns such curves
+        their nesting (:func:`activecontour.geometry.topology.region_problem`): they bound no region, and
+        (6.38) is not defined.  :func:`activecontour.geometry.topology.region_union` turns such curves
         into the boundary of the region they outline.
     """
     from activecontour.imaging.noise import auto_mu, is_auto

@@ -401,7 +401,7 @@ def region_boundary(curves):
     odd number a hole (made negative), whatever orientation it was given in: a lone curve is an
     outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate.
     Where curves overlap, repeat or cross themselves, the region is their union (a self-crossing
-    curve's loops all count), rebuilt exactly by :func:`activecontour.topology.region_union`:
+    curve's loops all count), rebuilt exactly by :func:`activecontour.geometry.topology.region_union`:
     winding-number weights of 2 are not a region (6.38) is defined on.
     """
     from activecontour.geometry import topology

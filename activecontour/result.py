@@ -33,7 +33,8 @@ class SegmentationResult:
         The inside region Omega_i: pixels whose centre lies inside the contours.
     contours : list of ndarray (K, 2)
         Closed curves in (row, col), pixel centres at integer coordinates, each vertex once; outer
-        boundaries have positive signed area, holes negative (the conventions of :mod:`activecontour.curve`).
+        boundaries have positive signed area, holes negative (the conventions of
+        :mod:`activecontour.geometry.curve`).
     c_in, c_out : float or ndarray (C,)
         The region constants (6.42) at the end: floats for gray images, one per channel otherwise.
     energy : float
@@ -77,7 +78,7 @@ class SegmentationResult:
         background).
     roi : bool ndarray (M, N) or None
         With ``segment(roi=...)``: the domain D the functional was solved on
-        (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
+        (:mod:`activecontour.imaging.roi`); ``energy`` is (6.38) on its bounding box.
     n_regions : int or None
         The number of regions K of the model (the one ``n_regions="auto"`` chose); ``classes``
         takes values in 0..K-1 and ``constants`` has K rows.  Set by :func:`activecontour.segment`.
@@ -157,25 +158,25 @@ def scalar_if_gray(value):
 
 
 #: Energies that agree to this relative tolerance are the same number computed twice, or before and
-#: after :func:`activecontour.curve.clean` (which moves the region by ~1e-9 of its extent).
+#: after :func:`activecontour.geometry.curve.clean` (which moves the region by ~1e-9 of its extent).
 _SAME_ENERGY = 1e-8
 
 
 def build_result(model, params, contours, *, energies, n_iter, status, backend, phi=None):
     """The one way a backend makes its result, so that every result obeys the same invariants.
 
-    * contours are cleaned (:func:`activecontour.curve.clean`): no repeated vertices, zero-width
+    * contours are cleaned (:func:`activecontour.geometry.curve.clean`): no repeated vertices, zero-width
       spikes, fewer than 3 vertices or zero area; curves that do not bound a region (a ring that
-      touches itself, overlaps: :func:`activecontour.topology.region_problem`) are replaced by
+      touches itself, overlaps: :func:`activecontour.geometry.topology.region_problem`) are replaced by
       the boundary of the region they outline, so every contour is a simple polygon and no two
       cross;
     * ``energy`` is (6.38) of exactly these contours by the common evaluator
-      (:func:`activecontour.energy.chan_vese_energy`), and ``energies`` ends with it;
+      (:func:`activecontour.evaluate.chan_vese_energy`), and ``energies`` ends with it;
     * when a converged flow ends above the energy of the empty set (a local minimum worse than
       no object at all), or the backend reports a collapse, the result is the empty set, status
       3, but only if that does not raise the energy: a collapse with curves left that beat the
       empty set keeps them (status 1);
-    * ``mask`` is the inside of the contours (:func:`activecontour.raster.rasterize`);
+    * ``mask`` is the inside of the contours (:func:`activecontour.geometry.raster.rasterize`);
     * ``c_in``, ``c_out`` are finite: the constant of an empty region is reported equal to the
       other one (its fitting term is 0 whatever it is).
 

@@ -425,7 +425,7 @@ class _Batch:
         self.settings = settings
         self.formats = formats
         self.overlay = overlay  # keyword arguments of io.save_result: color, thickness
-        #: object file formats (:data:`activecontour.object_formats.OBJECT_FORMATS`)
+        #: object file formats (:data:`activecontour.io.objects.OBJECT_FORMATS`)
         self.objects = objects
         self.protect = protect
         self.output = output

@@ -9,7 +9,7 @@ buttons choose the backend and the init gesture.  Changes apply to the next run.
 can be opened from the window (the "image" field, key i).  Key k chooses the number of regions
 (2, 3, 4, 5, 6, auto: ``n_regions`` of :func:`activecontour.segment`) and key l the light
 (``fit``: constant or smooth); with more than two regions every region's boundary is drawn in its
-own colour (:data:`activecontour.image_files.REGION_COLORS`, as the overlays) and a run starts from
+own colour (:data:`activecontour.io.pictures.REGION_COLORS`, as the overlays) and a run starts from
 the library's start for K regions (the global K-means): a drawn curve outlines two regions.
 The result is saved with the CLI's writers (:func:`activecontour.io.save_result`), by default
 next to the input image, which is never overwritten.  The toolbar's readout gives the mouse
@@ -150,7 +150,7 @@ class Viewer:
     inside : {"auto", "bright", "dark"}
         Which region is the objects (see :func:`activecontour.segment`).  A run started from
         drawn curves is restricted to their neighbourhood (``segment(roi="init")``, see
-        :mod:`activecontour.roi`): drawing around one object gives that object.
+        :mod:`activecontour.imaging.roi`): drawing around one object gives that object.
     n_regions : int or "auto"
         The number of regions (see :func:`activecontour.segment`); key k cycles through
         :data:`REGION_CHOICES`.

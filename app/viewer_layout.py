@@ -134,7 +134,7 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     ----------
     fig : matplotlib.figure.Figure
     display : ndarray (M, N, 3) of uint8
-        The image as shown (:func:`activecontour.image_files.display_rgb`).
+        The image as shown (:func:`activecontour.io.pictures.display_rgb`).
     backends : sequence of str
         The backend choices; ``backend`` is selected.
     values : dict
@@ -219,7 +219,7 @@ def _cut(line, keep):
 
 
 def show_image(ax, display):
-    """Show the display image (M, N, 3) uint8 (:func:`activecontour.image_files.display_rgb`, as
+    """Show the display image (M, N, 3) uint8 (:func:`activecontour.io.pictures.display_rgb`, as
     the CLI's overlay shows it) on the image axes, replacing the one shown, and reset the view to
     the whole image."""
     for old in list(ax.images):
@@ -257,7 +257,7 @@ def show_energy(ax, line, note, history):
 
 def contour_color(display):
     """The contour's colour on the display image, as the overlays draw it
-    (:func:`activecontour.image_files.contrasting_color`: red on gray, one that stands out on
+    (:func:`activecontour.io.pictures.contrasting_color`: red on gray, one that stands out on
     colour), as matplotlib RGB in [0, 1]."""
     from activecontour.io.pictures import contrasting_color
 

@@ -13,7 +13,7 @@ scored the same way:
 * the final energy (6.38) by the common evaluator :func:`activecontour.chan_vese_energy`
   (exact on the bilinear image), on each method's contours: the zero level set of phi by
   marching squares for the level-set methods, the pixel boundary of the mask
-  (:func:`activecontour.raster.mask_to_curves`) for the morphological one.
+  (:func:`activecontour.geometry.raster.mask_to_curves`) for the morphological one.
 
 The methods:
 

@@ -3,7 +3,7 @@
 Run ``python benchmarks/bench_split.py``.  Each object is the largest connected piece of smoothed
 uniform noise (Gaussian, sigma 2 px) above its 45 % quantile: a sponge-like outline whose distance
 to the boundary has a local maximum every few pixels, so the watershed of
-:func:`activecontour.objects.split_touching` makes hundreds to thousands of parts.  The table
+:func:`activecontour.objects.split.split_touching` makes hundreds to thousands of parts.  The table
 lists the object's pixels, the watershed's parts, the objects after the split, the wall time and
 the time per pixel, which stays about constant if the split is about linear in the pixels.
 """

@@ -39,8 +39,7 @@ def test_a_truncated_png_is_called_damaged(tmp_path):
 
 @pytest.mark.parametrize("suffix", [".png", ".tif", ".jpg", ".bmp"])
 def test_the_size_limit_is_checked_from_the_header_before_decoding(tmp_path, monkeypatch, suffix):
-    import activecontour.image as image_module
-
+    import activecontour.io.images as image_module
     from activecontour.io.images import SizeLimitError
 
     path = tmp_path / f"big{suffix}"

@@ -97,7 +97,7 @@ class PolygonOptions:
         "the energy), e.g. circles of a grid start that shrink away on the background."))
     nucleate: bool = option(True, (
         "When the flow has converged, look for holes and new components that lower the energy (the "
-        "topological derivative, activecontour.topology.nucleation_sites), insert small circles "
+        "topological derivative, activecontour.geometry.topology.nucleation_sites), insert small circles "
         "there and continue; repeated at most a few times.  This is how a single initial curve "
         "finds a hole or a second object it cannot reach by deformation."))
     accelerate: bool = option(True, (
@@ -347,10 +347,10 @@ class _Flow:
         """Return (new geometry, its Evaluation), or None when no descent step exists.
 
         A trial whose edges cross is replaced by the boundary of {w > 0}
-        (:func:`activecontour.topology.repair`) before the energy test, so a step that splits,
+        (:func:`activecontour.geometry.topology.repair`) before the energy test, so a step that splits,
         merges or opens a hole is accepted only if the repaired curves satisfy the same descent
         condition as any other step.  A trial that runs two edges along the same stretch of the
-        image border (:func:`activecontour.topology.border_overlap`) is no region: it is
+        image border (:func:`activecontour.geometry.topology.border_overlap`) is no region: it is
         rejected as a step too long, before the repair: the repair keeps an edge by the winding
         number on its right, taking the one on its left to be one more, which an edge that another
         covers does not separate (such a trial once ended as a hole outside every curve, a region
@@ -533,7 +533,7 @@ def _resampled(curves, spacing, every=False):
     """Curves resampled at equal arc length ``spacing`` (with ``every``, else those whose vertices
     are not about that far apart already), stacked.  A chord of the resampling can cut across a
     narrow neck or a notch and cross the curve: the result is then the boundary of {w > 0}
-    (:func:`activecontour.topology.repair`), so that its energy is that of a region."""
+    (:func:`activecontour.geometry.topology.repair`), so that its energy is that of a region."""
     geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
                              for c in curves])
     repaired = topology.repair(*geometry, before=[signed_area(c) for c in curves])

@@ -36,7 +36,7 @@ def _from_shapely(polygon):
 def complement_region(contours, shape):
     """The boundary of the image domain minus the region the contours bound (oriented curves).
 
-    The domain is the rectangle [-0.5, M - 0.5] x [-0.5, N - 0.5] of :func:`activecontour.raster`
+    The domain is the rectangle [-0.5, M - 0.5] x [-0.5, N - 0.5] of :func:`activecontour.geometry.raster`
     (every pixel square), so the complement's mask is the region's mask inverted.
     """
     import shapely

@@ -45,7 +45,7 @@ def auto_mu(values):
     Read (6.38) as a MAP estimate: with Gaussian noise of variance sigma^2 the fitting terms are
     2 sigma^2 times a negative log-likelihood, so a length prior of fixed strength is a mu
     proportional to sigma^2.  sigma is estimated from the normalised image itself
-    (:func:`activecontour.image.estimate_noise`; for colour, the mean variance of the channels,
+    (:func:`activecontour.io.images.estimate_noise`; for colour, the mean variance of the channels,
     as the fitting terms are the channels' mean).  A fixed mu is too strong for a clean image with
     dim objects and too weak for a noisy one; this one keeps noise specks of the size of a few
     pixels from surviving while leaving a noise-free image's detail alone.

@@ -3,11 +3,11 @@
 The parts live in modules named after what they hold; this module gathers their public names:
 
 =============================  ================================================================
-:mod:`activecontour.atomic`    writing files all or nothing, one file or a group
-:mod:`~activecontour.image_files`  masks (0/255 PNG) and overlays (the contours drawn on the image)
-:mod:`~activecontour.contour_files`  contour files: JSON, CSV, NPZ and the formats' dispatch
-:mod:`~activecontour.vector_formats`  the (x, y) formats, GeoJSON and SVG
-:mod:`~activecontour.object_formats`  one id per object: label image, GeoJSON, ImageJ ROIs, CSV
+:mod:`activecontour.io.atomic`    writing files all or nothing, one file or a group
+:mod:`~activecontour.io.pictures`  masks (0/255 PNG) and overlays (the contours drawn on the image)
+:mod:`~activecontour.io.contours`  contour files: JSON, CSV, NPZ and the formats' dispatch
+:mod:`~activecontour.io.vector`  the (x, y) formats, GeoJSON and SVG
+:mod:`~activecontour.io.objects`  one id per object: label image, GeoJSON, ImageJ ROIs, CSV
 =============================  ================================================================
 
 Every writer renders its whole output in memory first and then moves it into place with
@@ -89,13 +89,13 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
     color, thickness
         Of the overlay's contour lines (see :func:`write_overlay`): by default a colour that stands
         out from the image and a width that grows with the overlay's size.  The overlay's longer
-        side is at most :data:`~activecontour.image_files.OVERLAY_MAX_SIDE` (4096) pixels.
+        side is at most :data:`~activecontour.io.pictures.OVERLAY_MAX_SIDE` (4096) pixels.
     protect : sequence of path
         Files that must not be overwritten (e.g. the input image): ValueError if an output is one.
     objects : sequence of str
-        Object files, from :data:`~activecontour.object_formats.OBJECT_FORMATS` (``labels``,
+        Object files, from :data:`~activecontour.io.objects.OBJECT_FORMATS` (``labels``,
         ``labels-tif``, ``geojson``, ``roi``, ``csv``): the label image, one GeoJSON Feature
-        or ImageJ ROI per object, the measurement table (:mod:`activecontour.object_formats`).
+        or ImageJ ROI per object, the measurement table (:mod:`activecontour.io.objects`).
 
     Returns
     -------

@@ -2,7 +2,7 @@
 
 Points are (row, col) with pixel centres at integer coordinates, each vertex stored once (the curve
 closes implicitly); outer boundaries have positive signed area, holes negative (the conventions of
-:mod:`activecontour.curve`).  The format follows the file's suffix:
+:mod:`activecontour.geometry.curve`).  The format follows the file's suffix:
 
 ``.json``
     ``{"format": "activecontour-contours", "convention": ..., "metadata": {...},
@@ -21,7 +21,7 @@ closes implicitly); outer boundaries have positive signed area, holes negative (
 ``.npz``
     Arrays ``contour_0, contour_1, ...`` of shape (K, 2) and ``metadata`` (a JSON string).
 
-Every written polygon is valid: the curves go through :func:`activecontour.curve.clean` (no
+Every written polygon is valid: the curves go through :func:`activecontour.geometry.curve.clean` (no
 repeated vertex, no zero-width spike such as a back-step along the image border).  Floating-point
 numbers are written with :func:`repr`, so :func:`read_contours` gives back exactly the arrays that
 were written, in the same order, for every format.  Metadata numbers that are not finite (NaN,
@@ -174,8 +174,9 @@ def curve_list(contours):
     TypeError
         For something that is not a list of curves.
     ValueError
-        Naming the contour, for one that is not a closed curve (:func:`~activecontour.curve.as_curve`)
-        or has nothing left after :func:`~activecontour.curve.clean` (all spike, no area).
+        Naming the contour, for one that is not a closed curve
+        (:func:`~activecontour.geometry.curve.as_curve`) or has nothing left after
+        :func:`~activecontour.geometry.curve.clean` (all spike, no area).
     """
     if hasattr(contours, "contours") and hasattr(contours, "mask"):
         contours = contours.contours

@@ -18,7 +18,7 @@ format name            file                            read by
                                                        background, the others by mean intensity)
 =====================  ==============================  =============================================
 
-Coordinates: GeoJSON uses the image coordinates of :mod:`activecontour.vector_formats` (x = col,
+Coordinates: GeoJSON uses the image coordinates of :mod:`activecontour.io.vector` (x = col,
 y = row, pixel centres at integers); ImageJ puts the top-left corner of pixel (0, 0) at (0, 0),
 so its coordinates are ``x = col + 0.5, y = row + 0.5``.  An ImageJ polygon ROI has no holes: an
 object's holes are in the label image and the GeoJSON, not in its ROI.

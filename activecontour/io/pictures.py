@@ -2,7 +2,7 @@
 
 A mask is an 8-bit image, 0 outside and 255 inside; an overlay is the image in 8-bit RGB with the
 contours drawn on it, anti-aliased at sub-pixel precision.  Both are written all or nothing
-(:mod:`activecontour.atomic`).
+(:mod:`activecontour.io.atomic`).
 """
 
 from __future__ import annotations
@@ -80,11 +80,11 @@ def read_mask(path, *, max_pixels=MAX_PIXELS):
     Parameters
     ----------
     path : str or os.PathLike
-        Any image :func:`activecontour.image.load_image` reads.  Gray images are used as they are; a
+        Any image :func:`activecontour.io.images.load_image` reads.  Gray images are used as they are; a
         gray + alpha image by its gray channel; an RGB or RGBA image is inside where any of R, G, B
         is nonzero (the alpha channel is ignored).
     max_pixels : int or None
-        As in :func:`~activecontour.image.load_image`.
+        As in :func:`~activecontour.io.images.load_image`.
 
     Returns
     -------
@@ -255,7 +255,7 @@ def display_rgb(image):
     The one place where images are scaled for display (the overlays and the viewer): the values
     of every channel together are mapped from their :data:`DISPLAY_PERCENTILES` onto 0..255, so a
     uint16 image holding 0..235, a 12-bit image or floats 0..1000 are shown with their full
-    contrast, as the segmentation sees them (:func:`activecontour.image.normalize_image`).  An
+    contrast, as the segmentation sees them (:func:`activecontour.imaging.normalize.normalize_image`).  An
     image whose pixels are all alike is shown by its dtype's range (uint8 / 255, floats clipped to
     [0, 1]), in its own colour.  Gray
     images are repeated on three channels; alpha is dropped; a channel-first (3 or 4, M, N) image

@@ -16,7 +16,7 @@ __all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "read_frames"]
 
 #: File name endings read as videos (OpenCV); other files are images or (multi-page) TIFFs.
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".wmv", ".mpg", ".mpeg", ".webm", ".ogv")
-#: Frame files a folder may hold (read by :func:`activecontour.image.load_image`).
+#: Frame files a folder may hold (read by :func:`activecontour.io.images.load_image`).
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp", ".webp", ".jp2", ".pgm", ".ppm")
 
 

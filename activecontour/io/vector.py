@@ -1,7 +1,7 @@
 """The (x, y) contour formats, GeoJSON and SVG: polygons of an outer boundary and its holes.
 
 Both use image coordinates ``x = col, y = row`` with pixel centres at integers (converted by
-:func:`activecontour.curve.to_xy`, the one place).  Each polygon is an outer boundary followed by the
+:func:`activecontour.geometry.curve.to_xy`, the one place).  Each polygon is an outer boundary followed by the
 holes it contains, each hole grouped with the smallest outer boundary around it.
 
 GeoJSON rings are closed (first position repeated last) and follow the right-hand rule of RFC 7946

@@ -31,9 +31,9 @@ bumps, one per region, each as wide as the noise; a region is a *mode* of their 
 5. K is the number of such modes, at least 2 (the two-region model of (6.38) is the least the
    functional knows) and at most ``max_regions``.
 
-sigma is the larger of the image's noise (:func:`activecontour.noise.estimate_noise`) and the
+sigma is the larger of the image's noise (:func:`activecontour.imaging.noise.estimate_noise`) and the
 noise that the length weight assumes, ``sqrt(mu / MU_PER_NOISE_VARIANCE)``
-(:func:`activecontour.noise.auto_mu` sets ``mu = MU_PER_NOISE_VARIANCE sigma^2``).  So the
+(:func:`activecontour.imaging.noise.auto_mu` sets ``mu = MU_PER_NOISE_VARIANCE sigma^2``).  So the
 intensity resolution at which regions are told apart is the one the functional resolves: with
 ``mu="auto"``, a noise-free image is counted at sigma = sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)
 = 0.03 of its range, and a larger ``mu`` merges close levels.  Colour images (``color="vector"``)
@@ -92,16 +92,16 @@ def choose_regions(values, mu="auto", *, max_regions=MAX_REGIONS):
     """``n_regions="auto"`` of :func:`activecontour.segment`: :func:`count_regions` at the noise
     level the length weight assumes.
 
-    In the working frame (the image spanning [0, 1], :func:`activecontour.energy.working_frame`),
+    In the working frame (the image spanning [0, 1], :func:`activecontour.imaging.frame.working_frame`),
     sigma is ``sqrt(mu / MU_PER_NOISE_VARIANCE)`` for the larger of ``mu`` and
-    :func:`~activecontour.noise.auto_mu`'s (the image's noise, at least
+    :func:`~activecontour.imaging.noise.auto_mu`'s (the image's noise, at least
     ``sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)`` = 0.03 of its range): regions are told apart at the
     resolution the functional resolves.
 
     Parameters
     ----------
     values : ndarray (M, N, C)
-        Normalised intensities (:func:`activecontour.image.normalize_image`).
+        Normalised intensities (:func:`activecontour.imaging.normalize.normalize_image`).
     mu : float or "auto"
         The length weight of the run, in the units of ``values``.
     max_regions : int

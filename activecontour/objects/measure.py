@@ -118,7 +118,7 @@ def polygon_moments(curves):
 def label_image(objects, shape):
     """The int32 label image: pixel centres inside object k's curves get id k + 1, others 0.
 
-    Each object is rasterised in its own bounding box (:func:`activecontour.raster.rasterize`),
+    Each object is rasterised in its own bounding box (:func:`activecontour.geometry.raster.rasterize`),
     so the cost is the objects' area, not n times the image.
     """
     m, n = shape

@@ -187,7 +187,7 @@ def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
 #: (pixels; normalised to the object, so the background does not darken its rim) ...
 CONTRAST_SCALE = 1.0
 #: ... and splits it in two classes (Otsu) only where their means differ by at least this many
-#: times the pixel noise (:func:`activecontour.noise.estimate_noise`).  On a uniform object the
+#: times the pixel noise (:func:`activecontour.imaging.noise.estimate_noise`).  On a uniform object the
 #: two classes of the smoothed noise differ by ~0.45 noise sigmas, a fifth of this; on the DSB
 #: 2018 nuclei image a bright nucleus touching a dim one differs by 6-25 sigmas.
 CONTRAST_DEPTH = 2.0

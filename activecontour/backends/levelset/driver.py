@@ -84,7 +84,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
 
     Parameters
     ----------
-    model : activecontour.image.ImageModel
+    model : activecontour.imaging.tables.ImageModel
     init : None, ndarray (K, 2), list of them, bool ndarray (M, N), SegmentationResult, or str
         None: the default start (:func:`activecontour.initial.initial_curves`).  Curves, masks
         and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are

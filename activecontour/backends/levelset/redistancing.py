@@ -328,7 +328,7 @@ def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
     """Signed distance to closed curves (inside positive), exact in the band, as ``dtype``.
 
     The inside is the rasterised region (pixel centres with nonzero winding,
-    :func:`activecontour.raster.rasterize`); the pixels next to its boundary get their exact
+    :func:`activecontour.geometry.raster.rasterize`); the pixels next to its boundary get their exact
     distance to the curves (split into pieces of at most half a pixel), and the band inherits it
     by closest-segment propagation.
 
