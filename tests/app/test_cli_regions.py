@@ -10,7 +10,7 @@ import pytest
 
 from activecontour import io
 from activecontour.io.objects import read_label_image
-from tests.test_cli import assert_one_line_error, run, summary_fields
+from tests.app.test_cli import assert_one_line_error, run, summary_fields
 
 
 @pytest.fixture

@@ -6,7 +6,7 @@ import scipy.sparse.linalg
 
 from activecontour.geometry import curve, fem
 from tests.helpers import central_differences
-from tests.test_curve import random_smooth_curve
+from tests.geometry.test_curve import random_smooth_curve
 
 
 @pytest.fixture

@@ -40,7 +40,7 @@ from app import cli
 
 SHAPE = (48, 64)
 CENTER, RADIUS = (23.0, 33.5), 13.0
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def lead(reason):

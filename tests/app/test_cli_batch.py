@@ -13,10 +13,10 @@ import pytest
 
 from activecontour import io, synthetic
 from app import cli
-from tests.test_cli import assert_one_line_error, run, summary_fields
+from tests.app.test_cli import assert_one_line_error, run, summary_fields
 
 SIZE = (48, 64)
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture

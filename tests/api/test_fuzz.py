@@ -2,7 +2,7 @@
 init, random parameters, both backends; every result must obey DESIGN.md's invariants.
 
 The default run tries a few hundred cases (derandomised, so it is the same every run);
-``FUZZ_EXAMPLES=5000 python3 -m pytest tests/test_fuzz.py`` tries many more, at random.
+``FUZZ_EXAMPLES=5000 python3 -m pytest tests/api/test_fuzz.py`` tries many more, at random.
 """
 
 import os

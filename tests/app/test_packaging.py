@@ -8,7 +8,7 @@ import app.cli
 
 tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
-PYPROJECT = Path(__file__).resolve().parents[1] / "pyproject.toml"
+PYPROJECT = Path(__file__).resolve().parents[2] / "pyproject.toml"
 
 
 def test_the_front_ends_install_as_activecontour_app_not_app():

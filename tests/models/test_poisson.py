@@ -108,7 +108,7 @@ def test_dim_objects_above_the_logarithmic_mean_are_kept(backend):
 
 @pytest.mark.parametrize("backend", ["polygon", "levelset"])
 def test_faint_blobs_under_uneven_light_with_counts(backend):
-    from tests.test_smooth import _blobs
+    from tests.models.test_smooth import _blobs
 
     image, truth = _blobs()
     res = ac.segment(image, backend=backend, fit="smooth", noise="poisson")

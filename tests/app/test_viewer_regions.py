@@ -12,8 +12,8 @@ import pytest  # noqa: E402
 import activecontour as ac  # noqa: E402
 from activecontour.io.pictures import REGION_COLORS  # noqa: E402
 from app.viewer import REGION_CHOICES  # noqa: E402
-from tests import test_viewer  # noqa: E402
-from tests.test_viewer import drag, key  # noqa: E402
+from tests.app import test_viewer  # noqa: E402
+from tests.app.test_viewer import drag, key  # noqa: E402
 
 # the viewer tests' fixtures: a headless viewer, closed afterwards; launch's viewers recorded
 make_viewer, headless_launch = test_viewer.make_viewer, test_viewer.headless_launch
@@ -129,7 +129,7 @@ def test_save_writes_the_classes_image_as_the_command_line_does(rings, make_view
 
 
 def test_a_label_field_run_is_drawn_while_it_runs(rings, make_viewer):
-    from tests.test_viewer import during_run, gui_like
+    from tests.app.test_viewer import during_run, gui_like
 
     image, _ = rings
     viewer = gui_like(make_viewer(image, backend="levelset", redraw_every=1))

@@ -17,7 +17,7 @@ import app
 from activecontour import io, synthetic
 from app import cli
 
-SAMPLES = Path(__file__).resolve().parents[1] / "sample_images"
+SAMPLES = Path(__file__).resolve().parents[2] / "sample_images"
 SIZE = (48, 64)
 CENTER, RADIUS = (23.0, 33.5), 13.0
 
@@ -449,7 +449,7 @@ def test_ctrl_c_during_a_compiled_kernel_ends_the_run_within_a_second(small, tmp
     out = tmp_path / "out"
     process = subprocess.Popen(
         [sys.executable, "-c", _SLOW_SEGMENT, "segment", str(path), "-o", str(out)],
-        cwd=Path(__file__).resolve().parents[1], stderr=subprocess.PIPE, text=True,
+        cwd=Path(__file__).resolve().parents[2], stderr=subprocess.PIPE, text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:

@@ -9,7 +9,7 @@ import pytest
 import activecontour as ac
 from activecontour import synthetic
 from activecontour.batch import segment_dask
-from tests.test_batch import assert_same_result, disk_images
+from tests.batch.test_batch import assert_same_result, disk_images
 
 distributed = pytest.importorskip("distributed")
 da = pytest.importorskip("dask.array")

@@ -12,7 +12,7 @@ from activecontour.imaging.tables import ImageModel
 from activecontour.initial import circle
 from activecontour.models import ChanVeseParameters
 from tests.helpers import central_differences
-from tests.test_curve import random_smooth_curve
+from tests.geometry.test_curve import random_smooth_curve
 
 
 def model_of(image, color="gray"):

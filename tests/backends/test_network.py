@@ -228,7 +228,7 @@ _MANY = int(os.environ.get("FUZZ_EXAMPLES", "0"))
        kind=st.sampled_from(["noise", "blocks", "disk and step"]), n_regions=st.integers(3, 4),
        mu=st.sampled_from([0.0, 0.01, 0.1, 1.0]))
 def test_n_region_results_obey_the_invariants(backend, seed, rows, cols, kind, n_regions, mu):
-    # FUZZ_EXAMPLES=2000 tries many more, at random (as tests/test_fuzz.py)
+    # FUZZ_EXAMPLES=2000 tries many more, at random (as tests/api/test_fuzz.py)
     import shapely
 
     rng = np.random.default_rng(seed)

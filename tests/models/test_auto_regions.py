@@ -189,13 +189,13 @@ def test_an_image_without_flat_pixels_has_no_mode():
 
 
 def test_any_small_image_gets_a_count_in_range_and_a_consistent_result():
-    """Fuzz: random small images of every dtype and scene of tests/test_fuzz.py, every mu and
+    """Fuzz: random small images of every dtype and scene of tests/api/test_fuzz.py, every mu and
     normalisation: K in 2..MAX_REGIONS, classes in 0..K-1, K constants, the common evaluator's
     energy."""
     hypothesis = pytest.importorskip("hypothesis")
     from hypothesis import strategies as st
 
-    from tests.test_fuzz import DTYPES, SCENES, make_image
+    from tests.api.test_fuzz import DTYPES, SCENES, make_image
 
     @hypothesis.settings(max_examples=40, derandomize=True, deadline=None, database=None,
                          suppress_health_check=list(hypothesis.HealthCheck))

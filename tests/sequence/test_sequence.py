@@ -218,7 +218,7 @@ def test_bad_arguments(kwargs, error, match):
 
 def test_readme_example_runs(capsys):
     """README's "Time-lapses and stacks" block runs as written: two tracks, one id each."""
-    from tests.test_readme import python_blocks, run_blocks
+    from tests.app.test_readme import python_blocks, run_blocks
 
     (block,) = [code for code in python_blocks() if "segment_sequence(frames)" in code]
     namespace = run_blocks(block)

@@ -8,7 +8,7 @@ import pytest
 
 from activecontour import synthetic
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+README = Path(__file__).resolve().parents[2] / "README.md"
 
 
 def python_blocks():

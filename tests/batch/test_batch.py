@@ -258,7 +258,7 @@ def test_ctrl_c_while_spawned_workers_start_stops_them_quietly(tmp_path):
 
     script = tmp_path / "interrupted.py"
     script.write_text(INTERRUPTED_BATCH)
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     process = subprocess.Popen([sys.executable, str(script)], cwd=root,
                                env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, start_new_session=True)
@@ -299,7 +299,7 @@ def _start_sleeping_batch(tmp_path):
     script, pids = tmp_path / "sleeping.py", tmp_path / "pids"
     script.write_text(SLEEPING_BATCH)
     pids.mkdir()
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     process = subprocess.Popen([sys.executable, str(script), str(pids)], cwd=root,
                                env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, start_new_session=True)

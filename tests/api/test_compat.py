@@ -136,7 +136,7 @@ def test_bad_arguments_name_the_parameter(kwargs, error, match):
 
 def test_readme_example_runs():
     """README's "Coming from scikit-image" block runs as written and returns what it says."""
-    from tests.test_readme import python_blocks, run_blocks
+    from tests.app.test_readme import python_blocks, run_blocks
 
     (block,) = [code for code in python_blocks() if "activecontour.compat" in code]
     namespace = run_blocks(block)
