@@ -5,8 +5,8 @@ import pytest
 import scipy.sparse.linalg
 
 from activecontour.geometry import curve, fem
-from tests.helpers import central_differences
 from tests.geometry.test_curve import random_smooth_curve
+from tests.helpers import central_differences
 
 
 @pytest.fixture

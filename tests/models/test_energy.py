@@ -11,8 +11,8 @@ from activecontour.imaging.normalize import normalize_image
 from activecontour.imaging.tables import ImageModel
 from activecontour.initial import circle
 from activecontour.models import ChanVeseParameters
-from tests.helpers import central_differences
 from tests.geometry.test_curve import random_smooth_curve
+from tests.helpers import central_differences
 
 
 def model_of(image, color="gray"):
