@@ -1064,7 +1064,7 @@ def _library_defaults():
     """The defaults of :func:`activecontour.segment`, so the viewer starts where the library does."""
     import importlib
 
-    segment = importlib.import_module("activecontour.segment").segment
+    segment = importlib.import_module("activecontour._segment").segment
     return {name: parameter.default for name, parameter in inspect.signature(segment).parameters.items()
             if parameter.default is not inspect.Parameter.empty}
 
