@@ -16,6 +16,7 @@ import pytest
 import app
 from activecontour import io, synthetic
 from app import cli
+from app.cli.progress import ImageProgress
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_images"
 SIZE = (48, 64)
@@ -117,7 +118,7 @@ def test_the_same_image_named_twice_is_segmented_once(small, tmp_path, capsys):
 
 def test_progress_bar_only_on_a_terminal(small, tmp_path, capsys, monkeypatch):
     path, _ = small
-    monkeypatch.setattr(cli, "_is_terminal", lambda stream: True)
+    monkeypatch.setattr("app.cli.segment.is_terminal", lambda stream: True)
     status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "a", "--max-iter", 3)
     assert status == 0
     assert "\r" in stderr and "[" in stderr and "/3" in stderr
@@ -234,10 +235,8 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
     path, _ = small
     calls = []
 
-    def launch(image_path, *, backend="polygon", mu=0.5, omega=0.0, lambda_in=1.0, lambda_out=1.0,
-               max_num_iter=500, tol=1e-3, init=None):
-        calls.append(dict(image_path=image_path, backend=backend, mu=mu, max_num_iter=max_num_iter,
-                          init=init))
+    def launch(image_path, *, image=None, init=None, max_pixels=None, **settings):
+        calls.append(dict(image_path=image_path, image=image, init=init, **settings))
         return 0
 
     viewer = types.ModuleType("app.viewer")
@@ -249,13 +248,15 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
     assert status == 0, stderr
     (call,) = calls
     assert call["image_path"] == str(path) and call["mu"] == 0.25 and call["max_num_iter"] == 40
+    assert call["image"].shape == SIZE  # read once, by the command line
     assert np.allclose(np.hypot(call["init"][:, 0] - 20, call["init"][:, 1] - 30), 8.0)
-    # an option the viewer does not take is refused rather than silently dropped
-    status, _, stderr = run(capsys, "view", path, "--c-in", "0.5")
-    assert_one_line_error(status, stderr, "--c-in")
+    # every setting the view command takes reaches the viewer, none is silently dropped
+    status, _, stderr = run(capsys, "view", path, "--c-in", "0.5", "--noise", "poisson")
+    assert status == 0, stderr
+    assert calls[-1]["c_in"] == 0.5 and calls[-1]["noise"] == "poisson"
     status, _, stderr = run(capsys, "view", path.parent / "missing.png")
     assert_one_line_error(status, stderr, "not found")
-    assert len(calls) == 1
+    assert len(calls) == 2
 
 
 def test_installed_console_script(small, tmp_path):
@@ -374,7 +375,7 @@ def test_progress_shows_file_k_of_n_elapsed_and_time_left():
 
     now = [0.0]
     stream = stdio.StringIO()
-    progress = cli._Progress(3, stream=stream, clock=lambda: now[0])
+    progress = ImageProgress(3, stream=stream, clock=lambda: now[0])
     progress.start(1, "/data/a.png")
     assert "[1/3] a.png: loading" in stream.getvalue() and "elapsed 0:00 left ?" in stream.getvalue()
     now[0] = 4.0
@@ -395,7 +396,7 @@ def test_progress_of_a_single_image_bounds_the_time_left_by_the_iteration_rate()
 
     now = [0.0]
     stream = stdio.StringIO()
-    progress = cli._Progress(1, stream=stream, clock=lambda: now[0])
+    progress = ImageProgress(1, stream=stream, clock=lambda: now[0])
     progress.start(1, "/data/a.png")
     now[0] = 2.0  # loaded; the first iteration reports at 2 s
     progress(types.SimpleNamespace(iteration=1, max_num_iter=101, energy=3.0))
