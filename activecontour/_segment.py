@@ -8,8 +8,7 @@ import os
 
 import numpy as np
 
-from activecontour.backends import BACKENDS
-from activecontour.backends.options import parse_options
+from activecontour.backends import BACKENDS, solver_for
 from activecontour.geometry.raster import mask_to_curves
 from activecontour.geometry.regions import clip_region, complement_region
 from activecontour.imaging.frame import to_frame, working_frame
@@ -189,20 +188,12 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
     shape = values.shape[:2]
     if is_auto(n_regions):
         n_regions = choose_regions(values, mu)
-    if n_regions > 2:
-        if backend == "polygon":
-            from activecontour.backends.network import segment_network as solver
-        else:
-            from activecontour.backends.labelfield import segment_labels as solver
-        solver = functools.partial(solver, n_regions=int(n_regions))
-    else:
-        chosen = BACKENDS[backend]
-        parse_options(chosen.options, backend, options or {})  # before any work: bad keys, types
-        solver = chosen.run
+    chosen = solver_for(backend, n_regions)
+    solver = functools.partial(chosen.solve, options=chosen.parse(options or {}), n_regions=int(n_regions))
     solve = functools.partial(
         _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
         inside=inside, normalize=normalize, callback=callback, fit=fit, noise=noise,
-        settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
+        settings=dict(max_num_iter=int(max_num_iter), tol=float(tol)))
     if isinstance(roi, str) and roi == "init":
         # the smallest neighbourhood of the init that holds the object: grown while the result
         # reaches the domain's edge (or is empty), e.g. when the curve was drawn inside the object

@@ -932,13 +932,14 @@ def test_the_contour_stands_out_from_a_red_image_on_screen_too(make_viewer):
 
 
 def test_step_sliders_start_at_the_options_dataclass_defaults(disk_image, make_viewer):
-    # the slider of each backend is the option its dataclass marks, starting at that field's default
+    # the slider of each backend is an option of its dataclass, starting at that field's default
     from activecontour.backends import BACKENDS
     from activecontour.backends.polygon import PolygonOptions
+    from app.viewer.layout import STEP_OPTIONS
 
     viewer = make_viewer(disk_image[0])
     assert set(viewer.step_sliders) == set(BACKENDS)
     assert viewer.step_sliders["polygon"].val == PolygonOptions().max_step
     for name, backend in BACKENDS.items():
-        option = backend.step_slider()[0]
+        option = STEP_OPTIONS[name][0]
         assert viewer.step_sliders[name].val == getattr(backend.options(), option)
