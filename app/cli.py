@@ -523,16 +523,14 @@ def _report(progress, line, stream):
 
 def _settings(args):
     """The keyword arguments of activecontour.segment, validated before any work is done."""
-    from activecontour.models import ChanVeseParameters
+    from activecontour.settings import Settings
 
     settings = {name: getattr(args, name) for name in _PARAMETER_OPTIONS}
     if getattr(args, "options", None):
         settings["options"] = dict(args.options)
         _check_option_types(settings["backend"], settings["options"])
     try:
-        ChanVeseParameters(0.0 if settings["mu"] == "auto" else settings["mu"], settings["omega"],
-                           settings["lambda_in"],
-                           settings["lambda_out"], settings["c_in"], settings["c_out"])
+        Settings(**settings)
     except (ValueError, TypeError) as exc:
         raise UsageError(_with_option_names(str(exc))) from None
     return settings
@@ -959,12 +957,10 @@ def _run_view(args):
 
 def _segment_defaults():
     """segment()'s default values, so the options and the library never disagree."""
-    import importlib
+    from activecontour.settings import Settings
 
-    # the module, not the package attribute of the same name (the function, which may be wrapped)
-    segment = importlib.import_module("activecontour.segment").segment
-    parameters = inspect.signature(segment).parameters
-    return {name: parameters[name].default for name in _PARAMETER_OPTIONS}
+    defaults = Settings()
+    return {name: getattr(defaults, name) for name in _PARAMETER_OPTIONS}
 
 
 def _version():
@@ -999,19 +995,19 @@ def _object_formats(text):
 
 
 def _inside_choices():
-    from activecontour._segment import INSIDE
+    from activecontour.settings import INSIDE
 
     return INSIDE
 
 
 def _noise_choices():
-    from activecontour.models import NOISES
+    from activecontour.settings import NOISES
 
     return NOISES
 
 
 def _fit_choices():
-    from activecontour._segment import FITS
+    from activecontour.settings import FITS
 
     return FITS
 

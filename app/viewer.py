@@ -51,7 +51,6 @@ the shortcuts are off.
 from __future__ import annotations
 
 import contextlib
-import inspect
 import os
 import sys
 import time
@@ -59,7 +58,8 @@ from pathlib import Path
 
 import numpy as np
 
-from activecontour._segment import BACKENDS, segment
+from activecontour._segment import segment
+from activecontour.backends import BACKENDS
 from activecontour.geometry.curve import length, to_xy
 from activecontour.imaging.noise import auto_mu, is_auto
 from activecontour.imaging.normalize import normalize_image
@@ -1062,11 +1062,9 @@ def _settings(**given):
 
 def _library_defaults():
     """The defaults of :func:`activecontour.segment`, so the viewer starts where the library does."""
-    import importlib
+    from activecontour.settings import Settings
 
-    segment = importlib.import_module("activecontour.segment").segment
-    return {name: parameter.default for name, parameter in inspect.signature(segment).parameters.items()
-            if parameter.default is not inspect.Parameter.empty}
+    return Settings().keywords()
 
 
 def _backend_default(backend, option):
