@@ -2,6 +2,7 @@
 
 import dataclasses
 import inspect
+import subprocess
 import sys
 
 import numpy as np
@@ -199,6 +200,41 @@ def test_the_dispatcher_runs_the_registrys_record(monkeypatch):
     monkeypatch.setitem(SOLVERS, "labelfield", dataclasses.replace(record, module="recorded_labelfield"))
     result = ac.segment(IMAGE, backend="levelset", n_regions=3, max_num_iter=5)
     assert calls == [3] and result.n_regions == 3
+
+
+# --------------------------------------------------------------------------------------------
+# Start-up: the settings and the registry load no solver
+
+
+HEAVY = ("scipy", "skimage", "cv2", "shapely", "matplotlib")
+SOLVER_MODULES = ("activecontour.backends.polygon", "activecontour.backends.network",
+                  "activecontour.backends.levelset", "activecontour.backends.labelfield",
+                  "activecontour._segment", "activecontour.energy", "activecontour.problem")
+
+
+def _modules_after(statement):
+    code = f"{statement}\nimport sys\nprint('\\n'.join(sorted(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    return set(out.split())
+
+
+def test_the_settings_and_the_registry_import_no_solver():
+    loaded = _modules_after("import activecontour.settings, activecontour.backends\n"
+                            "activecontour.settings.setting_specs()\n"
+                            "[b.option_specs() for b in activecontour.backends.BACKENDS.values()]")
+    assert not [name for name in loaded if name.split(".")[0] in HEAVY]
+    assert not [name for name in loaded if name.startswith(SOLVER_MODULES)]
+
+
+def test_import_activecontour_is_lazy_and_lists_its_public_names():
+    loaded = _modules_after("import activecontour")
+    assert {name for name in loaded if name.startswith("activecontour")} == {"activecontour",
+                                                                             "activecontour._kernels"}
+    assert set(ac.__all__) <= set(dir(ac))
+    for name in ac.__all__:
+        assert getattr(ac, name).__name__ == name
+    with pytest.raises(AttributeError, match="has no attribute 'segmnt'"):
+        ac.segmnt  # noqa: B018
 
 
 def test_no_code_reaches_a_module_through_importlib_by_the_functions_name():
