@@ -32,6 +32,7 @@ __all__ = [
     "encode_picture",
     "read_mask",
     "render_overlay",
+    "rgb_color",
     "write_mask",
     "write_overlay",
 ]
@@ -190,7 +191,7 @@ def render_overlay(image, contours, color="auto", thickness="auto", max_side=Non
     if max_side is not None and not (isinstance(max_side, (int, np.integer)) and max_side >= 16):
         raise ValueError(f"max_side must be None or an integer >= 16, got {max_side!r}")
     if not (isinstance(color, str) and color == "auto"):
-        color = _rgb_color(color)
+        color = rgb_color(color)
     rgb = display_rgb(image)
     scale = 1.0
     if max_side is not None and max(rgb.shape[:2]) > max_side:
@@ -308,7 +309,9 @@ def _check_suffix(path, kind):
     return suffix
 
 
-def _rgb_color(color):
+def rgb_color(color):
+    """An overlay colour as an RGB triple in 0..255: a name from :data:`COLORS` or a triple;
+    ValueError naming the valid ones otherwise."""
     if isinstance(color, str):
         if color.lower() not in COLORS:
             raise ValueError(f"color must be one of {tuple(COLORS)} or an RGB triple, got {color!r}")

@@ -1,9 +1,11 @@
 """The ``activecontour`` parser, built from the library's settings and registries.
 
-Each setting of :func:`activecontour.segment` that a command line can give is one option: its
-name, default, choices and help come from the library (:func:`setting_fields`), so a new choice of
-backend, model or noise shows here without an edit.  Parsing turns text into values only; the
-library checks them, once, when the run's settings are made (:func:`settings_from`).
+Each setting of :func:`activecontour.segment` that the command line gives (:data:`OPTIONS`) is one
+option whose default, choices, help and kind come from the library
+(:func:`activecontour.settings.setting_specs`), so a new choice of backend, model or noise shows
+here without an edit; ``--option`` lists every backend's options from its options dataclass.
+Parsing turns text into values only; the library checks them, once, when the run's settings are
+made (:func:`settings_from`), and its refusal is one line naming the option.
 
 ``--help`` wraps at 100 columns and answers without importing a backend or the image libraries.
 """
@@ -16,12 +18,31 @@ import shutil
 from . import stacks, starts
 from .errors import EXIT_USAGE, PROG
 
-__all__ = ["build_parser", "option_name", "settings_from"]
+__all__ = ["OPTIONS", "build_parser", "recorded", "settings_from", "with_option_names"]
 
-#: The settings' options spelled otherwise than ``--name-with-dashes``.
-SPELLING = {"max_num_iter": "--max-iter", "n_regions": "--regions"}
+#: The settings the command line gives, and their options, in the order the contour files record
+#: them (:func:`recorded`).
+OPTIONS = {
+    "backend": "--backend",
+    "mu": "--mu",
+    "omega": "--omega",
+    "lambda_in": "--lambda-in",
+    "lambda_out": "--lambda-out",
+    "max_num_iter": "--max-iter",
+    "tol": "--tol",
+    "c_in": "--c-in",
+    "c_out": "--c-out",
+    "color": "--color",
+    "inside": "--inside",
+    "n_regions": "--regions",
+    "fit": "--fit",
+    "noise": "--noise",
+}
 #: The settings listed first; the others go to "less common options" at the end of --help.
 COMMON = ("backend", "mu", "n_regions", "inside", "fit", "noise")
+#: The placeholders of the options that are not ``--name NAME``.
+METAVARS = {"max_num_iter": "N", "n_regions": "K", "c_in": "C", "c_out": "C", "lambda_in": "L",
+            "lambda_out": "L"}
 #: Help lines wrap at this many columns at most.
 WIDTH = 100
 
@@ -47,8 +68,8 @@ class _Formatter(argparse.HelpFormatter):
         lines = []
         for line in text.splitlines():
             inner = indent + line[:len(line) - len(line.lstrip())]
-            lines.append(textwrap.fill(line.strip(), width, initial_indent=inner,
-                                       subsequent_indent=inner + "    ") if line.strip() else "")
+            lines.append(textwrap.fill(line.strip(), width, initial_indent=inner, subsequent_indent=inner)
+                         if line.strip() else "")
         return "\n".join(lines)
 
 
@@ -72,7 +93,8 @@ def _segment_parser(commands):
         description="Segment each IMAGE and write <name>_mask.png (the objects in white), "
         "<name>_overlay.png (the outlines drawn on the image) and <name>_contours.json next to it, "
         "or into --output.  A multi-page TIFF or a video is segmented as a sequence, its objects "
-        "tracked from frame to frame.")
+        "tracked from frame to frame.",
+        epilog=_backend_options_listing())
     segment.add_argument("images", nargs="+", metavar="IMAGE",
                          help="image files, folders (the images in them) or quoted patterns such as "
                          "'data/*.tif'")
@@ -88,7 +110,6 @@ def _segment_parser(commands):
     _settings_options(rare, rare=True)
     _output_options(rare, rare=True)
     stacks.add_options(rare)
-    segment.epilog = _backend_options_listing()
     segment.set_defaults(run="segment")
 
 
@@ -141,58 +162,74 @@ def _max_pixels(parser):
 
 
 def _settings_options(parser, *, rare, backend_options=True):
-    """One option per setting of :func:`activecontour.segment` (the common ones, or the others)."""
-    for field in setting_fields():
-        if (field.name in COMMON) == rare:
+    """One option per setting of :data:`OPTIONS` (the common ones, or the others)."""
+    from activecontour.settings import setting_specs
+
+    for spec in setting_specs():
+        if spec.name not in OPTIONS or (spec.name in COMMON) == rare:
             continue
-        kwargs = {"dest": field.name, "default": field.default, "help": field.help}
-        if field.choices is not None:
-            kwargs.update(choices=field.choices, metavar="{" + ",".join(map(str, field.choices)) + "}")
+        shown = "" if "default" in spec.help else " (default: %(default)s)"  # unless it says its own
+        kwargs = {"dest": spec.name, "default": spec.default, "help": spec.help + shown}
+        if spec.choices is not None:
+            kwargs.update(choices=spec.choices)
         else:
-            kwargs.update(type=field.parse, metavar=field.metavar)
-        parser.add_argument(option_name(field.name), **kwargs)
+            metavar = METAVARS.get(spec.name, OPTIONS[spec.name].lstrip("-").upper())
+            kwargs.update(type=_TEXT_TO_VALUE[spec.kind](spec.auto), metavar=metavar + "|auto" * spec.auto)
+        parser.add_argument(OPTIONS[spec.name], **kwargs)
     if rare and backend_options:
         parser.add_argument("--option", dest="options", action="append", type=_key_value, default=None,
-                            metavar="KEY=VALUE", help=_backend_options_help())
-
-
-def option_name(name):
-    """The command-line option of the setting ``name``."""
-    return SPELLING.get(name, "--" + name.replace("_", "-"))
+                            metavar="KEY=VALUE",
+                            help="a setting of the backend (listed below), e.g. max_step=2; repeatable")
 
 
 def settings_from(args):
-    """The run's settings from the parsed arguments, checked by the library: one line naming the
-    option when it refuses them."""
+    """The run's :class:`~activecontour.settings.Settings` from the parsed arguments: one line
+    naming the option when the library refuses them."""
+    from activecontour.settings import Settings
+
     from ..messages import one_line
     from .errors import UsageError
 
-    given = {field.name: getattr(args, field.name) for field in setting_fields()}
+    given = {name: getattr(args, name) for name in OPTIONS}
     if getattr(args, "options", None):
         given["options"] = dict(args.options)
     try:
-        return make_settings(given)
+        return Settings(**given)
     except (ValueError, TypeError) as exc:
         raise UsageError(with_option_names(one_line(exc))) from None
 
 
+def recorded(settings):
+    """The settings as the contour files record them: those of :data:`OPTIONS`, and the backend's
+    options when given."""
+    values = {name: getattr(settings, name) for name in OPTIONS}
+    if settings.options:
+        values["options"] = settings.options
+    return values
+
+
 def with_option_names(message):
-    """A library message about ``lambda_in`` etc., with the option's spelling in front."""
-    for field in setting_fields():
-        if message.startswith((field.name + " ", field.name + ",", field.name + ":")):
-            return f"{option_name(field.name)}: {message}"
-    if message.startswith("option "):
-        return f"--option {message.removeprefix('option ')}"
+    """A library message about ``lambda_in``, or about a backend's option, with the option's
+    spelling in front."""
+    import re
+
+    for name, option in OPTIONS.items():
+        if message.startswith((name + " ", name + ",", name + ":")):
+            return f"{option}: {message}"
+    named = re.match(r"option '(\w+)'|(\w+) (?:and \w+ )?must be", message)
+    if named:
+        from activecontour.backends import BACKENDS
+
+        key = named.group(1) or named.group(2)
+        if named.group(1) or any(key == spec.name for backend in BACKENDS.values()
+                                 for spec in backend.option_specs()):
+            return f"--option {key}: {message}"
     return message
-
-
-def _backend_options_help():
-    return "a setting of the backend (listed below), e.g. max_step=2; repeatable"
 
 
 def _backend_options_listing():
     """Every backend's ``--option`` settings, from its options dataclass: name, default and the
-    first sentence of its help."""
+    first sentence of its help, without its asides, on one line."""
     import re
 
     from activecontour.backends import BACKENDS
@@ -203,9 +240,9 @@ def _backend_options_listing():
         for spec in backend.option_specs():
             default = "automatic" if spec.default is None else str(spec.default).lower() \
                 if spec.kind is bool else spec.default
-            first = re.sub(r" \([^()]*\)", "", spec.help.split(".  ")[0]).rstrip(".")  # no asides
+            first = re.sub(r" \([^()]*\)", "", spec.help.split(".  ")[0]).rstrip(".")
             line = f"    {spec.name}={default}: {first}"
-            lines.append(line if len(line) <= WIDTH else line[:WIDTH - 1] + "\N{HORIZONTAL ELLIPSIS}")
+            lines.append(line if len(line) <= WIDTH else line[:WIDTH - 3] + "...")
     return "\n".join(lines)
 
 
@@ -216,12 +253,38 @@ def _version():
 
 
 # ------------------------------------------------------------------------------ text to values
-def _key_value(text):
-    """``--option`` KEY=VALUE: the value read as an int, a float, true/false, or else kept as text."""
-    key, sep, value = text.partition("=")
-    if not sep or not key.strip().isidentifier():
-        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
-    return key.strip(), value_of(value.strip())
+def _number(auto):
+    """A setting of kind "number": a float ("auto" where it may be); other text as it is, for the
+    library to refuse in its words."""
+    def parse(text):
+        if auto and text == "auto":
+            return text
+        try:
+            return float(text)
+        except ValueError:
+            return text
+    return parse
+
+
+def _integer(auto):
+    """A setting of kind "integer": an int where the text is one, else a number or the text."""
+    return value_of
+
+
+def _channels(auto):
+    """A setting of kind "channels": a number, or numbers separated by commas (one per channel)."""
+    def parse(text):
+        values = [_number(False)(part) for part in text.split(",")]
+        return values[0] if len(values) == 1 else values
+    return parse
+
+
+def _flag(auto):
+    return lambda text: {"true": True, "false": False}.get(text.lower(), text)
+
+
+#: How a setting of each kind (:data:`activecontour.settings.KINDS`) is read from text.
+_TEXT_TO_VALUE = {"number": _number, "integer": _integer, "channels": _channels, "flag": _flag}
 
 
 def value_of(text):
@@ -232,6 +295,14 @@ def value_of(text):
         except ValueError:
             pass
     return {"true": True, "false": False}.get(text.lower(), text)
+
+
+def _key_value(text):
+    """``--option`` KEY=VALUE, the value read by :func:`value_of`."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip().isidentifier():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    return key.strip(), value_of(value.strip())
 
 
 def _formats(text):
@@ -256,19 +327,17 @@ def _listed(text, choices, what, normal):
 
 
 def _line_color(text):
-    """``--line-color``: "auto", a colour name or R,G,B in 0..255."""
-    from activecontour.io.pictures import COLORS
+    """``--line-color``: "auto", or a colour of the overlays (a name, or R,G,B in 0..255) as the
+    library reads it (:func:`activecontour.io.pictures.rgb_color`)."""
+    from activecontour.io.pictures import rgb_color
 
-    if text.lower() in ("auto", *COLORS):
-        return text.lower()
+    if text.lower() == "auto":
+        return "auto"
     try:
-        values = tuple(int(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 3 or not all(0 <= v <= 255 for v in values):
-        raise argparse.ArgumentTypeError(
-            f"must be auto, one of {', '.join(COLORS)} or R,G,B in 0..255, got {text!r}")
-    return values
+        parts = text.split(",")
+        return rgb_color(text.lower() if len(parts) == 1 else tuple(int(p) for p in parts))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"expected auto, a colour name or R,G,B: {exc}") from None
 
 
 def _line_width(text):
@@ -288,115 +357,3 @@ def _int_at_least(low):
 
     parse.__name__ = f"integer >= {low}"
     return parse
-
-
-# --------------------------------------------------------------------------- interim: the fields
-class _Field:
-    def __init__(self, name, default, help, choices=None, parse=None, metavar=None):
-        self.name, self.default, self.help, self.choices = name, default, help, choices
-        self.parse, self.metavar = parse, metavar
-
-
-def setting_fields():
-    """Interim, until ``activecontour.settings`` lands: the settings a command line gives."""
-    import inspect
-
-    from activecontour._segment import FITS, INSIDE, segment
-    from activecontour.backends import BACKENDS
-    from activecontour.models import NOISES
-
-    defaults = {n: p.default for n, p in inspect.signature(segment).parameters.items()}
-
-    def number(text):
-        try:
-            return float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-
-    def number_or_auto(text):
-        return text if text == "auto" else number(text)
-
-    def integer(text):
-        try:
-            return int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-
-    def regions(text):
-        if text == "auto":
-            return text
-        try:
-            return int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer >= 2 or 'auto', got {text!r}") from None
-
-    def numbers(text):
-        try:
-            values = [float(v) for v in text.split(",")]
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number or comma-separated numbers, got {text!r}") \
-                from None
-        return values[0] if len(values) == 1 else values
-
-    fields = [
-        _Field("backend", defaults["backend"], "polygon: sub-pixel outlines; levelset: outlines on the "
-               "pixel grid that split and merge freely (default: %(default)s)", tuple(BACKENDS)),
-        _Field("mu", defaults["mu"], "how smooth the outline is: larger removes more detail and "
-               "noise; auto: from the image's noise (default: %(default)s)", None, number_or_auto, "MU|auto"),
-        _Field("omega", defaults["omega"], "> 0 shrinks, < 0 grows the objects (default: %(default)s)",
-               None, number, "OMEGA"),
-        _Field("lambda_in", defaults["lambda_in"], "weight of the objects' fit, > 0 (default: %(default)s)",
-               None, number, "L"),
-        _Field("lambda_out", defaults["lambda_out"], "weight of the background's fit, > 0 "
-               "(default: %(default)s)", None, number, "L"),
-        _Field("max_num_iter", defaults["max_num_iter"], "stop after N iterations (default: %(default)s)",
-               None, integer, "N"),
-        _Field("tol", defaults["tol"], "stop when the outline moves less than this many pixels per "
-               "iteration (default: %(default)s)", None, number, "TOL"),
-        _Field("c_in", None, "the objects' intensity, held fixed: a number, or one per channel "
-               "separated by commas (default: found)", None, numbers, "C"),
-        _Field("c_out", None, "the background's intensity, held fixed (default: found)", None, numbers, "C"),
-        _Field("color", defaults["color"], "colour images: as gray, or every channel (default: %(default)s)",
-               ("gray", "vector")),
-        _Field("inside", defaults["inside"], "which region is the objects: auto (the one touching less "
-               "of the border), bright or dark (default: %(default)s)", INSIDE),
-        _Field("n_regions", defaults["n_regions"], "the number of intensity classes, 2 or more, or auto; "
-               "not 2: <name>_classes.png too (default: %(default)s)", None, regions, "K|auto"),
-        _Field("fit", defaults["fit"], "smooth: for uneven light, a smooth light field times each "
-               "region's intensity (default: %(default)s)", FITS),
-        _Field("noise", defaults["noise"], "poisson: for photon counts such as fluorescence "
-               "(default: %(default)s)", NOISES),
-    ]
-    return fields
-
-
-class _Settings(dict):
-    def __getattr__(self, name):
-        return self[name]
-
-    def keywords(self):
-        return dict(self)
-
-
-def make_settings(given):
-    """Interim, until ``activecontour.settings`` lands: the settings, checked as segment checks them."""
-    import math
-
-    from activecontour.backends import BACKENDS
-    from activecontour.models import ChanVeseParameters
-
-    settings = _Settings(given)
-    if settings["max_num_iter"] < 0:
-        raise ValueError(f"max_num_iter must be >= 0, got {settings['max_num_iter']}")
-    if not (math.isfinite(settings["tol"]) and settings["tol"] >= 0):
-        raise ValueError(f"tol must be a finite number >= 0, got {settings['tol']!r}")
-    if settings["n_regions"] != "auto" and settings["n_regions"] < 2:
-        raise ValueError(f"n_regions must be an integer >= 2 or 'auto', got {settings['n_regions']!r}")
-    if "options" in settings:
-        specs = {spec.name: spec for spec in BACKENDS[settings["backend"]].option_specs()}
-        for key, value in settings["options"].items():
-            if key in specs:
-                specs[key].check(value, settings["backend"])
-    ChanVeseParameters(0.0 if settings["mu"] == "auto" else settings["mu"], settings["omega"],
-                       settings["lambda_in"], settings["lambda_out"], settings["c_in"], settings["c_out"])
-    return settings

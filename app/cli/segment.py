@@ -22,6 +22,7 @@ from ..messages import one_line, shown
 from . import stacks, starts
 from .errors import EXIT_USAGE, PROG, REPORTED_ERRORS, UsageError
 from .outputs import Directories, check_can_create, plan_outputs, sweep_temporaries
+from .parser import recorded, with_option_names
 from .progress import ImageProgress, is_terminal
 
 __all__ = ["Batch", "load_image", "run", "segment_one"]
@@ -122,7 +123,7 @@ def segment_one(image_path, stem, batch, progress=None):
     metadata = {
         "image": os.fspath(image_path),
         "init": batch.init_description,
-        "parameters": batch.settings.keywords(),
+        "parameters": recorded(batch.settings),
     }
     batch.directories.make(Path(stem).parent)
     written = io.save_result(result, image, stem, batch.formats, metadata=metadata,
@@ -191,8 +192,6 @@ def _report(progress, line, stream):
 def _naming(image_path, exc):
     """The error's one line (a setting named as its option), prefixed by the image's path unless
     it already names it."""
-    from .parser import with_option_names
-
     text = with_option_names(one_line(exc))
     name = shown(image_path)
     return text if name in text or repr(os.fspath(image_path)) in text else f"{name}: {text}"

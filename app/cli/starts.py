@@ -15,7 +15,7 @@ from .errors import UsageError
 __all__ = ["ContourInit", "add_options", "load_init"]
 
 #: The default start, as the help says it (:func:`activecontour.initial.default_init`).
-DEFAULT_START = ("the outlines of the two-means (6.38 without its length term) threshold of the "
+DEFAULT_START = ("the outlines of what is brighter or darker than the two-means threshold of the "
                  "lightly blurred image, so objects anywhere in the image are in the start "
                  "(activecontour.initial.default_init)")
 
@@ -65,11 +65,19 @@ def load_init(args):
     if args.init_grid:
         return "grid", "grid"
     if args.init_checkerboard:
-        if args.backend != "levelset":  # interim: until the registry says which backends take it
-            raise UsageError("--init-checkerboard needs --backend levelset (use --init-grid for the "
-                             "polygon backend)")
+        _check_named("checkerboard", args.backend)
         return "checkerboard", "checkerboard"
     return None, "default"
+
+
+def _check_named(name, backend):
+    """A named start that the backend's solver does not take (the registry says which do)."""
+    from activecontour.backends import BACKENDS
+
+    if name not in BACKENDS[backend].inits:
+        takers = [other for other, solver in BACKENDS.items() if name in solver.inits]
+        raise UsageError(f"--init-{name} needs --backend {' or '.join(takers)} (the {backend} backend "
+                         "does not take it)")
 
 
 def fresh(init):

@@ -21,5 +21,5 @@ def run(args, settings):
             raise
         raise UsageError("the interactive viewer is not installed") from None
     formats = {} if args.formats is None else {"formats": tuple(args.formats)}
-    return launch(args.image, image=image, init=starts.fresh(init), max_pixels=args.max_pixels, **formats,
-                  **settings.keywords())
+    return launch(args.image, settings, image=image, init=starts.fresh(init), max_pixels=args.max_pixels,
+                  **formats)

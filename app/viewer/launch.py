@@ -9,7 +9,8 @@ from activecontour.io.images import MAX_PIXELS
 __all__ = ["launch"]
 
 
-def launch(image_path, *, image=None, init=None, formats=("json",), max_pixels=MAX_PIXELS, **settings):
+def launch(image_path, settings=None, *, image=None, init=None, formats=("json",), max_pixels=MAX_PIXELS,
+           **keywords):
     """Open the viewer's window on an image and return an exit code when it is closed.
 
     Parameters
@@ -18,7 +19,7 @@ def launch(image_path, *, image=None, init=None, formats=("json",), max_pixels=M
         Any image :func:`activecontour.load_image` reads.
     image : ndarray, optional
         The image of ``image_path`` when it has been read already.
-    init, formats, **settings
+    settings, init, formats, **keywords
         See :class:`~.window.Viewer`; ``init`` may also be a name from
         :data:`~.starts.NAMED_INITS` (``"grid"``, ``"checkerboard"``) or a mask file's path.
     max_pixels : int or None
@@ -41,7 +42,7 @@ def launch(image_path, *, image=None, init=None, formats=("json",), max_pixels=M
     try:
         if image is None:
             image = load_image(image_path, max_pixels=max_pixels)
-        viewer = window.Viewer(image, image_path=image_path, init=init, formats=formats, **settings)
+        viewer = window.Viewer(image, settings, image_path=image_path, init=init, formats=formats, **keywords)
         viewer.max_pixels = max_pixels
     except (OSError, ValueError, TypeError) as exc:
         print(f"activecontour view: {exc}", file=sys.stderr)

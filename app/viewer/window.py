@@ -9,6 +9,7 @@ the runs since the last init (:mod:`.session`), the starts (:mod:`.starts`) and 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import time
 from pathlib import Path
@@ -22,7 +23,7 @@ from activecontour.io.pictures import display_rgb
 
 from ..messages import one_line
 from . import display, events, starts
-from .controls import Controls, slider_values, starting_settings, step_values
+from .controls import Controls, slider_values, step_values
 from .layout import PREVIEW_COLOR, build_layout, contour_color, new_figure, show_image
 from .session import Session
 from .tools import INIT_MODES, CurveDrawer
@@ -41,6 +42,8 @@ class Viewer:
     ----------
     image : ndarray of shape (M, N) or (M, N, C)
         The image, as :func:`activecontour.load_image` returns it.
+    settings : Settings, optional
+        The starting settings (:class:`activecontour.settings.Settings`); by default the library's.
     image_path : str or os.PathLike, optional
         Where the image came from: the window title, the default save stem (``<dir>/<stem>``), and
         a file the writers must not overwrite.
@@ -56,9 +59,9 @@ class Viewer:
         Draw during runs and after each action; by default True on an interactive canvas and
         False on a non-interactive one (Agg), where nothing is drawn until the figure is drawn or
         saved (``savefig``).
-    **settings
-        The starting settings, keywords of :func:`activecontour.segment` (``backend``, ``mu``,
-        ``max_num_iter``, ``n_regions``, ...): the library's defaults for those not given.  A run
+    **keywords
+        Settings that differ from ``settings``, keywords of :func:`activecontour.segment`
+        (``backend``, ``mu``, ``max_num_iter``, ``n_regions``, ...), checked by the library.  A run
         started from drawn curves is restricted to their neighbourhood (``roi="init"``, see
         :mod:`activecontour.imaging.roi`): drawing around one object gives that object.
 
@@ -88,9 +91,11 @@ class Viewer:
     #: The largest image the "image" field opens (:func:`activecontour.load_image`'s limit).
     max_pixels = MAX_PIXELS
 
-    def __init__(self, image, *, image_path=None, init=None, formats=("json",), redraw_every=2, live=None,
-                 **settings):
-        settings = starting_settings(settings)
+    def __init__(self, image, settings=None, *, image_path=None, init=None, formats=("json",), redraw_every=2,
+                 live=None, **keywords):
+        from activecontour.settings import Settings
+
+        settings = Settings.of(keywords) if settings is None else dataclasses.replace(settings, **keywords)
         if isinstance(redraw_every, bool) or not isinstance(redraw_every, (int, np.integer)) \
                 or redraw_every < 1:
             raise ValueError(f"redraw_every must be an integer >= 1, got {redraw_every!r}")
@@ -133,13 +138,13 @@ class Viewer:
             else bool(live)
         with _no_redraw(self.fig.canvas):  # widgets redraw as they are built: once is enough
             self.layout = build_layout(
-                self.fig, display_image, backends=tuple(BACKENDS), backend=settings["backend"],
+                self.fig, display_image, backends=tuple(BACKENDS), backend=settings.backend,
                 values=slider_values(settings, self.image), step_values=step_values(),
-                max_num_iter=settings["max_num_iter"], tol=settings["tol"],
+                max_num_iter=settings.max_num_iter, tol=settings.tol,
                 save_stem="" if self.image_path is None else self.image_path.stem,
                 help_line=events.help_line())
             vars(self).update(vars(self.layout))  # its artists and widgets are the viewer's attributes
-            self.controls = Controls(self.layout, settings, self.image, say=self.say,
+            self.controls = Controls(self.layout, settings, say=self.say,
                                      has_run=lambda: self.running or self.result is not None)
         self._contour_rgb = contour_color(display_image)  # of two regions' contours
         self.drawer = CurveDrawer(self.ax_image, lambda curve: self.set_init([curve]), self.say, self.redraw,
@@ -161,8 +166,9 @@ class Viewer:
 
     # ----------------------------------------------------------------------------- the state
     def parameters(self):
-        """The settings the next run will use: keywords of :func:`activecontour.segment`."""
-        return self.controls.parameters()
+        """The settings the next run will use, as keywords of :func:`activecontour.segment`
+        (:meth:`.controls.Controls.settings`)."""
+        return self.controls.settings().keywords()
 
     @property
     def result(self):
@@ -511,9 +517,7 @@ class Viewer:
         from activecontour.io import save_result
 
         protect = [self.image_path] if self.image_path is not None else []
-        parameters = self.parameters()
-        parameters.pop("color")
-        metadata = {"parameters": parameters}
+        metadata = {"parameters": self.parameters()}
         if self.image_path is not None:
             metadata["image"] = os.fspath(self.image_path)
         try:

@@ -154,6 +154,7 @@ def bad_text_image(folder):
         ("no image", ["required"]),
         ("missing init mask", ["--init-mask", "not found"]),
         ("c_in per channel of a gray image", ["--c-in", "2 values"]),
+        ("a one-column image", ["(100, 1)", "2 x 2"]),  # its own shape, not a corner's
     ],
 )
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(small, tmp_path, capsys, case, words):
@@ -200,6 +201,9 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(small, tmp_path, cap
         argv += ["--init-mask", tmp_path / "nope.png"]
     elif case == "c_in per channel of a gray image":
         argv += ["--c-in", "0.2,0.3"]
+    elif case == "a one-column image":
+        argv[1] = tmp_path / "column.png"
+        cv2.imwrite(str(argv[1]), np.arange(100, dtype=np.uint8)[:, None])
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
     status, stdout, stderr = run(capsys, *argv)
     assert_one_line_error(status, stderr, *words)
@@ -235,8 +239,8 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
     path, _ = small
     calls = []
 
-    def launch(image_path, *, image=None, init=None, max_pixels=None, **settings):
-        calls.append(dict(image_path=image_path, image=image, init=init, **settings))
+    def launch(image_path, settings, *, image=None, init=None, max_pixels=None):
+        calls.append(dict(image_path=image_path, image=image, init=init, **settings.keywords()))
         return 0
 
     viewer = types.ModuleType("app.viewer")
@@ -348,10 +352,14 @@ def test_an_image_whose_files_cannot_be_written_does_not_stop_the_next(small, tm
 @pytest.mark.parametrize(
     "option, message",
     [
-        ("smoothing=abc", "--option smoothing: expected a number (default automatic), got 'abc'"),
-        ("smoothing=inf", "--option smoothing: expected a number (default automatic), got inf"),
-        ("nucleate=3", "--option nucleate: expected true or false (default True), got 3"),
-        ("velocity=1", "--option velocity: expected text (default 'h1'), got 1"),
+        # the library's message (the options dataclass states each rule once), the option named
+        ("smoothing=abc", "--option smoothing: option 'smoothing' must be a number or None, got 'abc' "
+                          "(backend 'polygon')"),
+        ("smoothing=inf", "--option smoothing: smoothing and min_smoothing must be pixel lengths with "
+                          "smoothing >= min_smoothing >= 0, got inf and 1.0"),
+        ("nucleate=3", "--option nucleate: option 'nucleate' must be True or False, got 3 (backend "
+                       "'polygon')"),
+        ("velocity=1", "--option velocity: option 'velocity' must be text, got 1 (backend 'polygon')"),
     ],
 )
 def test_backend_option_of_the_wrong_kind_gets_one_true_line(small, tmp_path, capsys, option, message):
