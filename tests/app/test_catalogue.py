@@ -32,7 +32,7 @@ import skimage.measure
 
 import activecontour as ac
 from activecontour import io, synthetic
-from activecontour.geometry.curve import signed_area
+from activecontour.geometry.curve import length, signed_area
 from activecontour.geometry.raster import rasterize
 from activecontour.imaging.normalize import normalize_image
 from activecontour.result import STATUS_MESSAGES
@@ -171,7 +171,7 @@ def _tiny_spacing_is_refused_or_bounded():
     densities = []
 
     def vertices_per_pixel(state):
-        length = sum(ac.curve.length(c) for c in state.contours)
+        length = sum(length(c) for c in state.contours)
         densities.append(sum(len(c) for c in state.contours) / max(length, 1.0))
 
     try:
