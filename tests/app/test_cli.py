@@ -485,3 +485,25 @@ def test_help_says_what_the_default_start_is(command, capsys):
     text = " ".join(out.split())
     assert "centred circle" not in text and "default_init" in text and "two-means" in text
     assert "centred circle" not in ac.segment.__doc__ and "default_init" in ac.segment.__doc__
+
+
+_IMPORTED_BY_HELP = """
+import contextlib, io, sys
+from app import cli
+for argv in (["--help"], ["segment", "--help"], ["view", "--help"], ["--version"],
+             ["segment", "x.png", "--mu", "-1"]):
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        cli.main(argv)
+print(" ".join(sorted(sys.modules)))
+"""
+
+
+def test_help_and_argument_errors_import_no_backend_and_no_image_library():
+    completed = subprocess.run([sys.executable, "-c", _IMPORTED_BY_HELP], capture_output=True, text=True,
+                               cwd=Path(__file__).resolve().parents[2], check=True)
+    modules = set(completed.stdout.split())
+    assert "app.cli.parser" in modules and "activecontour.settings" in modules  # it did build the parser
+    heavy = {"scipy", "cv2", "skimage", "matplotlib", "shapely", "tifffile", "roifile"}
+    assert not {name for name in modules if name.split(".")[0] in heavy}
+    solvers = {"activecontour.backends." + name for name in ("polygon", "network", "labelfield", "levelset")}
+    assert not modules & solvers
