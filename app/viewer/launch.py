@@ -6,6 +6,8 @@ import sys
 
 from activecontour.io.images import MAX_PIXELS
 
+from ..messages import one_line
+
 __all__ = ["launch"]
 
 
@@ -29,8 +31,9 @@ def launch(image_path, settings=None, *, image=None, init=None, formats=("json",
     Returns
     -------
     int
-        0 after the window was closed; 2 for a bad image, init or parameter (one line on
-        stderr); 1 when matplotlib has no interactive backend (no display, or ``MPLBACKEND=Agg``).
+        0 after the window was closed; 2 for a bad image, init or parameter; 1 when matplotlib
+        has no interactive backend (no display, or ``MPLBACKEND=Agg``).  A problem is one line on
+        stderr, ``activecontour: error: ...`` as the command line's.
     """
     import matplotlib.pyplot as plt
     import numpy as np
@@ -45,11 +48,11 @@ def launch(image_path, settings=None, *, image=None, init=None, formats=("json",
         viewer = window.Viewer(image, settings, image_path=image_path, init=init, formats=formats, **keywords)
         viewer.max_pixels = max_pixels
     except (OSError, ValueError, TypeError) as exc:
-        print(f"activecontour view: {exc}", file=sys.stderr)
+        print(f"activecontour: error: {one_line(exc)}", file=sys.stderr)
         return 2
     if viewer.fig.canvas.required_interactive_framework is None:
         plt.close(viewer.fig)
-        print(f"activecontour view: matplotlib backend {plt.get_backend()!r} cannot open a window "
+        print(f"activecontour: error: matplotlib backend {plt.get_backend()!r} cannot open a window "
               "(no display?); set MPLBACKEND to an interactive backend such as TkAgg or QtAgg",
               file=sys.stderr)
         return 1

@@ -490,7 +490,8 @@ def test_screenshot_shows_the_contour_on_the_object_boundary(disk_image, make_vi
 
 def test_launch_reports_bad_image_and_missing_display(tmp_path, disk_image, capsys):
     assert launch(tmp_path / "missing.png") == 2
-    assert "not found" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "not found" in err and err.startswith("activecontour: error: ") and len(err.splitlines()) == 1
     path = tmp_path / "disk.png"
     write_mask(path, disk_image[1])
     figures = plt.get_fignums()
