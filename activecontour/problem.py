@@ -32,6 +32,7 @@ from activecontour.imaging.frame import to_frame, working_frame
 from activecontour.imaging.noise import auto_mu, is_auto
 from activecontour.imaging.normalize import intensity_scale, normalize_image, single_image
 from activecontour.imaging.roi import restrict_values
+from activecontour.io.images import load_image
 from activecontour.models import ChanVeseParameters, noise_model
 from activecontour.models.modes import choose_regions
 from activecontour.settings import Settings
@@ -56,8 +57,6 @@ def prepare(image, settings=None):
     """
     settings = Settings() if settings is None else settings
     if isinstance(image, (str, os.PathLike)):
-        from activecontour.io.images import load_image
-
         image = load_image(image)
     image = single_image(image, settings.channel_axis)
     values = normalize_image(image, color=settings.color, normalize=settings.normalize)
@@ -159,9 +158,9 @@ class Problem:
         return self.noise_model[0](self.values, light, self.working)
 
     def restricted(self, box, domain):
-        """The problem on the crop ``box`` of a region of interest, the pixels outside ``domain``
-        filled (:func:`activecontour.imaging.roi.restrict_values`); with ``normalize="range"`` the
-        crop is scaled by its own range, as ``segment(image[box])`` would.
+        """The whole image's problem on the crop ``box`` of a region of interest, the pixels outside
+        ``domain`` filled (:func:`activecontour.imaging.roi.restrict_values`); with
+        ``normalize="range"`` the crop is scaled by its own range, as ``segment(image[box])`` would.
 
         Parameters
         ----------

@@ -20,7 +20,7 @@ import numpy as np
 
 from activecontour.backends import BACKENDS, solver_for
 
-__all__ = ["COLOR_MODES", "FITS", "INSIDE", "NOISES", "NORMALIZATIONS", "SettingSpec", "Settings",
+__all__ = ["COLOR_MODES", "FITS", "INSIDE", "KINDS", "NOISES", "NORMALIZATIONS", "SettingSpec", "Settings",
            "setting_specs"]
 
 #: ``color``: colour images converted to gray, or their channels kept (vector-valued (6.38)).
@@ -35,9 +35,9 @@ NOISES = ("gaussian", "poisson")
 INSIDE = ("auto", "bright", "dark")
 
 #: The kinds of settings (:attr:`SettingSpec.kind`), for a front end that reads them from text:
-#: one of ``choices``; a number; an integer; True or False; a number or one per channel (or
-#: None); a region of interest; an axis (or None); a backend's options (a dict, see
-#: :mod:`activecontour.backends.options`).
+#: one of ``choices``; a number; an integer; True or False; a number or one per channel (None
+#: too where that is the default); a region of interest; an axis (or None); a backend's options
+#: (a dict, see :mod:`activecontour.backends.options`).
 KINDS = ("choice", "number", "integer", "flag", "channels", "roi", "axis", "options")
 
 
@@ -83,11 +83,11 @@ class Settings:
         0.0, "cost of the inside's area: positive shrinks the objects, negative grows them "
         "(omega)", "number")
     lambda_in: object = _setting(
-        1.0, "weight of how closely the inside matches its intensity, > 0 (lambda_in of (6.38))",
-        "number")
+        1.0, "weight of how closely the inside matches its intensity, > 0, one number or one per "
+        "channel (lambda_in of (6.38))", "channels")
     lambda_out: object = _setting(
-        1.0, "weight of how closely the outside matches its intensity, > 0 (lambda_out of (6.38))",
-        "number")
+        1.0, "weight of how closely the outside matches its intensity, > 0, one number or one per "
+        "channel (lambda_out of (6.38))", "channels")
     max_num_iter: int = _setting(
         500, "the most iterations to run (0: the start as it is)", "integer")
     tol: float = _setting(

@@ -11,7 +11,7 @@ import pytest
 import activecontour as ac
 from activecontour.backends import BACKENDS, INITS, SOLVERS, solver_for
 from activecontour.backends.options import NoOptions, option_specs
-from activecontour.settings import Settings, setting_specs
+from activecontour.settings import KINDS, Settings, setting_specs
 
 IMAGE = np.zeros((40, 50))
 IMAGE[10:30, 15:35] = 1.0
@@ -135,8 +135,7 @@ def test_specs_carry_default_help_kind_and_choices():
     assert list(specs) == [field.name for field in dataclasses.fields(Settings)]
     for spec in specs.values():
         assert spec.default is getattr(defaults, spec.name)
-        assert spec.help and spec.kind in ("choice", "number", "integer", "flag", "channels", "roi", "axis",
-                                           "options")
+        assert spec.help and spec.kind in KINDS
         if spec.kind == "choice":
             assert spec.default in spec.choices
     assert specs["backend"].choices == tuple(BACKENDS)
