@@ -1,7 +1,7 @@
 """The golden check (benchmarks/golden.py): the outputs of a fixed corpus hash as stored.
 
 By default three of its cheapest cases run here; the whole corpus (about a hundred cases) is
-marked slow: ``pytest -m slow tests/test_golden.py``, or ``python3 benchmarks/golden.py``.
+marked slow: ``pytest -m slow tests/api/test_golden.py``, or ``python3 benchmarks/golden.py``.
 """
 
 import importlib.util
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "golden.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "golden.py"
 
 #: Three of the fastest stored cases (0.2-0.3 s of CPU each): both backends, K = 2 and 3.
 CHEAP = ["segment/cell/polygon/K2", "segment/colorwheel/polygon/K2", "segment/checkerboard/levelset/K3"]
