@@ -4,27 +4,28 @@ The method is section 6.5 of *The Shapes of Things* (S. W. Walker): the Chan-Ves
 minimised by the gradient flow (6.30)-(6.31) with the H^1 velocity (6.39)-(6.40) and the shape
 derivative (6.41), on a polygon, or on a level-set function over the pixel grid.
 
-Parts
+Parts (arrows point down only: a room imports the rooms below it, never one above)
 -----
-segment            the entry point: ``segment(image, init, backend=..., mu=..., ...)``
-segment_sequence   a time-lapse or z-stack, each frame from the last, objects tracked (sequence)
-segment_many       many images in worker processes, results as they finish (also on Dask: batch)
-SegmentationResult the result of every backend
-circle, rectangle  initial curves (any (K, 2) array, list of them, or bool mask also works)
-chan_vese_energy   the common evaluator of (6.38) for any contours
-curve, fem         polygon geometry (tangent, normal, curvature) and P1 finite elements
-image, energy      the image model with its cumulative tables; the functional and its derivative
-noise              the image's noise level and the default mu it implies
-initial, result    starts (the default one, circles, grids, masks); the one result constructor
-flow               the polygon backend (the book's H^1 flow)
-backends.levelset  the level-set backend (redistancing, zero set, scheme, driver)
-topology, pyramid  crossings and their repair, nucleation; a start from a reduced copy
-_kernels           the compiled loops (Cython, built at install)
-io, raster         writers/readers of masks, overlays and contours (atomic, image_files,
-                   contour_files, vector_formats); curves <-> masks
+segment            the entry point: ``segment(image, init, backend=..., mu=..., ...)`` (_segment)
+Settings           segment's keywords: defaults, choices, help and checks, stated once (settings)
+segment_sequence   a time-lapse or z-stack, each frame from the last, objects tracked (sequence/)
+segment_many       many images in worker processes, results as they finish (also on Dask: batch/)
+SegmentationResult the result of every backend (result)
+chan_vese_energy   the common evaluator of (6.38) for any contours (evaluate)
+circle, rectangle  initial curves; the default start (initial)
+problem            prepare(image, settings): the working frame, noise, mu, parameters, model
+backends/          the registry of solvers: polygon (the book's H^1 flow), network (N regions),
+                   levelset/, labelfield; their options (backends.options)
+objects/           the label image, measurements, touching objects kept apart, metrics
+energy             the discrete functional and its shape derivative (6.41) on stacked curves
+models/            the integrands: two regions, N regions, smooth light, Poisson
+imaging/           normalisation, working frame, image tables, noise level and default mu, roi
+geometry/          curves (tangent, normal, curvature), P1 elements, crossings, rasters, regions
+io/                every reader and writer: images, stacks, videos, contours, masks, overlays,
+                   object formats; atomic writes
 synthetic          anti-aliased test images with exact ground truth
 compat             scikit-image's signatures: ``from activecontour.compat import chan_vese``
-batch              many images: worker processes, folders and globs, a Dask cluster
+_kernels           the compiled loops (Cython, built at install)
 
 Conventions: points are (row, col) with pixel centres at integer coordinates; outer boundaries are
 positively oriented (signed area > 0), holes negatively; the normal points out of the inside region.
@@ -38,26 +39,42 @@ except ImportError as exc:  # a source tree that was never installed, or pulled 
         "in the source tree (needs a C compiler)"
     ) from exc
 
-from activecontour.batch import segment_many
-from activecontour.energy import chan_vese_energy
-from activecontour.image import load_image
-from activecontour.initial import circle, rectangle
-from activecontour.result import FlowState, SegmentationResult
-from activecontour.segment import segment
-from activecontour.sequence import SequenceResult, iter_sequence, segment_sequence
+#: Each public name and the module that defines it, imported on first use (PEP 562): ``import
+#: activecontour`` loads no solver, and ``activecontour --help`` answers without one.
+_PUBLIC = {
+    "FlowState": "activecontour.result",
+    "SegmentationResult": "activecontour.result",
+    "SequenceResult": "activecontour.sequence.results",
+    "Settings": "activecontour.settings",
+    "chan_vese_energy": "activecontour.evaluate",
+    "circle": "activecontour.initial",
+    "iter_sequence": "activecontour.sequence.results",
+    "load_image": "activecontour.io.images",
+    "rectangle": "activecontour.initial",
+    "segment": "activecontour._segment",
+    "segment_many": "activecontour.batch",
+    "segment_sequence": "activecontour.sequence.results",
+}
 
-__all__ = [
-    "FlowState",
-    "SegmentationResult",
-    "SequenceResult",
-    "chan_vese_energy",
-    "circle",
-    "load_image",
-    "rectangle",
-    "iter_sequence",
-    "segment",
-    "segment_many",
-    "segment_sequence",
-]
+__all__ = sorted(_PUBLIC)
 
 __version__ = "0.1.0"
+
+
+def __getattr__(name):
+    """A public name, or a submodule (``activecontour.initial``), imported on first use."""
+    import importlib
+    import importlib.util
+
+    if name in _PUBLIC:
+        value = getattr(importlib.import_module(_PUBLIC[name]), name)
+    elif not name.startswith("__") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value  # found directly from now on
+    return value
+
+
+def __dir__():
+    return sorted({*globals(), *__all__})

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.curve import as_curve, orient, signed_area
-from activecontour.raster import mask_to_curves
+from activecontour.geometry.curve import as_curve, orient, signed_area
+from activecontour.geometry.raster import mask_to_curves
 
 __all__ = ["circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_split",
            "threshold_starts"]
@@ -405,10 +405,10 @@ def region_boundary(curves):
     odd number a hole (made negative), whatever orientation it was given in: a lone curve is an
     outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate.
     Where curves overlap, repeat or cross themselves, the region is their union (a self-crossing
-    curve's loops all count), rebuilt exactly by :func:`activecontour.topology.region_union`:
+    curve's loops all count), rebuilt exactly by :func:`activecontour.geometry.topology.region_union`:
     winding-number weights of 2 are not a region (6.38) is defined on.
     """
-    from activecontour import topology
+    from activecontour.geometry import topology
 
     oriented = []
     for i, curve in enumerate(curves):
@@ -424,7 +424,7 @@ def _contains(curve, point):
     low, high = curve.min(axis=0), curve.max(axis=0)
     if np.any(point < low) or np.any(point > high):
         return False
-    from activecontour.topology import winding_number
+    from activecontour.geometry.topology import winding_number
 
     next_index = np.roll(np.arange(len(curve)), -1)
     return bool(winding_number(curve, next_index, point[None, :])[0] != 0)

@@ -6,10 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from activecontour.curve import clean_curves
-from activecontour.energy import evaluate, stack_curves
-from activecontour.raster import rasterize
-from activecontour.topology import region_problem, region_union
+from activecontour.energy import evaluate
+from activecontour.geometry.curve import clean_curves, stack_curves
+from activecontour.geometry.raster import rasterize
+from activecontour.geometry.topology import region_problem, region_union
 
 __all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
@@ -27,13 +27,17 @@ STATUS_MESSAGES = {
 class SegmentationResult:
     """The outcome of :func:`activecontour.segment`.
 
+    A backend makes one in its working frame (:func:`build_result`); ``segment`` builds the one it
+    returns once, at the end, with every part below in place (nothing sets a field afterwards).
+
     Attributes
     ----------
     mask : ndarray of bool, shape (M, N)
         The inside region Omega_i: pixels whose centre lies inside the contours.
     contours : list of ndarray (K, 2)
         Closed curves in (row, col), pixel centres at integer coordinates, each vertex once; outer
-        boundaries have positive signed area, holes negative (the conventions of :mod:`activecontour.curve`).
+        boundaries have positive signed area, holes negative (the conventions of
+        :mod:`activecontour.geometry.curve`).
     c_in, c_out : float or ndarray (C,)
         The region constants (6.42) at the end: floats for gray images, one per channel otherwise.
     energy : float
@@ -51,13 +55,13 @@ class SegmentationResult:
     phi : ndarray (M, N) or None
         The level-set function (``backend="levelset"``), None for the polygon backend.
     mu : float or None
-        The length weight used (the value ``mu="auto"`` chose), set by :func:`activecontour.segment`.
+        The length weight used (the value ``mu="auto"`` chose).
     c_in_image, c_out_image : float or ndarray (C,) or None
         ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
-        normalised units the functional uses), set by :func:`activecontour.segment`.
+        normalised units the functional uses).
     labels : int32 ndarray (M, N) or None
         0 = background, 1..n one id per object (:mod:`activecontour.objects`); with
-        ``separate=True`` touching objects have their own ids.  Set by :func:`activecontour.segment`.
+        ``separate=True`` touching objects have their own ids.
     objects : dict of str to ndarray, or None
         Per-object measurements, one row per id (``regionprops_table`` names; see
         :func:`activecontour.objects.measure` for which columns are exact).
@@ -66,21 +70,20 @@ class SegmentationResult:
         lines; ``contours`` stays the boundary of the inside region, which the energy is of.
     classes : int ndarray (M, N) or None
         The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
-        by increasing mean intensity; set by :func:`activecontour.segment`.
+        by increasing mean intensity.
     light : ndarray (M, N) or None
         The light field b of ``fit="smooth"`` (mean 1): region k's intensity is ``c_k b``; None
         for ``fit="constant"`` and when the smooth fit found the light uniform.
     constants : ndarray (K, C) or None
-        The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
-        :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
-        ``c_in`` the area-weighted mean of the others (the inside is every region but the
-        background).
+        The constant of every region in normalised units (two regions: ``[c_out, c_in]``).  With
+        ``n_regions > 2``, ``c_out`` is the background's and ``c_in`` the area-weighted mean of the
+        others (the inside is every region but the background).
     roi : bool ndarray (M, N) or None
         With ``segment(roi=...)``: the domain D the functional was solved on
-        (:mod:`activecontour.roi`); ``energy`` is (6.38) on its bounding box.
+        (:mod:`activecontour.imaging.roi`); ``energy`` is (6.38) on its bounding box.
     n_regions : int or None
         The number of regions K of the model (the one ``n_regions="auto"`` chose); ``classes``
-        takes values in 0..K-1 and ``constants`` has K rows.  Set by :func:`activecontour.segment`.
+        takes values in 0..K-1 and ``constants`` has K rows.
     class_contours : list of list of ndarray, or None
         With ``n_regions > 2``: the closed curves of every region k (outer boundaries positive,
         holes negative; region 0 the background), the sub-pixel partition whose functional is
@@ -146,7 +149,7 @@ class FlowState:
         """The current inside region, rasterised on demand (not free: O(M N))."""
         if self.phi is not None:
             return self.phi > 0
-        from activecontour.raster import rasterize
+        from activecontour.geometry.raster import rasterize
 
         return rasterize(self.contours, self.shape)
 
@@ -157,25 +160,25 @@ def scalar_if_gray(value):
 
 
 #: Energies that agree to this relative tolerance are the same number computed twice, or before and
-#: after :func:`activecontour.curve.clean` (which moves the region by ~1e-9 of its extent).
+#: after :func:`activecontour.geometry.curve.clean` (which moves the region by ~1e-9 of its extent).
 _SAME_ENERGY = 1e-8
 
 
 def build_result(model, params, contours, *, energies, n_iter, status, backend, phi=None):
     """The one way a backend makes its result, so that every result obeys the same invariants.
 
-    * contours are cleaned (:func:`activecontour.curve.clean`): no repeated vertices, zero-width
+    * contours are cleaned (:func:`activecontour.geometry.curve.clean`): no repeated vertices, zero-width
       spikes, fewer than 3 vertices or zero area; curves that do not bound a region (a ring that
-      touches itself, overlaps: :func:`activecontour.topology.region_problem`) are replaced by
+      touches itself, overlaps: :func:`activecontour.geometry.topology.region_problem`) are replaced by
       the boundary of the region they outline, so every contour is a simple polygon and no two
       cross;
     * ``energy`` is (6.38) of exactly these contours by the common evaluator
-      (:func:`activecontour.energy.chan_vese_energy`), and ``energies`` ends with it;
+      (:func:`activecontour.evaluate.chan_vese_energy`), and ``energies`` ends with it;
     * when a converged flow ends above the energy of the empty set (a local minimum worse than
       no object at all), or the backend reports a collapse, the result is the empty set, status
       3, but only if that does not raise the energy: a collapse with curves left that beat the
       empty set keeps them (status 1);
-    * ``mask`` is the inside of the contours (:func:`activecontour.raster.rasterize`);
+    * ``mask`` is the inside of the contours (:func:`activecontour.geometry.raster.rasterize`);
     * ``c_in``, ``c_out`` are finite: the constant of an empty region is reported equal to the
       other one (its fitting term is 0 whatever it is).
 

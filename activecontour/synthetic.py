@@ -3,7 +3,7 @@
 A shape is a function ``inside(r, c) -> bool array`` of (row, col) coordinates.  :func:`render`
 gives an anti-aliased image (each pixel's value is the fraction of its square covered by the shape,
 estimated on a ``supersample x supersample`` sub-grid) and the ground-truth mask (pixel centres
-inside the shape), the same convention as :func:`activecontour.raster.rasterize`.
+inside the shape), the same convention as :func:`activecontour.geometry.raster.rasterize`.
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ run.  Every result is scored by the common evaluator of (6.38),
 * ``E ours``: ours as a curve, the last of the returned ``energies`` (by construction the common
   evaluator's value of the final contours, the invariant every result obeys);
 * ``mask sk`` / ``mask ours``: both returned masks outlined the same way (marching squares at 1/2,
-  :func:`activecontour.raster.mask_to_curves`) and scored: what a user holding only the masks sees.
+  :func:`activecontour.geometry.raster.mask_to_curves`) and scored: what a user holding only the masks sees.
 
 ``dE`` is ``(E ours - E sk) / |E sk|`` (negative: ours lower); ``t ratio`` is the time of our call
 over scikit-image's, ``cpu rat`` the same for this process's CPU time (what a loaded machine does
@@ -33,7 +33,7 @@ import numpy as np
 
 import activecontour as ac
 from activecontour.compat import _segment_arguments, chan_vese
-from activecontour.raster import level_curves, mask_to_curves
+from activecontour.geometry.raster import level_curves, mask_to_curves
 from activecontour.synthetic import dice
 
 #: scikit-image sample images that load without a download (``--quick``: the first four)

@@ -13,7 +13,7 @@ scored the same way:
 * the final energy (6.38) by the common evaluator :func:`activecontour.chan_vese_energy`
   (exact on the bilinear image), on each method's contours: the zero level set of phi by
   marching squares for the level-set methods, the pixel boundary of the mask
-  (:func:`activecontour.raster.mask_to_curves`) for the morphological one.
+  (:func:`activecontour.geometry.raster.mask_to_curves`) for the morphological one.
 
 The methods:
 
@@ -61,8 +61,8 @@ import numpy as np
 import activecontour as ac
 from activecontour import synthetic as sy
 from activecontour.backends.levelset import checkerboard_level_set, curves_level_set, level_set_contours
+from activecontour.geometry.raster import mask_to_curves, rasterize
 from activecontour.initial import default_init
-from activecontour.raster import mask_to_curves, rasterize
 
 MU = 0.2
 INSIDE, OUTSIDE = 0.75, 0.25

@@ -17,7 +17,7 @@ image shipped in the ``stardist`` wheel (BSD-3; looked for in ``$STARDIST_DATA``
 ``../_data/stardist/data/images``, or fetched once with ``pip download --no-deps stardist`` into
 ``~/.cache/activecontour``), and ``skimage.data.coins`` (24 coins, no instance truth: object
 counts only).  Columns: F1 and accuracy TP / (TP + FP + FN) at IoU >= 0.5
-(:func:`activecontour.metrics.match_instances`), objects found / true, wall time.  ``--render``
+(:func:`activecontour.objects.metrics.match_instances`), objects found / true, wall time.  ``--render``
 writes each label image in colour (one colour per id) next to the truth.
 """
 
@@ -37,7 +37,7 @@ import scipy.ndimage
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.metrics import match_instances
+from activecontour.objects.metrics import match_instances
 
 STARDIST_FILES = ("stardist/data/images/img2d.tif", "stardist/data/images/mask2d.tif")
 

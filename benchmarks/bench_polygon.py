@@ -20,7 +20,8 @@ import skimage.segmentation
 
 import activecontour as ac
 from activecontour import synthetic
-from activecontour.image import ImageModel, normalize_image
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
 
 CONTRAST_IMAGES = {
     "disk": lambda c: synthetic.disk(c, 60.0),

@@ -15,9 +15,7 @@ load average is printed with the timings: compare ratios taken in the same run.
    the PNG plus one float64 cumulative sum along its rows (in-process time).  Then the command line
    with ``--max-iter`` (wall, peak RSS, iterations, Dice of its mask against the synthetic truth);
    the library in one process: preparation (normalising and the tables), time per iteration, and
-   the rest after the last iteration (the final mask); and the coarse-to-fine start
-   (:func:`activecontour.pyramid.coarse_start` then the full-size flow on the same model): in-process
-   time from reading the PNG to the result, peak RSS, full-size iterations, Dice.
+   the rest after the last iteration (the final mask).
 """
 
 from __future__ import annotations
@@ -50,7 +48,8 @@ print(time.perf_counter() - start, time.process_time() - cpu)
 LIBRARY = """
 import sys, time, numpy as np
 import activecontour as ac
-from activecontour.image import ImageModel, normalize_image
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
 image = ac.load_image(sys.argv[1])
 start = time.process_time()
 ImageModel(normalize_image(image))
@@ -63,24 +62,6 @@ end = time.process_time()
 steps = np.diff([start] + stamps)
 per_iteration = float(np.median(steps[1:])) if len(steps) > 1 else float("nan")
 print(prepare, per_iteration, end - stamps[-1], result.n_iter)
-"""
-
-
-COARSE_TO_FINE = """
-import sys, time, numpy as np
-import activecontour as ac
-from activecontour import pyramid, synthetic
-from activecontour.energy import ChanVeseParameters
-from activecontour.backends.polygon import segment_polygon
-from activecontour.image import ImageModel, normalize_image
-from activecontour.noise import auto_mu
-start, cpu = time.perf_counter(), time.process_time()
-model = ImageModel(normalize_image(ac.load_image(sys.argv[1])))
-params = ChanVeseParameters(auto_mu(model.values))  # segment's default mu
-curves = pyramid.coarse_start(model, None, params)
-result = segment_polygon(model, curves, params, max_num_iter=int(sys.argv[3]), tol=1e-3, callback=None)
-elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
-print(elapsed, cpu, result.n_iter, synthetic.dice(result.mask, np.load(sys.argv[2])))
 """
 
 
@@ -155,14 +136,13 @@ def import_profile(cache, top=12):
 
 def sizes(cache, sizes, max_iter):
     from activecontour import synthetic
-    from activecontour.image import load_image
+    from activecontour.io.images import load_image
 
     print(f"\nNoisy disk through the polygon backend, --max-iter {max_iter} ({load()})")
     print("floor: read + one float64 cumulative sum (in-process wall / CPU); CLI: whole process; library")
-    print("and c2f (coarse-to-fine): in-process CPU; x floor compares CPU seconds with the floor's CPU")
+    print("x floor compares CPU seconds with the floor's CPU")
     header = (f"{'size':>6s} | {'floor s':>9s} | {'CLI s':>11s} {'x floor':>7s} {'RSS MB':>6s} {'iters':>5s} "
-              f"{'Dice':>6s} | {'prepare':>7s} {'ms/iter':>7s} {'final':>5s} | {'c2f s':>10s} "
-              f"{'x floor':>7s} {'RSS MB':>6s} {'iters':>5s} {'Dice':>6s}")
+              f"{'Dice':>6s} | {'prepare':>7s} {'ms/iter':>7s} {'final':>5s}")
     print(header)
     print("-" * len(header))
     for size in sizes:
@@ -176,13 +156,9 @@ def sizes(cache, sizes, max_iter):
         dice = synthetic.dice(mask, np.load(truth))
         prepare, per_iter, final, _ = map(float, run_measured([sys.executable, "-c", LIBRARY, str(image),
                                                               str(max_iter)])[3].split())
-        _, c2f_rss, _, c2f = run_measured([sys.executable, "-c", COARSE_TO_FINE, str(image), str(truth),
-                                           str(max_iter)])
-        c2f_wall, c2f_cpu, c2f_iter, c2f_dice = map(float, c2f.split())
         print(f"{size:6d} | {floor_wall:4.2f}/{floor:4.2f} | {wall:5.2f}/{cpu:5.2f} {cpu / floor:7.1f} "
-              f"{rss:6.0f} {iterations:5d} {dice:6.4f} | {prepare:7.2f} {per_iter * 1e3:7.1f} {final:5.2f} | "
-              f"{c2f_wall:5.2f}/{c2f_cpu:4.2f} {c2f_cpu / floor:7.1f} {c2f_rss:6.0f} {int(c2f_iter):5d} "
-              f"{c2f_dice:6.4f}", flush=True)
+              f"{rss:6.0f} {iterations:5d} {dice:6.4f} | {prepare:7.2f} {per_iter * 1e3:7.1f} "
+              f"{final:5.2f}", flush=True)
     print(f"({load()})")
 
 

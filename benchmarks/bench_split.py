@@ -3,7 +3,7 @@
 Run ``python benchmarks/bench_split.py``.  Each object is the largest connected piece of smoothed
 uniform noise (Gaussian, sigma 2 px) above its 45 % quantile: a sponge-like outline whose distance
 to the boundary has a local maximum every few pixels, so the watershed of
-:func:`activecontour.objects.split_touching` makes hundreds to thousands of parts.  The table
+:func:`activecontour.objects.split.split_touching` makes hundreds to thousands of parts.  The table
 lists the object's pixels, the watershed's parts, the objects after the split, the wall time and
 the time per pixel, which stays about constant if the split is about linear in the pixels.
 """
@@ -16,8 +16,10 @@ import numpy as np
 import scipy.ndimage
 import skimage.morphology
 
-from activecontour.objects import group_curves, label_image, split_touching
-from activecontour.raster import mask_to_curves
+from activecontour.geometry.raster import mask_to_curves
+from activecontour.geometry.regions import group_curves
+from activecontour.objects.measure import label_image
+from activecontour.objects.split import split_touching
 
 SIDES = (192, 384, 768, 1100)
 

@@ -4,7 +4,7 @@
 
 Every image goes through ``activecontour.segment(image)`` with all its defaults (no init, mu
 "auto", the polygon backend), exactly as ``activecontour segment IMAGE`` does, and its overlay is
-drawn by the command line's own writer (:func:`activecontour.image_files.render_overlay`: the image
+drawn by the command line's own writer (:func:`activecontour.io.pictures.render_overlay`: the image
 shown by its own range, the contour in a colour that stands out from it), shrunk to
 :data:`THUMBNAIL_SIDE` pixels with a 2 px line (the command line's "auto" width is 1 px per 1024 px
 of the written side) and stored as an 8-bit palette PNG to keep the files small.  The
@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import activecontour as ac  # noqa: E402
-from activecontour.image_files import render_overlay  # noqa: E402
+from activecontour.io.pictures import render_overlay  # noqa: E402
 
 #: The longest side of a gallery figure, in pixels.
 THUMBNAIL_SIDE = 360

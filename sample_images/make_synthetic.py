@@ -14,7 +14,7 @@ its square, then Gaussian blur and noise with a fixed seed, clipped to [0, 1], s
     1 pixel, noise sigma 0.1, seed 1.  Three components and a hole: a test for topology.
 
 ``<name>_truth.png`` is the ground truth, 255 where the pixel centre lies inside the shape (the
-convention of activecontour.raster.rasterize).
+convention of activecontour.geometry.raster.rasterize).
 
 From scikit-image's data (see LICENSE.md): ``coins.png`` (303 x 384, unchanged) and
 ``camera.png`` (downscaled from 512 x 512 to 256 x 256 with anti-aliasing, to keep the folder small).

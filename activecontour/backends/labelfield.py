@@ -14,7 +14,7 @@ A label per pixel partitions the image by construction: no vacuum, no overlap, j
 three regions meet, topology free, and the cost of a sweep grows with K, not with the pairs of
 regions (Vese-Chan's log2 K level sets couple every region through products of Heavisides; K level
 sets need a projection back onto the partition after every step).  The label image stands for a
-sub-pixel partition (:mod:`activecontour.partition`: boundaries through the midpoints between
+sub-pixel partition (:mod:`activecontour.geometry.partition`: boundaries through the midpoints between
 pixels of different regions, junctions at cell centres) whose length is a sum over grid cells, so
 the exact change of L when one pixel changes region is local: the four cells around it.
 
@@ -46,8 +46,8 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour.energy import evaluate_partition
+from activecontour.geometry.partition import chain, class_boundary, class_soup
 from activecontour.models.kmeans import histogram_kmeans
-from activecontour.partition import chain, class_boundary, class_soup
 from activecontour.result import FlowState, SegmentationResult
 
 __all__ = ["initial_classes", "segment_labels"]
@@ -312,7 +312,7 @@ _HALF = np.sqrt(0.5)
 
 def _cell_length(tl, tr, br, bl):
     """Boundary length inside grid cells with these corner classes, by the rule of
-    :mod:`activecontour.partition`: a straight cut 1, a corner cut sqrt(1/2), a saddle two corner
+    :mod:`activecontour.geometry.partition`: a straight cut 1, a corner cut sqrt(1/2), a saddle two corner
     cuts, a junction 1/2 per cell edge whose ends differ."""
     top, right, bottom, left = tl != tr, tr != br, bl != br, tl != bl
     count = top.astype(np.int8) + right + bottom + left

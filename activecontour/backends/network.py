@@ -34,7 +34,7 @@ The network moves its vertices; it does not change its graph.  The topology come
 label field (:func:`activecontour.backends.labelfield.segment_labels`: the global K-means start, then
 the exact descent with its merge and split moves, which create, remove and reconnect regions
 freely).  Its partition (boundaries through the midpoints between pixels, junctions at cell
-centres: :mod:`activecontour.partition`) is the network's start; the flow then moves every
+centres: :mod:`activecontour.geometry.partition`) is the network's start; the flow then moves every
 interface and junction to sub-pixel position, lowering J from the label field's value.  So the
 polygon backend's N-region result is the label field's topology with the polygon's geometry.
 
@@ -57,8 +57,8 @@ from activecontour.energy import (
     partition_moments,
     soup_moments,
 )
-from activecontour.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
-from activecontour.raster import rasterize
+from activecontour.geometry.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
+from activecontour.geometry.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
 
 __all__ = ["Network", "segment_network"]
@@ -112,7 +112,7 @@ class Network:
 
     @classmethod
     def of_classes(cls, classes):
-        """The network of the partition a label image stands for (:mod:`activecontour.partition`)."""
+        """The network of the partition a label image stands for (:mod:`activecontour.geometry.partition`)."""
         boundary = class_boundary(classes)
         points = np.vstack([boundary.start, boundary.end])
         _, first, index = np.unique(lattice_keys(points), return_index=True, return_inverse=True)
@@ -121,7 +121,7 @@ class Network:
                    classes.shape)
 
     def boundary(self, nodes=None):
-        """The partition's :class:`~activecontour.partition.Boundary` with the vertices at ``nodes``."""
+        """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
         nodes = self.nodes if nodes is None else nodes
         return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
 
@@ -213,7 +213,7 @@ class Network:
     def resampled(self, nodes, spacing):
         """The network with every interface resampled at equal arc-length steps of about
         ``spacing`` px, its branch nodes kept (mesh health, as the two-region flow's
-        :func:`activecontour.curve.resample`).  Returns ``(network, nodes)``."""
+        :func:`activecontour.geometry.curve.resample`).  Returns ``(network, nodes)``."""
         lines = self.polylines()
         interior = np.zeros(len(nodes), dtype=bool)
         for path, _, _, closed in lines:

@@ -31,9 +31,9 @@ bumps, one per region, each as wide as the noise; a region is a *mode* of their 
 5. K is the number of such modes, at least 2 (the two-region model of (6.38) is the least the
    functional knows) and at most ``max_regions``.
 
-sigma is the larger of the image's noise (:func:`activecontour.noise.estimate_noise`) and the
+sigma is the larger of the image's noise (:func:`activecontour.imaging.noise.estimate_noise`) and the
 noise that the length weight assumes, ``sqrt(mu / MU_PER_NOISE_VARIANCE)``
-(:func:`activecontour.noise.auto_mu` sets ``mu = MU_PER_NOISE_VARIANCE sigma^2``).  So the
+(:func:`activecontour.imaging.noise.auto_mu` sets ``mu = MU_PER_NOISE_VARIANCE sigma^2``).  So the
 intensity resolution at which regions are told apart is the one the functional resolves: with
 ``mu="auto"``, a noise-free image is counted at sigma = sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)
 = 0.03 of its range, and a larger ``mu`` merges close levels.  Colour images (``color="vector"``)
@@ -88,35 +88,33 @@ _PROMINENCE = 0.5  # a mode's rise above its saddle, over its height
 _SIGNIFICANCE = 3.0  # ... and over the standard deviation of the counts' noise
 
 
-def choose_regions(values, mu="auto", *, max_regions=MAX_REGIONS):
+def choose_regions(values, floor, mu=None, *, max_regions=MAX_REGIONS):
     """``n_regions="auto"`` of :func:`activecontour.segment`: :func:`count_regions` at the noise
     level the length weight assumes.
 
-    In the working frame (the image spanning [0, 1], :func:`activecontour.energy.working_frame`),
+    In the working frame (the image spanning [0, 1], :func:`activecontour.imaging.frame.working_frame`),
     sigma is ``sqrt(mu / MU_PER_NOISE_VARIANCE)`` for the larger of ``mu`` and
-    :func:`~activecontour.noise.auto_mu`'s (the image's noise, at least
+    :func:`~activecontour.imaging.noise.auto_mu`'s (the image's noise, at least
     ``sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)`` = 0.03 of its range): regions are told apart at the
-    resolution the functional resolves.
+    resolution the functional resolves.  :class:`activecontour.problem.Problem` gives the three.
 
     Parameters
     ----------
     values : ndarray (M, N, C)
-        Normalised intensities (:func:`activecontour.image.normalize_image`).
-    mu : float or "auto"
-        The length weight of the run, in the units of ``values``.
+        Normalised intensities in the working frame.
+    floor : float
+        :func:`~activecontour.imaging.noise.auto_mu` of ``values``.
+    mu : float, optional
+        The length weight of the run, in the working frame; None: ``mu="auto"``.
     max_regions : int
 
     Returns
     -------
     int
     """
-    from activecontour.energy import to_frame, working_frame
-    from activecontour.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
+    from activecontour.imaging.noise import MU_PER_NOISE_VARIANCE
 
-    offset, scale = working_frame(values)
-    values = to_frame(values, offset, scale)
-    floor = auto_mu(values)
-    mu = floor if is_auto(mu) else max(floor, mu / scale**2)
+    mu = floor if mu is None else max(floor, mu)
     return count_regions(values, np.sqrt(mu / MU_PER_NOISE_VARIANCE), max_regions=max_regions)
 
 

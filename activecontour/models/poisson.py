@@ -119,7 +119,7 @@ def poisson_model(image, light, params):
     -------
     ImageModel, PoissonParameters
     """
-    from activecontour.image import ImageModel
+    from activecontour.imaging.tables import ImageModel
 
     fields = {field.name: getattr(params, field.name) for field in dataclasses.fields(ChanVeseParameters)}
     reference = tuple(float(max(r, RATE_FLOOR)) for r in image.reshape(-1, image.shape[2]).mean(axis=0))

@@ -23,7 +23,7 @@ With b fixed, (6.38)'s fit term is a diagonal quadratic form in the feature chan
 
 and the bilinear interpolants of the features obey the same identity pointwise (``I + b`` is
 linear in the pixel values).  So the row-antiderivative tables of the features
-(:class:`activecontour.image.ImageModel`), the exact edge integrals, the load (6.41), the level
+(:class:`activecontour.imaging.tables.ImageModel`), the exact edge integrals, the load (6.41), the level
 set's force and nucleation all work unchanged (:class:`SmoothLightParameters` is the model they
 read); the constants (6.42) become ``c_k = int I b / int b^2``, from the second moments.
 
@@ -170,7 +170,7 @@ def smooth_light_model(image, light, params):
     """
     import dataclasses
 
-    from activecontour.image import ImageModel
+    from activecontour.imaging.tables import ImageModel
 
     if light is None:  # uniform: the constant fit
         return ImageModel(image), params

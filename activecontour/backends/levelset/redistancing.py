@@ -6,7 +6,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _corners
-from activecontour.raster import rasterize
+from activecontour.geometry.raster import rasterize
 
 _FAR = 1e15  # a sentinel segment start: its squared distance stays finite in float32
 _MIN_DISTANCE = 1e-6  # pixels: the smallest |phi| a reinitialisation writes (see _propagate)
@@ -328,7 +328,7 @@ def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):
     """Signed distance to closed curves (inside positive), exact in the band, as ``dtype``.
 
     The inside is the rasterised region (pixel centres with nonzero winding,
-    :func:`activecontour.raster.rasterize`); the pixels next to its boundary get their exact
+    :func:`activecontour.geometry.raster.rasterize`); the pixels next to its boundary get their exact
     distance to the curves (split into pieces of at most half a pixel), and the band inherits it
     by closest-segment propagation.
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.raster import level_curves
+from activecontour.geometry.raster import level_curves
 
 
 def _cell_segments(a, b, c, d, cell_r, cell_c, width):
@@ -71,7 +71,7 @@ def _corners(phi, cell_r, cell_c):
 
 
 def level_set_contours(phi):
-    """The zero level set of phi as closed sub-pixel curves in the convention of :mod:`activecontour.curve`.
+    """The zero level set of phi as closed sub-pixel curves, oriented as in :mod:`~activecontour.geometry`.
 
     Marching squares (``skimage.measure.find_contours``) on phi padded by one pixel of
     ``-|phi|`` (:func:`_closed_padding`): a region that touches the image border closes along the

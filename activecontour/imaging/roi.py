@@ -1,0 +1,116 @@
+"""The domain D of (6.38) restricted to a region of interest: a box, a mask, or around the init.
+
+``segment(..., roi=...)`` solves the functional on the part of the image the user points at, so
+that drawing around one object segments that object and nothing else:
+
+* a box ``(r0, c0, r1, c1)`` (rows r0..r1-1, columns c0..c1-1, as a slice): exact; the image is
+  cropped, the flow runs on the crop, and the contours are shifted back;
+* a bool mask of the image's shape: the image is cropped to the mask's bounding box, and the
+  pixels of the box outside the mask are given the median intensity of the mask's edge pixels
+  (those inside the mask with a neighbour outside), so that they read as the background the user
+  drew around; the result is then clipped to the mask, so no pixel outside it is inside.  This is
+  an approximation of the restricted integral: exact when the background around the mask is
+  uniform; otherwise the filled pixels pull ``c_out`` towards the edge's median;
+* ``"init"``: the region of the given curves (or mask) dilated by ``ROI_INIT_MARGIN`` times its
+  equivalent radius, at least ``ROI_INIT_MIN_MARGIN`` pixels (:func:`init_neighbourhood`), used
+  as a mask as above.  Drawing a circle around one object and running gives that object: the
+  neighbourhood holds the object and the background around it, not the neighbours.  When the
+  result is empty or reaches the neighbourhood's edge (a curve drawn inside the object), the
+  margin is doubled and the run repeated, up to the whole image.
+
+The result is in the whole image's frame (mask, contours, labels); its ``roi`` attribute is the
+domain used (a bool mask: pass it as ``roi`` to continue on the same domain) and its ``energy``
+is (6.38) on the crop (with the filled pixels, for a mask).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["ROI_INIT_MARGIN", "ROI_INIT_MIN_MARGIN", "crop_init", "init_neighbourhood", "resolve_roi",
+           "restrict_values"]
+
+#: ``roi="init"``: the init's region grown by this fraction of its equivalent radius ...
+ROI_INIT_MARGIN = 0.25
+#: ... and by at least this many pixels.
+ROI_INIT_MIN_MARGIN = 4.0
+
+
+def resolve_roi(roi, shape):
+    """The crop box and the domain mask inside it (None for a box) of a ``roi`` argument.
+
+    Parameters
+    ----------
+    roi : bool ndarray (M, N) or (r0, c0, r1, c1)
+        A mask or a box (of the kinds :class:`activecontour.settings.Settings` admits; ``"init"``
+        is a mask by then, :func:`init_neighbourhood`).
+    shape : tuple (M, N)
+
+    Returns
+    -------
+    box : tuple (r0, c0, r1, c1) of int
+    domain : bool ndarray (r1 - r0, c1 - c0) or None
+    """
+    m, n = shape
+    array = np.asarray(roi)
+    if array.dtype == bool:
+        if array.shape != (m, n):
+            raise ValueError(f"roi mask has shape {array.shape}, but the image has shape {(m, n)}")
+        if not array.any():
+            raise ValueError("roi mask is empty: it selects no pixel")
+        rows, cols = np.flatnonzero(array.any(axis=1)), np.flatnonzero(array.any(axis=0))
+        box = (int(rows[0]), int(cols[0]), int(rows[-1]) + 1, int(cols[-1]) + 1)
+        domain = array[box[0]:box[2], box[1]:box[3]]
+        return box, (None if domain.all() else domain)
+    r0, c0, r1, c1 = (int(v) for v in np.clip(array, 0, [m, n, m, n]))
+    if r1 - r0 < 2 or c1 - c0 < 2:
+        raise ValueError(f"roi box {tuple(array.tolist())} leaves less than 2 x 2 pixels of the "
+                         f"{m} x {n} image")
+    return (r0, c0, r1, c1), None
+
+
+def init_neighbourhood(init, shape, margin=ROI_INIT_MARGIN):
+    """The bool (M, N) mask of ``roi="init"``: the init's region dilated by ``margin`` times its
+    equivalent radius ``sqrt(area / pi)``, and by at least ``ROI_INIT_MIN_MARGIN`` pixels."""
+    import scipy.ndimage
+
+    from activecontour.geometry.raster import rasterize
+    from activecontour.initial import initial_curves
+
+    if init is None or isinstance(init, str):
+        raise ValueError("roi='init' needs an init: curves, a mask or a result to draw around")
+    region = rasterize(initial_curves(init, shape), shape)
+    if not region.any():
+        raise ValueError("roi='init': the init encloses no pixel centre")
+    width = max(ROI_INIT_MIN_MARGIN, margin * np.sqrt(region.sum() / np.pi))
+    return scipy.ndimage.distance_transform_edt(~region) <= width
+
+
+def restrict_values(values, box, domain):
+    """The normalised values (M, N, C) on the crop, the pixels outside ``domain`` filled with the
+    median of its edge pixels (see the module docstring)."""
+    import scipy.ndimage
+
+    r0, c0, r1, c1 = box
+    crop = np.array(values[r0:r1, c0:c1])
+    if domain is not None:
+        edge = domain & ~scipy.ndimage.binary_erosion(domain, border_value=0)
+        crop[~domain] = np.median(crop[edge], axis=0)
+    return crop
+
+
+def crop_init(init, box, shape):
+    """The init in the crop's frame: curves shifted, a mask cropped; None and names as they are."""
+    from activecontour.initial import _is_mask
+
+    r0, c0, r1, c1 = box
+    if init is None or isinstance(init, str):
+        return init
+    if hasattr(init, "contours") and hasattr(init, "mask"):
+        init = init.contours
+    if _is_mask(init, shape) and np.shape(init) == tuple(shape):
+        return np.asarray(init)[r0:r1, c0:c1]
+    offset = np.array([r0, c0], dtype=np.float64)
+    if isinstance(init, (list, tuple)) and len(init) and np.ndim(init[0]) == 2:
+        return [np.asarray(c, dtype=np.float64) - offset for c in init]
+    return np.asarray(init, dtype=np.float64) - offset

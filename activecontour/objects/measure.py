@@ -1,0 +1,210 @@
+"""Objects and their measurements: the label image and the per-object table.
+
+An *object* is a connected piece of a non-background region: one outer boundary with the holes
+directly inside it (:func:`activecontour.geometry.regions.group_curves`).  :func:`find_objects` groups
+the result's curves, keeps touching objects apart (:mod:`activecontour.objects.split`), gives each
+an id 1..n in the label image (:func:`label_image`) and a row in the table (:func:`measure`).
+
+Exact and pixel columns of :func:`measure` (names as ``skimage.measure.regionprops_table``):
+
+====================================  ===========================================================
+exact, from the sub-pixel polygon     ``area``, ``perimeter`` (outer boundary and holes),
+(Green's theorem, holes subtracted)   ``centroid-0/1``, and from the second moments
+                                      ``eccentricity``, ``orientation``, ``axis_major_length``,
+                                      ``axis_minor_length``; ``area_convex`` and ``solidity``
+                                      (convex hull of the polygon); ``equivalent_diameter_area``
+from the pixels of the label image    ``label``, ``bbox-0..3``, ``num_pixels``,
+                                      ``intensity_mean`` (input units; ``intensity_mean-k`` per
+                                      channel of a colour image)
+====================================  ===========================================================
+
+The exact moments are those of the continuous region; ``regionprops`` sums point masses at pixel
+centres, so its second moments differ by the 1/12 px^2 of a pixel square and by the rasterisation
+(a few per cent on objects of a few pixels, below 1 % beyond a radius of ~10 px).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from activecontour.geometry.curve import signed_area
+from activecontour.geometry.raster import rasterize
+from activecontour.geometry.regions import group_curves, top_left
+from activecontour.objects.split import split_touching
+
+__all__ = ["find_objects", "group_curves", "label_image", "measure", "polygon_moments"]
+
+
+def find_objects(contours, shape, image=None, *, separate=True):
+    """The objects of a result: their curves, the label image and the measurement table.
+
+    Parameters
+    ----------
+    contours : list of ndarray (K, 2), or list of such lists
+        The oriented boundary of the inside region (a result's ``contours``), or one such list per
+        non-background class of an N-region partition: objects are the connected pieces of each
+        class, so two touching pieces of different classes are two objects (the table's ``class``
+        column, 1-based, says which).
+    shape : tuple (M, N)
+    image : ndarray (M, N) or (M, N, C), optional
+        The input image in its own units, for ``intensity_mean``.
+    separate : bool
+        Split touching objects along their necks, and by contrast where the image is given
+        (:func:`split_touching`); False keeps the connected pieces.
+
+    Returns
+    -------
+    objects : list of list of ndarray
+        Object k (id k + 1): outer boundary, then holes.  Objects that cover no pixel centre (a
+        sub-pixel speck) have no id and are left out.
+    labels : int32 ndarray (M, N)
+    table : dict of str to ndarray
+        :func:`measure`, with a ``class`` column.
+    """
+    by_class = [contours] if not contours or isinstance(contours[0], np.ndarray) else list(contours)
+    objects, classes = [], []
+    for k, curves in enumerate(by_class):
+        found = group_curves(curves)
+        if separate and found:
+            found = split_touching(found, label_image(found, shape), image)
+        objects += found
+        classes += [k + 1] * len(found)
+    order = sorted(range(len(objects)), key=lambda i: top_left(objects[i]))
+    objects, classes = [objects[i] for i in order], np.array([classes[i] for i in order], dtype=np.int32)
+    labels = label_image(objects, shape)
+    present = np.bincount(labels.ravel(), minlength=len(objects) + 1)[1:] > 0
+    if not present.all():
+        objects, classes = [o for o, keep in zip(objects, present, strict=True) if keep], classes[present]
+        relabel = np.concatenate([[0], np.cumsum(present) * present]).astype(np.int32)
+        labels = relabel[labels]
+    table = measure(objects, labels, image)
+    table["class"] = classes
+    return objects, labels, table
+
+
+def polygon_moments(curves):
+    """Exact area, first and second moments of the region bounded by oriented polygons.
+
+    By Green's theorem each edge (r_i, c_i) -> (r_j, c_j) with cross product
+    ``w = r_i c_j - r_j c_i`` adds ``w / 2`` to the area, ``(r_i + r_j) w / 6`` to ``int r``,
+    ``(r_i^2 + r_i r_j + r_j^2) w / 12`` to ``int r^2``, and ``(2 r_i c_i + r_i c_j + r_j c_i +
+    2 r_j c_j) w / 24`` to ``int r c``; holes (negative orientation) subtract themselves.
+
+    Returns
+    -------
+    area : float
+    centroid : ndarray (2,)
+        (row, col).
+    central : ndarray (2, 2)
+        Central second moments ``int (x - xbar)(x - xbar)^T dA`` over the region, x = (row, col).
+    """
+    origin = np.asarray(curves[0], dtype=np.float64).mean(axis=0)  # against cancellation
+    sums = np.zeros(6)  # 1, r, c, rr, cc, rc
+    for curve in curves:
+        p = np.asarray(curve, dtype=np.float64) - origin
+        q = np.roll(p, -1, axis=0)
+        r0, c0, r1, c1 = p[:, 0], p[:, 1], q[:, 0], q[:, 1]
+        w = r0 * c1 - r1 * c0
+        sums += [np.sum(w) / 2, np.sum((r0 + r1) * w) / 6, np.sum((c0 + c1) * w) / 6,
+                 np.sum((r0 * r0 + r0 * r1 + r1 * r1) * w) / 12,
+                 np.sum((c0 * c0 + c0 * c1 + c1 * c1) * w) / 12,
+                 np.sum((2 * r0 * c0 + r0 * c1 + r1 * c0 + 2 * r1 * c1) * w) / 24]
+    area = sums[0]
+    mean = sums[1:3] / area
+    central = np.array([[sums[3], sums[5]], [sums[5], sums[4]]]) - area * np.outer(mean, mean)
+    return area, origin + mean, central
+
+
+def label_image(objects, shape):
+    """The int32 label image: pixel centres inside object k's curves get id k + 1, others 0.
+
+    Each object is rasterised in its own bounding box (:func:`activecontour.geometry.raster.rasterize`),
+    so the cost is the objects' area, not n times the image.
+    """
+    m, n = shape
+    labels = np.zeros((m, n), dtype=np.int32)
+    for index, curves in enumerate(objects):
+        low = np.floor(np.min([c.min(axis=0) for c in curves], axis=0)).astype(int)
+        high = np.ceil(np.max([c.max(axis=0) for c in curves], axis=0)).astype(int) + 1
+        low, high = np.maximum(low, 0), np.minimum(high, (m, n))
+        if np.any(high <= low):
+            continue
+        inside = rasterize([c - low for c in curves], tuple(high - low))
+        labels[low[0]:high[0], low[1]:high[1]][inside] = index + 1
+    return labels
+
+
+def measure(objects, labels, image=None):
+    """Per-object measurements, a dict of 1-D arrays with ``regionprops_table``'s names.
+
+    Parameters
+    ----------
+    objects : list of list of ndarray
+        Object k (id k + 1 in ``labels``): its outer boundary first, then its holes.
+    labels : int ndarray (M, N)
+        From :func:`label_image`.
+    image : ndarray (M, N) or (M, N, C), optional
+        The input image, in its own units, for ``intensity_mean``.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns listed in the module docstring; which are exact and which count pixels is
+        said there.  The second-moment columns follow ``skimage.measure.regionprops``: with the
+        inertia tensor ``T = [[m_cc, -m_rc], [-m_rc, m_rr]] / area`` and its eigenvalues
+        ``l1 >= l2``, ``axis_major_length = 4 sqrt(l1)``, ``eccentricity = sqrt(1 - l2 / l1)``,
+        ``orientation = atan2(-2 T_01, T_11 - T_00) / 2`` (the angle from the row axis to the
+        major axis, in (-pi/2, pi/2]).
+    """
+    import scipy.ndimage
+
+    n = len(objects)
+    ids = np.arange(1, n + 1)
+    table = {"label": ids.astype(np.int32)}
+    area, centroid, tensor, perimeter, convex = (np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2, 2)),
+                                                 np.zeros(n), np.zeros(n))
+    for k, curves in enumerate(objects):
+        area[k], centroid[k], central = polygon_moments(curves)
+        # regionprops' inertia tensor: the moment about each axis is the other coordinate's
+        tensor[k] = np.array([[central[1, 1], -central[0, 1]], [-central[0, 1], central[0, 0]]]) / area[k]
+        perimeter[k] = sum(np.sum(np.hypot(*np.diff(np.vstack([c, c[:1]]), axis=0).T)) for c in curves)
+        convex[k] = _hull_area(np.vstack([c for c in curves if signed_area(c) > 0]))
+    eigen = np.linalg.eigvalsh(tensor)[:, ::-1].clip(min=0)  # descending
+    table["area"] = area
+    table["perimeter"] = perimeter
+    table["centroid-0"], table["centroid-1"] = centroid[:, 0], centroid[:, 1]
+    boxes = scipy.ndimage.find_objects(labels, max_label=n)
+    bbox = np.array([[s[0].start, s[1].start, s[0].stop, s[1].stop] if s is not None else [0, 0, 0, 0]
+                     for s in boxes], dtype=np.int64).reshape(n, 4)
+    for j in range(4):
+        table[f"bbox-{j}"] = bbox[:, j]
+    table["num_pixels"] = np.bincount(labels.ravel(), minlength=n + 1)[1:n + 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        table["eccentricity"] = np.where(eigen[:, 0] > 0,
+                                         np.sqrt(np.clip(1 - eigen[:, 1] / eigen[:, 0], 0, 1)), 0.0)
+    a, b, c = tensor[:, 0, 0], tensor[:, 0, 1], tensor[:, 1, 1]
+    table["orientation"] = np.where(a == c, np.where(b < 0, -np.pi / 4, np.pi / 4),
+                                    0.5 * np.arctan2(-2 * b, c - a))
+    table["axis_major_length"] = 4 * np.sqrt(eigen[:, 0])
+    table["axis_minor_length"] = 4 * np.sqrt(eigen[:, 1])
+    table["area_convex"] = convex
+    table["solidity"] = area / np.maximum(convex, np.finfo(float).tiny)
+    table["equivalent_diameter_area"] = np.sqrt(4 * area / np.pi)
+    if image is not None:
+        image = np.asarray(image)
+        planes = [image] if image.ndim == 2 else [image[:, :, ch] for ch in range(image.shape[2])]
+        for ch, plane in enumerate(planes):
+            name = "intensity_mean" if image.ndim == 2 else f"intensity_mean-{ch}"
+            sums = np.bincount(labels.ravel(), weights=plane.ravel().astype(np.float64), minlength=n + 1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                table[name] = sums[1:n + 1] / table["num_pixels"]
+    return table
+
+
+def _hull_area(points):
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return float(ConvexHull(points).volume)  # a 2-D hull's "volume" is its area
+    except QhullError:  # all vertices on a line: no area
+        return 0.0

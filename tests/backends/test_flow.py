@@ -1,0 +1,178 @@
+"""The polygon backend on synthetic images with constructed ground truth."""
+
+import numpy as np
+import pytest
+
+import activecontour as ac
+from activecontour import synthetic
+from activecontour.geometry.curve import signed_area
+from activecontour.geometry.raster import rasterize
+
+SIZE = (128, 128)
+CENTER = (63.5, 64.0)
+SHAPES = {
+    "disk": synthetic.disk(CENTER, 30.0),
+    "square": synthetic.rectangle((36.3, 38.6), (90.4, 91.2)),
+    "star": synthetic.star(CENTER, 34.0, amplitude=0.25, arms=5),
+}
+# an init that contains each object, and one that lies inside it
+OUTER_INIT = ac.circle(CENTER, 56.0)
+INNER_INIT = ac.circle(CENTER, 12.0)
+
+
+def shape_image(name, *, noise=0.0, seed=0, blur=0.0, inside=0.7, outside=0.3):
+    image, truth = synthetic.render(SHAPES[name], SIZE, inside=inside, outside=outside)
+    return synthetic.add_noise(image, noise, seed, blur=blur) if (noise or blur) else image, truth
+
+
+@pytest.mark.parametrize("name", sorted(SHAPES))
+@pytest.mark.parametrize("init", [OUTER_INIT, INNER_INIT], ids=["outer", "inner"])
+@pytest.mark.parametrize("noise, seed, blur", [(0.0, 0, 0.0), (0.2, 11, 0.0), (0.1, 12, 1.5)])
+def test_dice_against_ground_truth(name, init, noise, seed, blur):
+    image, truth = shape_image(name, noise=noise, seed=seed, blur=blur)
+    result = ac.segment(image, init)
+    assert result.success, result.message
+    assert synthetic.dice(result.mask, truth) >= 0.98
+
+
+def test_noise_free_disk_contour_is_within_a_quarter_pixel_of_the_circle():
+    radius = 30.0
+    image, _ = shape_image("disk")
+    for init in (OUTER_INIT, INNER_INIT):
+        result = ac.segment(image, init)
+        (contour,) = result.contours
+        distance = np.hypot(contour[:, 0] - CENTER[0], contour[:, 1] - CENTER[1]) - radius
+        assert np.abs(distance).max() <= 0.25
+
+
+@pytest.mark.parametrize("velocity", ["h1", "l2"])
+def test_energy_never_increases(velocity):
+    image, _ = shape_image("star", noise=0.25, seed=3)
+    result = ac.segment(image, OUTER_INIT, options={"velocity": velocity}, max_num_iter=300)
+    assert np.all(np.diff(result.energies) <= 0.0)
+    assert result.energies[-1] == result.energy
+    assert len(result.energies) == result.n_iter + 1
+
+
+def test_l2_velocity_segments_a_clean_image():
+    # The L^2 form (6.25) has no smoothing: the fastest vertex caps each step, so it is slow in
+    # noise (hence H^1 by default), but it minimises the same functional.
+    image, truth = shape_image("disk")
+    result = ac.segment(image, OUTER_INIT, options={"velocity": "l2"}, max_num_iter=2000)
+    assert synthetic.dice(result.mask, truth) >= 0.98
+
+
+def test_result_follows_the_conventions():
+    image, _ = shape_image("disk", noise=0.1, seed=4)
+    result = ac.segment(image)
+    assert result.backend == "polygon" and result.phi is None
+    assert result.mask.dtype == bool and result.mask.shape == SIZE
+    assert all(signed_area(c) > 0 for c in result.contours)
+    np.testing.assert_array_equal(result.mask, rasterize(result.contours, SIZE))
+    # c_in, c_out are the region means (6.42): in the input's units close to the rendered
+    # intensities, and in the normalised units the same affine map of them
+    assert result.c_in_image == pytest.approx(0.7, abs=0.02)
+    assert result.c_out_image == pytest.approx(0.3, abs=0.02)
+    low, high = image.min(), image.max()
+    assert result.c_in == pytest.approx((result.c_in_image - low) / (high - low), rel=1e-12)
+    assert "SegmentationResult" in repr(result)
+
+
+def test_fixed_constants_are_kept():
+    image, truth = shape_image("disk", noise=0.1, seed=5)
+    result = ac.segment(image, OUTER_INIT, c_in=0.7, c_out=0.3)
+    assert (result.c_in, result.c_out) == (0.7, 0.3)
+    assert synthetic.dice(result.mask, truth) >= 0.98
+
+
+def test_a_larger_mu_gives_a_shorter_contour():
+    image, _ = shape_image("star", noise=0.1, seed=6)
+    lengths = []
+    for mu in (0.1, 1.0):  # mu |star| ~ 250 stays below the fit the star gains, ~450 (see below)
+        (contour,) = ac.segment(image, OUTER_INIT, mu=mu).contours
+        lengths.append(np.sum(np.linalg.norm(np.roll(contour, -1, 0) - contour, axis=1)))
+    assert lengths[1] < lengths[0]
+
+
+def test_a_length_weight_above_the_objects_gain_gives_the_empty_set():
+    # the empty set costs sum (I - mean)^2; the true star saves A (1 - A/|D|) (c_in - c_out)^2 of
+    # it, about 450 here, at a length of about 250 px: from mu = 3 on, nothing beats the empty set
+    image, truth = shape_image("star")
+    area, total = truth.sum(), truth.size
+    gain = area * (1 - area / total) * (0.7 - 0.3) ** 2
+    perimeter = ac.segment(image, OUTER_INIT, mu=0.01, normalize=None).contours
+    mu = 1.5 * gain / sum(np.sum(np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)) for c in perimeter)
+    result = ac.segment(image, OUTER_INIT, mu=mu, normalize=None)
+    assert result.status == 3 and result.contours == [] and not result.mask.any()
+    empty = np.sum((image - image.mean()) ** 2)
+    # the pixel sum approximates the bilinear integral up to the anti-aliased rim (~1 %)
+    assert result.energy == pytest.approx(empty, rel=2e-2)
+    assert result.c_in == result.c_out == pytest.approx(image.mean(), rel=1e-3)
+
+
+def test_positive_omega_shrinks_the_inside():
+    image, _ = shape_image("disk", noise=0.05, seed=7)
+    areas = [ac.segment(image, OUTER_INIT, omega=w).mask.sum() for w in (0.0, 0.05)]
+    assert areas[1] < areas[0]
+
+
+def test_callback_sees_every_iteration_and_can_stop():
+    image, _ = shape_image("disk")
+    seen = []
+
+    def callback(state):
+        seen.append((state.iteration, state.energy, state.mask.sum()))
+        return state.iteration == 3
+
+    result = ac.segment(image, OUTER_INIT, callback=callback)
+    assert [s[0] for s in seen] == [1, 2, 3]
+    assert result.status == 2 and not result.success and result.n_iter == 3
+    assert seen[-1][1] == result.energy
+
+
+def test_zero_iterations_returns_the_initial_curve():
+    image, _ = shape_image("disk")
+    result = ac.segment(image, OUTER_INIT, max_num_iter=0)
+    assert result.n_iter == 0 and result.status == 1 and len(result.energies) == 1
+    assert signed_area(result.contours[0]) == pytest.approx(np.pi * 56.0**2, rel=1e-3)
+
+
+def test_flat_image_makes_the_contour_collapse():
+    result = ac.segment(np.full(SIZE, 0.5), INNER_INIT)
+    assert result.status == 3 and not result.success
+
+
+def test_two_initial_curves_find_two_objects():
+    shape = synthetic.union(synthetic.disk((40, 40), 15), synthetic.disk((85, 90), 18))
+    image, truth = synthetic.render(shape, SIZE)
+    result = ac.segment(image, [ac.circle((40, 40), 24), ac.circle((85, 90), 28)])
+    assert len(result.contours) == 2
+    assert synthetic.dice(result.mask, truth) >= 0.98
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32, np.float64])
+def test_image_dtypes(dtype):
+    image, truth = shape_image("disk", noise=0.05, seed=8)
+    image = np.clip(image, 0, 1)
+    if np.issubdtype(dtype, np.integer):
+        image = np.round(image * np.iinfo(dtype).max)
+    result = ac.segment(image.astype(dtype), OUTER_INIT)
+    assert synthetic.dice(result.mask, truth) >= 0.98
+
+
+@pytest.mark.parametrize("channels", [3, 4])
+def test_colour_images_in_gray(channels):
+    image, truth = shape_image("disk", noise=0.05, seed=9)
+    rgb = np.repeat(image[:, :, None], channels, axis=2)
+    if channels == 4:
+        rgb[:, :, 3] = 1.0
+    assert synthetic.dice(ac.segment(rgb, OUTER_INIT).mask, truth) >= 0.98
+
+
+def test_mask_init_and_result_init():
+    image, truth = shape_image("square", noise=0.1, seed=10)
+    start = np.zeros(SIZE, dtype=bool)
+    start[50:80, 50:80] = True
+    first = ac.segment(image, start, max_num_iter=5)
+    result = ac.segment(image, first)  # a result is a valid init
+    assert synthetic.dice(result.mask, truth) >= 0.98

@@ -1,0 +1,279 @@
+"""N regions on the polygon backend: the boundary network, its H^1 flow and the region evaluator."""
+
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import activecontour as ac
+from activecontour.backends.network import Network, segment_network
+from activecontour.energy import evaluate_partition
+from activecontour.geometry.partition import chain, class_boundary, class_soup
+from activecontour.geometry.raster import rasterize
+from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.tables import ImageModel
+from activecontour.models import ChanVeseParameters
+
+
+def _antialiased(shape, classify, levels, factor=8):
+    """The image of a partition with constant ``levels`` per region, each pixel the mean over
+    ``factor x factor`` sub-samples (exact area fractions up to 1/factor^2), and the region of
+    every pixel centre."""
+    m, n = shape
+    offsets = (np.arange(factor) + 0.5) / factor - 0.5
+    rows = np.arange(m)[:, None, None, None] + offsets[None, None, :, None]
+    cols = np.arange(n)[None, :, None, None] + offsets[None, None, None, :]
+    fine = classify(rows + 0 * cols, cols + 0 * rows)
+    image = np.asarray(levels, dtype=np.float64)[fine].mean(axis=(2, 3))
+    centre = classify(np.arange(m)[:, None] + 0.0 * np.arange(n), 0.0 * np.arange(m)[:, None] + np.arange(n))
+    return image, centre
+
+
+def _rings(centre, radii):
+    def classify(r, c):
+        distance = np.hypot(r - centre[0], c - centre[1])
+        return sum((distance < radius).astype(int) for radius in radii)
+    return classify
+
+
+def _sectors(centre):
+    """Three 120 degree sectors meeting at ``centre`` (a Y junction)."""
+    def classify(r, c):
+        angle = np.mod(np.arctan2(r - centre[0], c - centre[1]) + np.pi / 2, 2 * np.pi)
+        return np.minimum((angle / (2 * np.pi / 3)).astype(int), 2)
+    return classify
+
+
+def _setup(image, mu):
+    values = normalize_image(image, normalize=None, color="vector")
+    return ImageModel(values), ChanVeseParameters(mu)
+
+
+def test_regions_evaluator_is_the_classes_evaluator_on_a_label_partition():
+    classes = np.random.default_rng(0).integers(0, 4, (13, 17))
+    classes[4:9, 5:12] = 2  # a block: straight interfaces and junctions at its corners
+    image = np.random.default_rng(1).random(classes.shape)
+    boundary = class_boundary(classes)
+    regions = [chain(*class_soup(boundary, k)) for k in range(4)]
+    by_classes = ac.chan_vese_energy(image, classes=classes, mu=0.3, omega=0.2, lambda_out=0.7)
+    by_regions = ac.chan_vese_energy(image, regions=regions, mu=0.3, omega=0.2, lambda_out=0.7)
+    assert by_regions == pytest.approx(by_classes, rel=1e-12)
+
+
+def test_regions_must_tile_the_domain():
+    image = np.zeros((10, 10))
+    square = np.array([[2.0, 2.0], [2.0, 6.0], [6.0, 6.0], [6.0, 2.0]])[::-1]  # positive
+    border = np.array([[-0.5, -0.5], [9.5, -0.5], [9.5, 9.5], [-0.5, 9.5]])
+    with pytest.raises(ValueError, match="do not tile the image domain"):
+        ac.chan_vese_energy(image, regions=[[border], [square]], mu=0.1)
+    with pytest.raises(TypeError, match="one of contours, classes or regions"):
+        ac.chan_vese_energy(image, [square], regions=[[border], [square]])
+
+
+def test_network_force_is_the_gradient_of_the_energy_at_every_kind_of_node():
+    image, classes = _antialiased((20, 24), _sectors((9.3, 11.6)), [0.1, 0.5, 0.9])
+    image += np.random.default_rng(2).normal(0, 0.05, image.shape)
+    model, params = _setup(image, 0.2)
+    network = Network.of_classes(classes)
+    shift = np.random.default_rng(3).uniform(-0.2, 0.2, network.nodes.shape)
+    nodes = network.nodes + shift * np.column_stack(network.free)  # off the lattice, border nodes on it
+    constants = evaluate_partition(model, network.boundary(nodes), params, 3).constants
+    force = network.force(nodes, model, params, constants)
+    degree = np.bincount(np.concatenate([network.start[network.interface], network.end[network.interface]]),
+                         minlength=len(nodes))
+    junction = np.flatnonzero(degree >= 3)
+    sliding = np.flatnonzero(network.free[0] ^ network.free[1])
+    plain = np.flatnonzero((degree == 2) & network.free[0] & network.free[1])
+    assert junction.size == 1 and sliding.size == 3
+    for node in [*junction, *sliding, *plain[::7]]:
+        for axis in np.flatnonzero([network.free[0][node], network.free[1][node]]):
+            step = 1e-6
+            energy = []
+            for sign in (1, -1):
+                moved = nodes.copy()
+                moved[node, axis] += sign * step
+                energy.append(evaluate_partition(model, network.boundary(moved), params, 3, constants).energy)
+            numeric = (energy[0] - energy[1]) / (2 * step)
+            assert numeric == pytest.approx(force[node, axis], abs=1e-6 * max(1.0, abs(force[node, axis])))
+
+
+def test_h1_form_integrates_linear_functions_and_kills_constants():
+    _, classes = _antialiased((30, 30), _rings((14.2, 15.1), [11.0, 5.0]), [0, 1, 2])
+    network = Network.of_classes(classes)
+    nodes = network.nodes
+    matrix = network.stiffness(nodes, smoothing=1.0).toarray()
+    mass = network.stiffness(nodes, smoothing=0.0).toarray()
+    stiffness = matrix - mass
+    ones = np.ones(len(nodes))
+    np.testing.assert_allclose(stiffness @ ones, 0.0, atol=1e-12)
+    # int_Gamma x_r ds: per segment its length times its midpoint's row
+    a, b = network.start[network.interface], network.end[network.interface]
+    exact = np.sum(np.linalg.norm(nodes[b] - nodes[a], axis=1) * 0.5 * (nodes[a, 0] + nodes[b, 0]))
+    assert ones @ mass @ nodes[:, 0] == pytest.approx(exact, rel=1e-12)
+
+
+def test_flow_moves_interfaces_to_subpixel_position():
+    centre, radii = (31.37, 32.81), [24.6, 11.3]
+    image, classes = _antialiased((64, 66), _rings(centre, radii), [0.1, 0.5, 0.9])
+    model, params = _setup(image, 1e-3)
+    labels = ac.segment(image, n_regions=3, backend="levelset", mu=1e-3, normalize=None)
+    result = segment_network(model, None, params, n_regions=3, max_num_iter=500, tol=5e-4, callback=None)
+    assert result.status == 0
+    assert result.energy < labels.energy
+    assert np.all(np.diff(result.energies) <= 1e-12 * np.abs(result.energies[1:]))
+
+    def radius_error(res, k, radius):
+        outer = max(res.class_contours[k], key=len)
+        return np.sqrt(np.mean((np.hypot(*(outer - centre).T) - radius) ** 2))
+
+    # the label field's boundary is a staircase through pixel midpoints; the network's is as close
+    # as the two-region polygon's on a disk of the same radius (the bilinear image's own limit)
+    disk, _ = _antialiased((64, 66), _rings(centre, radii[:1]), [0.1, 0.9])
+    two_region = ac.segment(disk, mu=1e-3, normalize=None)
+    limit = np.sqrt(np.mean((np.hypot(*(two_region.contours[0] - centre).T) - radii[0]) ** 2))
+    for k, radius in zip((1, 2), radii, strict=True):
+        assert radius_error(labels, k, radius) > 0.15
+        assert radius_error(result, k, radius) < 1.25 * limit + 0.01
+
+
+def test_junction_moves_to_where_the_three_regions_meet():
+    # three colours at equal distances: the blur of two is nearer either of them than the third,
+    # so no region lines the interface between the other two
+    centre = (20.3, 21.7)
+    image, classes = _antialiased((40, 42), _sectors(centre), [[0, 0, 0], [1, 0, 0], [0.5, 0.75**0.5, 0]])
+    model, params = _setup(image, 1e-3)
+    result = segment_network(model, None, params, n_regions=3, max_num_iter=500, tol=5e-4, callback=None)
+    start = Network.of_classes(classes)
+    degree = np.bincount(np.concatenate([start.start[start.interface], start.end[start.interface]]),
+                         minlength=len(start.nodes))
+    assert np.count_nonzero(degree == 3) == 1
+    assert np.hypot(*(start.nodes[degree == 3][0] - centre)) > 0.2  # the lattice's junction
+    points = np.concatenate([np.concatenate(region) for region in result.class_contours])
+    keys, counts = np.unique(np.round(points, 12), axis=0, return_counts=True)
+    junction = keys[counts == 3]  # the one vertex on the boundary of all three regions
+    assert len(junction) == 1
+    assert np.hypot(*(junction[0] - centre)) < 0.1
+
+
+def test_polygon_result_obeys_the_invariants_and_is_stationary():
+    image, truth = _antialiased((80, 90), _rings((40.2, 44.6), [30.3, 14.1]), [0.2, 0.9, 0.5])
+    image = image + np.random.default_rng(4).normal(0, 0.08, image.shape)
+    res = ac.segment(image, n_regions=3)
+    assert res.backend == "polygon" and res.success
+    assert res.energies[-1] == res.energy
+    assert res.energy == pytest.approx(ac.chan_vese_energy(image, regions=res.class_contours, mu=res.mu),
+                                       rel=1e-12)
+    assert np.array_equal(res.mask, res.classes > 0)
+    # classes: 0 the background (on the border), then by mean: the middle ring is the brightest
+    order = {0: 0, 2: 1, 1: 2}
+    assert np.mean(np.vectorize(order.get)(truth) == res.classes) > 0.99
+    # converged means stationary: a 100x smaller tol changes J and the regions by < 0.1 %
+    finer = ac.segment(image, n_regions=3, tol=5e-6)
+    assert abs(finer.energy - res.energy) <= 1e-3 * abs(res.energy)
+    assert np.sum(finer.classes != res.classes) <= 1e-3 * np.sum(res.classes > 0)
+
+
+def test_dropping_an_island_merges_it_into_the_region_around_it():
+    classes = np.zeros((16, 18), dtype=np.int32)
+    classes[3:12, 4:14] = 1
+    classes[6:8, 7:9] = 2  # an island of region 2 inside region 1
+    classes[13, 2] = 2  # and one in the background
+    image = np.random.default_rng(5).random(classes.shape)
+    model, params = _setup(image, 0.3)
+    network = Network.of_classes(classes)
+    loops = {len(loop): loop for loop, _ in network.closed_loops(network.nodes)}
+    assert sorted(loops) == [4, 8, 38]  # the speck, the 2 x 2 island, the block's outline
+    areas = sorted(area for _, area in network.closed_loops(network.nodes))
+    # the lattice partition: a pixel's square with its corners cut (1 - 4/8), the island's
+    # 2 x 2 square less its corners (4 - 4/8), the block's 9 x 10 less its corners (90 - 4/8)
+    np.testing.assert_allclose(areas, [0.5, 3.5, 89.5])
+    for size, around, box in ((4, 0, (13, 2)), (8, 1, (slice(6, 8), slice(7, 9)))):
+        merged = classes.copy()
+        merged[box] = around
+        dropped = network.without_island(network.nodes, loops[size])
+        expected = evaluate_partition(model, class_boundary(merged), params, 3).energy
+        found = evaluate_partition(model, dropped.boundary(), params, 3).energy
+        assert found == pytest.approx(expected, rel=1e-12)
+    # the block's outline holds the island: dropping it would need the island's regions renamed
+    assert network.without_island(network.nodes, loops[38]) is None
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_a_region_pinched_at_a_junction_is_two_simple_curves(backend):
+    # region 1 meets itself diagonally at the corner of region 2: its two squares touch at one
+    # point, which must not make one curve that touches itself (a figure eight is not a polygon)
+    from activecontour.geometry.topology import region_problem
+
+    truth = np.zeros((30, 30), dtype=int)
+    truth[5:15, 5:15] = 1
+    truth[15:25, 15:25] = 1
+    truth[15:25, 5:15] = 2
+    image = np.array([0.1, 0.9, 0.5])[truth] + np.random.default_rng(6).normal(0, 0.02, truth.shape)
+    res = ac.segment(image, n_regions=3, backend=backend)
+    assert np.mean(res.classes == np.array([0, 2, 1])[truth]) > 0.99
+    for curves in res.class_contours:
+        assert region_problem(curves) is None
+    assert len(res.class_contours[2]) == 2
+
+
+_MANY = int(os.environ.get("FUZZ_EXAMPLES", "0"))
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+@settings(max_examples=_MANY or 25, derandomize=not _MANY, deadline=None, database=None,
+          suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 2**32 - 1), rows=st.integers(4, 30), cols=st.integers(4, 30),
+       kind=st.sampled_from(["noise", "blocks", "disk and step"]), n_regions=st.integers(3, 4),
+       mu=st.sampled_from([0.0, 0.01, 0.1, 1.0]))
+def test_n_region_results_obey_the_invariants(backend, seed, rows, cols, kind, n_regions, mu):
+    # FUZZ_EXAMPLES=2000 tries many more, at random (as tests/api/test_fuzz.py)
+    import shapely
+
+    rng = np.random.default_rng(seed)
+    r, c = np.mgrid[:rows, :cols]
+    image = {"noise": lambda: rng.random((rows, cols)),
+             "blocks": lambda: (rng.random((rows, cols)) > 0.5) + rng.normal(0, 0.3, (rows, cols)),
+             "disk and step": lambda: ((r - rows / 2) ** 2 + (c - cols / 2) ** 2 < (min(rows, cols) / 3) ** 2)
+             + 0.5 * (c > cols / 2) + rng.normal(0, 0.1, (rows, cols))}[kind]().astype(float)
+    res = ac.segment(image, n_regions=n_regions, mu=mu, backend=backend)
+    assert res.energy == pytest.approx(ac.chan_vese_energy(image, regions=res.class_contours, mu=mu),
+                                       rel=1e-9, abs=1e-9)
+    energies = res.energies
+    assert energies[-1] == res.energy
+    assert np.all(np.diff(energies) <= 1e-9 * np.maximum(np.abs(energies[1:]), 1.0)), energies
+    assert np.array_equal(res.mask, res.classes > 0)
+    assert res.energy >= -1e-9
+    for k, curves in enumerate(res.class_contours):
+        assert all(len(curve) >= 3 and shapely.LinearRing(curve).is_simple for curve in curves)
+        if k:
+            assert np.array_equal(rasterize(curves, image.shape), res.classes == k)
+
+
+@pytest.mark.slow
+def test_random_crops_of_real_images_obey_the_invariants():
+    # 40 crops of scikit-image's pictures, 3-5 regions, gray or colour, several mu, default start
+    import shapely
+    import skimage.data
+
+    rng = np.random.default_rng(1)
+    names = ["camera", "coins", "page", "text", "moon", "cell", "astronaut", "chelsea",
+             "immunohistochemistry", "hubble_deep_field"]
+    for _ in range(40):
+        picture = getattr(skimage.data, names[rng.integers(len(names))])()
+        rows, cols = int(rng.integers(24, 120)), int(rng.integers(24, 120))
+        r0, c0 = int(rng.integers(0, picture.shape[0] - rows)), int(rng.integers(0, picture.shape[1] - cols))
+        crop = picture[r0:r0 + rows, c0:c0 + cols]
+        n_regions = int(rng.integers(3, 6))
+        color = "vector" if crop.ndim == 3 and rng.random() < 0.5 else "gray"
+        mu = "auto" if rng.random() < 0.7 else float(rng.choice([0.0, 0.005, 0.05]))
+        res = ac.segment(crop, n_regions=n_regions, mu=mu, color=color)
+        assert res.success, res.message
+        assert res.energy == pytest.approx(
+            ac.chan_vese_energy(crop, regions=res.class_contours, mu=res.mu, color=color), rel=1e-9, abs=1e-9)
+        assert np.all(np.diff(res.energies) <= 1e-9 * np.maximum(np.abs(res.energies[1:]), 1.0))
+        for k, curves in enumerate(res.class_contours):
+            assert all(len(curve) >= 3 and shapely.LinearRing(curve).is_simple for curve in curves)
+            if k:
+                assert np.array_equal(rasterize(curves, crop.shape[:2]), res.classes == k)

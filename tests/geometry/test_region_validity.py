@@ -1,0 +1,104 @@
+"""Every result bounds a region: simple polygons that do not cross each other (shapely), never
+worse than the start, energies that never rise; the evaluator refuses curves that bound no region."""
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import MultiPolygon, Polygon
+
+import activecontour as ac
+from activecontour.geometry import topology
+from activecontour.geometry.curve import signed_area
+
+
+def region_of(curves):
+    """The region of oriented curves by nesting, as one shapely geometry ((row, col) as (x, y))."""
+    outers = [Polygon(c) for c in curves if signed_area(c) > 0]
+    holes = {i: [] for i in range(len(outers))}
+    for c in curves:
+        if signed_area(c) < 0:
+            owner = min((i for i, o in enumerate(outers) if o.contains(Polygon(c).representative_point())),
+                        key=lambda i: outers[i].area)
+            holes[owner].append(c)
+    return MultiPolygon([Polygon(o.exterior.coords, holes[i]) for i, o in enumerate(outers)])
+
+
+def assert_bounds_a_region(image, result):
+    for curve in result.contours:
+        assert shapely.is_valid(Polygon(curve)), shapely.is_valid_reason(Polygon(curve))
+    region = region_of(result.contours)
+    assert shapely.is_valid(region), shapely.is_valid_reason(region)
+    assert topology.region_problem(result.contours) is None
+    # the mask is the region: its pixel count is its area to within the boundary's pixels
+    assert abs(result.mask.sum() - region.area) <= 1 + sum(len(c) for c in result.contours)
+    assert result.energy >= 0  # omega = 0: every term of (6.38) is >= 0
+    assert 0.0 <= result.c_in <= 1.0 and 0.0 <= result.c_out <= 1.0
+    assert result.energy == pytest.approx(ac.chan_vese_energy(image, result.contours, mu=result.mu),
+                                          rel=1e-9, abs=1e-9)
+    assert np.all(np.diff(result.energies) <= 1e-9 * np.abs(result.energies[1:]))
+
+
+RAMP16 = np.add.outer(np.arange(16.0), np.arange(16.0))
+RAMP32 = np.add.outer(np.arange(32.0), np.arange(32.0))
+
+
+@pytest.mark.parametrize("global_start", [True, False])
+@pytest.mark.parametrize("image, init", [(RAMP16, np.ones((16, 16), bool)), (RAMP32, "grid")],
+                         ids=["ramp16-full-mask", "ramp32-grid"])
+def test_a_ramp_from_the_border_gives_simple_polygons(image, init, global_start):
+    result = ac.segment(image, init, options={"global_start": global_start})
+    assert_bounds_a_region(image, result)
+
+
+def test_a_curve_given_twice_counts_once():
+    image = np.zeros((40, 40))
+    image[12:28, 12:28] = 1
+    curve = ac.circle((20, 20), 8)
+    once, twice = ac.segment(image, curve), ac.segment(image, [curve, curve[::-1].copy()])
+    assert twice.energy == pytest.approx(once.energy, rel=1e-9)
+    assert np.array_equal(twice.mask, once.mask)
+    # and the start is the disk, counted once: (6.38) of the circle by the evaluator
+    start = ac.segment(image, [curve, curve.copy()], max_num_iter=0)
+    assert start.energy == pytest.approx(ac.chan_vese_energy(image, [curve], mu=start.mu), rel=1e-12)
+
+
+def test_overlapping_init_curves_are_their_union():
+    a, b = ac.rectangle((10, 10), (30, 30)), ac.rectangle((20, 20), (40, 40))
+    (union,) = ac.initial.initial_curves([a, b, a.copy()], (50, 50))
+    assert signed_area(union) == pytest.approx(2 * 400 - 100)
+
+
+@pytest.mark.parametrize("contours, match", [
+    ([ac.circle((20, 20), 8)] * 2, "same curve"),
+    ([np.array([[5.0, 5.0], [30.0, 30.0], [30.0, 5.0], [5.0, 20.0]])], "crosses or touches itself"),
+    ([ac.rectangle((5, 5), (25, 25)), ac.rectangle((15, 15), (35, 35))], "cross or overlap"),
+    ([ac.rectangle((5, 5), (35, 35)), ac.rectangle((10, 10), (20, 20))], "positively oriented inside 1"),
+    # along the top border twice: a strip of winding number 2
+    ([np.array([[-0.5, -0.5], [10.0, -0.5], [10.0, 20.0], [-0.5, 20.0], [-0.5, 30.0], [5.0, 30.0],
+                [5.0, 10.0], [-0.5, 10.0]])], "crosses or touches itself"),
+])
+def test_the_evaluator_refuses_curves_that_bound_no_region(contours, match):
+    with pytest.raises(ValueError, match=match):
+        ac.chan_vese_energy(np.zeros((40, 40)), contours, mu=0.1)
+
+
+def test_border_overlap_sees_collinear_edges_on_the_border():
+    bounds = np.array([[-0.5, -0.5], [39.5, 39.5]])
+    twice = np.array([[-0.5, 0.0], [-0.5, 20.0], [5.0, 20.0], [5.0, 25.0], [-0.5, 25.0], [-0.5, 10.0],
+                      [10.0, 5.0]])
+    following = np.roll(np.arange(len(twice)), -1)
+    assert topology.border_overlap(twice, following, bounds)
+    square = ac.rectangle((-0.5, -0.5), (10, 10))
+    assert not topology.border_overlap(square, np.roll(np.arange(4), -1), bounds)
+
+
+def test_dropping_small_curves_never_raises_the_energy():
+    # a 3 px object (below min_area = 4 px^2) that is still worth its curve: the flow must not
+    # collapse to the empty set, whose energy is higher
+    image = np.zeros((32, 32))
+    image[15, 14:17] = 1.0
+    result = ac.segment(image, ac.circle((15, 15), 4), options={"global_start": False})
+    empty = ac.chan_vese_energy(image, [], mu=result.mu)
+    assert result.energy < empty
+    assert result.status != 3 and result.mask.sum() == 3
+    assert np.all(np.diff(result.energies) <= 0)
