@@ -170,7 +170,7 @@ def _tiny_spacing_is_refused_or_bounded():
     densities = []
 
     def vertices_per_pixel(state):
-        length = sum(ac.curve.length(c) for c in state.contours)
+        length = sum(ac.geometry.curve.length(c) for c in state.contours)
         densities.append(sum(len(c) for c in state.contours) / max(length, 1.0))
 
     try:
