@@ -399,31 +399,20 @@ def region_boundary(curves):
 
     A curve inside an even number of the others is an outer boundary (made positive), inside an
     odd number a hole (made negative), whatever orientation it was given in: a lone curve is an
-    outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate.
-    Where curves overlap, repeat or cross themselves, the region is their union (a self-crossing
-    curve's loops all count), rebuilt exactly by :func:`activecontour.geometry.topology.region_union`:
-    winding-number weights of 2 are not a region (6.38) is defined on.
+    outline (``skimage.measure.find_contours`` walks them clockwise), and nested curves alternate
+    (the one rule of nesting, :func:`activecontour.geometry.regions.orient_by_nesting`, which
+    :func:`activecontour.chan_vese_energy` reads too).  Where curves overlap, repeat or cross
+    themselves, the region is their union (a self-crossing curve's loops all count), rebuilt
+    exactly by :func:`activecontour.geometry.topology.region_union`: winding-number weights of 2
+    are not a region (6.38) is defined on.
     """
     from activecontour.geometry import topology
+    from activecontour.geometry.regions import orient_by_nesting
 
-    oriented = []
-    for i, curve in enumerate(curves):
-        depth = sum(_contains(other, curve[0]) for j, other in enumerate(curves) if j != i)
-        oriented.append(orient(curve, hole=depth % 2 == 1))
+    oriented = orient_by_nesting(curves)
     if topology.region_problem(oriented) is None:
         return oriented
     return topology.region_union(curves) or oriented
-
-
-def _contains(curve, point):
-    """Whether ``point`` lies inside the closed ``curve`` (either orientation)."""
-    low, high = curve.min(axis=0), curve.max(axis=0)
-    if np.any(point < low) or np.any(point > high):
-        return False
-    from activecontour.geometry.topology import winding_number
-
-    next_index = np.roll(np.arange(len(curve)), -1)
-    return bool(winding_number(curve, next_index, point[None, :])[0] != 0)
 
 
 def _is_mask(init, shape):
