@@ -170,10 +170,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     n_iter = 0
     jumped = global_start and init is not None and not from_result and max_num_iter > 0 and (
         moved := _global_move(model, params, geometry, energies[0], spacing)) is not None
-    if not (jumped or np.isfinite(current.energy) or max_num_iter == 0):
-        side, constant = ("inside", "c_in") if current.area < 0.5 * model.totals[0] else ("outside", "c_out")
-        raise ValueError(f"init leaves the {side} empty ({current.area:.6g} of {model.totals[0]:.0f} px^2 "
-                         f"inside): its constant {constant} (6.42) is undefined")
+    if not (jumped or np.isfinite(current.energy)):
+        # a start around the whole image: the empty region's constant is the other's (so the fit
+        # terms' force is zero and the length term shrinks the curve); once the region is not
+        # empty its constant (6.42) is defined, and the fit drives the curve onto the objects
+        current = evaluate(model, *geometry[:2], params, gradient=True, empty_ok=True)
     if jumped:
         (geometry, current), n_iter = moved, 1
         energies.append(current.energy)
