@@ -962,7 +962,7 @@ def _segment_defaults():
     import importlib
 
     # the module, not the package attribute of the same name (the function, which may be wrapped)
-    segment = importlib.import_module("activecontour.segment").segment
+    segment = importlib.import_module("activecontour._segment").segment
     parameters = inspect.signature(segment).parameters
     return {name: parameters[name].default for name in _PARAMETER_OPTIONS}
 
