@@ -330,12 +330,15 @@ def _run_segment(args):
     images = [path for path in images if path not in stacks]
     if settings["n_regions"] != 2 and "classes" not in args.objects:  # K regions: their image too
         args.objects = [*args.objects, "classes"]
-    plans = _plan_outputs(images, args.output, args.formats, args.objects)
+    # images and stacks planned together: no two inputs may write the same file
+    plans = _plan_outputs(images + stacks, args.output, args.formats, args.objects, stacks=stacks)
+    stack_plans = [plan for plan in plans if plan[0] in stacks]
+    plans = [plan for plan in plans if plan[0] not in stacks]
     overlay = {"color": _line_color(args.line_color), "thickness": args.line_width}
     _check_can_create(args.output)
     first_init = list(init) if isinstance(init, _ContourInit) else init  # the first frame's start
-    stack_failures = (sequence_cli.run(stacks, args, settings, overlay, _print_line, first_init)
-                      if stacks else 0)
+    stack_failures = (sequence_cli.run(stack_plans, args, settings, overlay, _print_line, first_init)
+                      if stack_plans else 0)
     if not plans:
         return EXIT_USAGE if stack_failures else 0
     if left_out and not args.quiet:
@@ -669,11 +672,13 @@ class _ContourInit(list):
         self.image_shape = tuple(shape) if shape is not None else None
 
 
-def _plan_outputs(images, output, formats, objects=()):
+def _plan_outputs(images, output, formats, objects=(), stacks=()):
     """[(image path, output stem)], after checking no output overwrites an input or another one.
 
     The stems come from :func:`activecontour.io.output_stem`: inside the output directory,
-    whatever the images are called.
+    whatever the images are called.  The inputs in ``stacks`` write a sequence's files
+    (:func:`sequence_cli.output_paths`): two stacks with one stem (``disk.mp4``, ``disk.avi``)
+    are refused as two images are.
     """
     from activecontour.io import output_paths, output_stem
 
@@ -688,7 +693,9 @@ def _plan_outputs(images, output, formats, objects=()):
         if directory.is_dir() and not os.access(directory, os.W_OK | os.X_OK):
             raise UsageError(f"the output directory {os.fspath(directory)!r} is not writable")
         stem = output_stem(directory, image_path)
-        for path in output_paths(stem, formats, objects):
+        written = (sequence_cli.output_paths(stem) if image_path in stacks
+                   else output_paths(stem, formats, objects))
+        for path in written:
             key = os.path.realpath(path)
             if key in inputs:
                 raise UsageError(

@@ -201,23 +201,20 @@ def _encode_png(rgb):
     return data.tobytes()
 
 
-def run(stacks, args, settings, overlay, report, init=None):
+def run(plans, args, settings, overlay, report, init=None):
     """Segment the stacks named on the command line, one after another; return the failures.
 
-    ``report(line, failed)`` prints a summary or an error line (the command line's own printer);
-    ``init`` (the ``--init-*`` options) is the first frame's start.
+    ``plans`` are (stack path, output stem) pairs, checked by the command line for outputs that
+    would collide; ``report(line, failed)`` prints a summary or an error line (the command line's
+    own printer); ``init`` (the ``--init-*`` options) is the first frame's start.
     """
     import sys
-
-    from activecontour.io import output_stem
 
     from .status_line import StatusLine
 
     status = StatusLine() if not args.quiet and sys.stderr.isatty() else None
     failures = 0
-    for path in stacks:
-        directory = Path(args.output) if args.output is not None else Path(path).parent
-        stem = output_stem(directory, path)
+    for path, stem in plans:
         try:
             line = segment_stack(path, stem, settings, frames=args.frames, axis=args.axis, overlay=overlay,
                                  init=init, status=status)

@@ -129,7 +129,8 @@ def main():
     for row in compat_rows(names, args.calls.split(","), repeat):
         rows.append(row)
         gain = (row["j_ours"] - row["j_sk"]) / abs(row["j_sk"])
-        print(f"{row['image']:22s} {row['size']:>9s} {row['call']:8s} {row['j_sk']:10.2f} {row['j_ours']:10.2f} "
+        print(f"{row['image']:22s} {row['size']:>9s} {row['call']:8s} {row['j_sk']:10.2f} "
+              f"{row['j_ours']:10.2f} "
               f"{100 * gain:+7.2f}% {row['it_sk']:5d} {row['it_ours']:7d} {row['cpu_sk']:8.3f} "
               f"{row['cpu_ours']:8.3f} {row['cpu_ours'] / row['cpu_sk']:6.3f}", flush=True)
     total = summary(rows)

@@ -79,7 +79,8 @@ def test_a_second_run_with_object_images_skips_them_too(folder, capsys):
         status, stdout, stderr = run(capsys, "segment", path, "--objects", "labels,labels-tif,classes",
                                      "--jobs", 1)
         assert status == 0, stderr
-        assert sorted(line.split(":")[0] for line in stdout.splitlines()) == [f"disk{k}.png" for k in range(4)]
+        names = sorted(line.split(":")[0] for line in stdout.splitlines())
+        assert names == [f"disk{k}.png" for k in range(4)]
     assert sorted(p.name for p in path.glob("*_labels*")) == sorted(
         f"disk{k}_labels.{suffix}" for k in range(4) for suffix in ("png", "tif"))
 
