@@ -95,7 +95,8 @@ def test_two_stacks_with_one_stem_are_refused_before_any_work(movie, tmp_path, c
     stem are (one line, exit 2, nothing written), not segmented one over the other (issue 22)."""
     _, pixels, _ = movie
     tifffile.imwrite(tmp_path / "disk.tif", pixels, photometric="minisblack")
-    writer = cv2.VideoWriter(str(tmp_path / "disk.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 5, (SIZE, SIZE), False)
+    writer = cv2.VideoWriter(str(tmp_path / "disk.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 5, (SIZE, SIZE),
+                             False)
     for frame in pixels:
         writer.write((frame >> 8).astype(np.uint8))
     writer.release()
