@@ -240,9 +240,12 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
         # The checkerboard has no preferred phase and the symmetric functional prefers one only
         # through the length along the image border, which the inside pays: take the phase of
         # lower energy (-phi is stationary too, but for that border term).
-        flipped = problem.evaluate(problem.redistance(-phi))
+        # the result is the redistanced -phi that was scored, not -phi itself: its zero set can
+        # differ by a fraction of a pixel, and the history would then end with a rise
+        flipped_state = problem.redistance(-phi)
+        flipped = problem.evaluate(flipped_state)
         if flipped.energy < current.energy:
-            phi = -phi
+            phi = flipped_state.phi
             energies.append(flipped.energy)
     result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
                           status=status, backend="levelset", phi=phi)
