@@ -37,7 +37,7 @@ import numpy as np
 from activecontour.backends.options import PolygonOptions
 from activecontour.energy import evaluate
 from activecontour.geometry import fem, topology
-from activecontour.geometry.curve import edge_lengths, resample, signed_area, stack_curves
+from activecontour.geometry.curve import resample, signed_area, stack_curves, subdivide
 from activecontour.geometry.raster import rasterize
 from activecontour.initial import circle, initial_curves
 from activecontour.result import FlowState, build_result
@@ -90,9 +90,9 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
     nucleate, accelerate, global_start = chosen.nucleate, chosen.accelerate, chosen.global_start
     from_result = hasattr(init, "contours") and hasattr(init, "mask")
     shape = model.shape
-    # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
-    # exactly: resampling it would cut its corners and move it off its minimum
-    geometry = _resampled(initial_curves(init, shape, model.image, params.mu), spacing)
+    # the start is the given region exactly (a previous result's energy and mask): long edges are
+    # split, nothing is cut; the remesh takes short edges when that lowers the energy
+    geometry = _subdivided(initial_curves(init, shape, model.image, params.mu), spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
@@ -100,10 +100,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
     n_iter = 0
     jumped = global_start and init is not None and not from_result and max_num_iter > 0 and (
         moved := _global_move(model, params, geometry, energies[0], spacing)) is not None
-    if not (jumped or np.isfinite(current.energy) or max_num_iter == 0):
-        side, constant = ("inside", "c_in") if current.area < 0.5 * model.totals[0] else ("outside", "c_out")
-        raise ValueError(f"init leaves the {side} empty ({current.area:.6g} of {model.totals[0]:.0f} px^2 "
-                         f"inside): its constant {constant} (6.42) is undefined")
+    if not (jumped or np.isfinite(current.energy)):
+        # a start around the whole image: the empty region's constant is the other's (so the fit
+        # terms' force is zero and the length term shrinks the curve); once the region is not
+        # empty its constant (6.42) is defined, and the fit drives the curve onto the objects
+        current = evaluate(model, *geometry[:2], params, gradient=True, empty_ok=True)
     if jumped:
         (geometry, current), n_iter = moved, 1
         energies.append(current.energy)
@@ -129,7 +130,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
             break
         if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
             last_remesh = k
-            remeshed = _resampled(_split(*new_geometry[::2]), spacing, every=True)
+            remeshed = _resampled(_split(*new_geometry[::2]), spacing)
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
@@ -182,7 +183,7 @@ def _global_move(model, params, geometry, energy, spacing):
     chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
     if not chosen:
         return None
-    moved = _resampled(chosen, spacing)
+    moved = _subdivided(chosen, spacing)
     new = evaluate(model, *moved[:2], params, gradient=True)
     return (moved, new) if new.energy < energy else None
 
@@ -459,13 +460,34 @@ def _dot(a, b):
     return float(np.einsum("i,i->", a, b))
 
 
-def _resampled(curves, spacing, every=False):
-    """Curves resampled at equal arc length ``spacing`` (with ``every``, else those whose vertices
-    are not about that far apart already), stacked.  A chord of the resampling can cut across a
-    narrow neck or a notch and cross the curve: the result is then the boundary of {w > 0}
-    (:func:`activecontour.geometry.topology.repair`), so that its energy is that of a region."""
-    geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
-                             for c in curves])
+def _subdivided(curves, spacing):
+    """The curves stacked, split where the flow needs vertices and nowhere else: the same polygons.
+
+    An edge longer than twice ``spacing`` becomes pieces of at most ``spacing``, and a curve of
+    fewer than 8 vertices gets at least 8 (:func:`activecontour.geometry.curve.subdivide`): the
+    new vertices lie on the old edges, so the region, its energy and its mask are the given ones
+    exactly (a previous result restarts where it ended).  Short edges stay: the remesh
+    (:func:`_resampled`) takes them when that does not raise the energy.
+    """
+    if not curves:
+        return stack_curves(curves)
+    points, next_index, offsets = stack_curves(curves)
+    counts = np.diff(offsets)
+    d = points[next_index] - points
+    totals = np.add.reduceat(np.hypot(d[:, 0], d[:, 1]), offsets[:-1])
+    few = counts < 8  # every edge split, into pieces of at most a curve's length / 8
+    piece = np.repeat(np.where(few, np.minimum(spacing, totals / 8.0), spacing), counts)
+    longest = np.repeat(np.where(few, 0.0, 2.0 * spacing), counts)
+    dense, counts = subdivide(points, counts, piece, longest)
+    return stack_curves(np.split(dense, np.cumsum(counts)[:-1]))
+
+
+def _resampled(curves, spacing):
+    """Curves resampled at equal arc length ``spacing``, stacked.  A chord of the resampling can
+    cut across a narrow neck or a notch and cross the curve: the result is then the boundary of
+    {w > 0} (:func:`activecontour.geometry.topology.repair`), so that its energy is that of a
+    region."""
+    geometry = stack_curves([resample(c, spacing) for c in curves])
     repaired = topology.repair(*geometry, before=[signed_area(c) for c in curves])
     return geometry if repaired is None else stack_curves(repaired)
 
@@ -474,10 +496,6 @@ def _unhealthy(geometry, spacing):
     points, next_index, _ = geometry
     d = points[next_index] - points
     return not _spacing_ok(np.hypot(d[:, 0], d[:, 1]), spacing)
-
-
-def _healthy(curve, spacing):
-    return len(curve) >= 8 and _spacing_ok(edge_lengths(curve), spacing)
 
 
 def _spacing_ok(h, spacing):

@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
+from activecontour.backends.levelset.initial import checkerboard_level_set, has_phi, initial_level_set
 from activecontour.backends.levelset.scheme import _Problem, _swept_area
 from activecontour.backends.levelset.zeroset import level_set_contours
 from activecontour.backends.options import LevelSetOptions
@@ -96,7 +96,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
                                 dtype=np.float32, mu=params.mu)
     # after the start: its temporaries (the default start's) are gone before the work arrays come
     problem = _Problem(model, params, settings)
-    state = problem.redistance(phi)
+    state = problem.redistance(phi, keep_front=has_phi(init))  # a result restarts where it ended
     del phi  # the start's array: the state holds its own
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
@@ -190,9 +190,12 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
         # The checkerboard has no preferred phase and the symmetric functional prefers one only
         # through the length along the image border, which the inside pays: take the phase of
         # lower energy (-phi is stationary too, but for that border term).
-        flipped = problem.evaluate(problem.redistance(-phi))
+        # the result is the redistanced -phi that was scored, not -phi itself: its zero set can
+        # differ by a fraction of a pixel, and the history would then end with a rise
+        flipped_state = problem.redistance(-phi)
+        flipped = problem.evaluate(flipped_state)
         if flipped.energy < current.energy:
-            phi = -phi
+            phi = flipped_state.phi
             energies.append(flipped.energy)
     result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
                           status=status, backend="levelset", phi=phi)
