@@ -14,7 +14,7 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport ceil, floor, sqrt
-from libc.stdlib cimport free, malloc
+from libc.stdlib cimport calloc, free, malloc
 
 #: rows between two stored rows of the antiderivative tables (see :func:`build_tables`)
 ANCHOR_ROWS = 8
@@ -511,3 +511,219 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
         begin = end
         PyErr_CheckSignals()
     return count
+
+
+def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
+                      const Py_ssize_t[::1] outer, const double[:, :, ::1] values,
+                      const double[:, :, :, ::1] table, double[:, ::1] moments, double[:, :, ::1] parts):
+    """The exact edge integrals of a partition's boundary segments (the N-region network of
+    :mod:`activecontour.backends.network`), in one pass: what :func:`edge_integrals` gives for one
+    closed curve, kept apart per region and per segment.
+
+    ``moments[k] += (closed integral of G_1 dc, of G_2 dc)`` (per channel, Green's theorem: the
+    region integrals of I and I^2) over the segments with region k on their inner side, and minus
+    those with k on their outer side (``outer < 0``: the image's edge, no region).  With ``parts``
+    of shape (S, 2, 2C) (a (0, 2, 0) array for none), for every segment and each of its ends
+    (phi = 1 - s at the start, s at the end, s the segment's parameter) the integrals in s:
+
+        parts[e, 0 or 1, ch]     = int_0^1 phi I_ch ds,
+        parts[e, 0 or 1, C + ch] = int_0^1 phi I_ch^2 ds,
+
+    from which a quadratic form's load (6.41) on the segment's ends is the form's combination
+    times the segment's normal ``nu |e| = (dv, -du)``.  The pieces between grid lines and their
+    quadrature are those of :func:`edge_integrals`.
+    """
+    cdef Py_ssize_t channels = values.shape[2], rows = values.shape[0], cols = values.shape[1]
+    cdef Py_ssize_t e, ch, g, a, j, i, o, count = starts.shape[0]
+    cdef bint with_parts = parts.shape[0] > 0
+    cdef double nodes[3]
+    cdef double weights[3]
+    cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid
+    cdef double t_edge, t, w, w0, half, third, g1, g2, b_pp, b_qq, b_pq, weight, intensity
+    cdef double *acc
+    cdef Cell cell
+    if moments.shape[1] != 2 * channels or (with_parts and (parts.shape[0] != count or parts.shape[1] != 2
+                                                             or parts.shape[2] != 2 * channels)):
+        raise ValueError("moments must be (K, 2C) and parts (S, 2, 2C) or empty")
+    acc = <double *> malloc(2 * channels * sizeof(double))
+    if acc == NULL:
+        raise MemoryError()
+    nodes[0], nodes[1], nodes[2] = 0.5 - 0.5 * sqrt(0.6), 0.5, 0.5 + 0.5 * sqrt(0.6)
+    weights[0], weights[1], weights[2] = 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0
+    with nogil:
+        for e in range(count):
+            u0, v0 = starts[e, 0] + 1.0, starts[e, 1] + 1.0
+            du, dv = ends[e, 0] + 1.0 - u0, ends[e, 1] + 1.0 - v0
+            for ch in range(2 * channels):
+                acc[ch] = 0.0
+                if with_parts:
+                    parts[e, 0, ch] = 0.0
+                    parts[e, 1, ch] = 0.0
+            # next grid lines in the direction of travel
+            k_u = floor(u0) + 1.0 if du > 0 else ceil(u0) - 1.0
+            k_v = floor(v0) + 1.0 if dv > 0 else ceil(v0) - 1.0
+            t_prev = 0.0
+            while True:
+                t_u = (k_u - u0) / du if du != 0.0 else 2.0
+                t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
+                t_next = min(t_u, t_v, 1.0)
+                span = t_next - t_prev
+                if span > 0.0:
+                    t_mid = t_prev + 0.5 * span
+                    a = <Py_ssize_t> min(max(floor(u0 + t_mid * du), 0.0), <double> rows)
+                    j = <Py_ssize_t> min(max(floor(v0 + t_mid * dv), 0.0), <double> cols)
+                    for ch in range(channels):
+                        _cell(values, table, a, j, ch, &cell)
+                        for g in range(3):
+                            t_edge = t_prev + span * nodes[g]
+                            t = u0 + t_edge * du - a
+                            w = v0 + t_edge * dv - j
+                            w0 = 1.0 - w
+                            half, third = 0.5 * t * t, t * t * t / 3.0
+                            g1 = (w0 * (cell.t1 + t * cell.p0 + half * cell.dp)
+                                  + w * (cell.r1 + t * cell.q0 + half * cell.dq))
+                            b_pp = (cell.t2 + cell.p0 * cell.p0 * t + 2.0 * cell.p0 * cell.dp * half
+                                    + cell.dp * cell.dp * third)
+                            b_qq = (cell.r2 + cell.q0 * cell.q0 * t + 2.0 * cell.q0 * cell.dq * half
+                                    + cell.dq * cell.dq * third)
+                            b_pq = (cell.t3 + cell.p0 * cell.q0 * t
+                                    + (cell.p0 * cell.dq + cell.q0 * cell.dp) * half
+                                    + cell.dp * cell.dq * third)
+                            g2 = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
+                            weight = span * weights[g]
+                            acc[ch] += weight * dv * g1
+                            acc[channels + ch] += weight * dv * g2
+                            if with_parts:
+                                intensity = w0 * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
+                                parts[e, 0, ch] += weight * (1.0 - t_edge) * intensity
+                                parts[e, 1, ch] += weight * t_edge * intensity
+                                parts[e, 0, channels + ch] += weight * (1.0 - t_edge) * intensity * intensity
+                                parts[e, 1, channels + ch] += weight * t_edge * intensity * intensity
+                if t_next >= 1.0:
+                    break
+                if t_u <= t_next:
+                    k_u += 1.0 if du > 0 else -1.0
+                if t_v <= t_next:
+                    k_v += 1.0 if dv > 0 else -1.0
+                t_prev = t_next
+            i, o = inner[e], outer[e]
+            for ch in range(2 * channels):
+                moments[i, ch] += acc[ch]
+                if o >= 0:
+                    moments[o, ch] -= acc[ch]
+    free(acc)
+
+
+def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end):
+    """Whether two of the segments ``nodes[start[s]] -> nodes[end[s]]`` meet anywhere but at a
+    node they share: a crossing, a touch (an end on another segment), or an overlap (collinear,
+    also of two segments with a common node).  The segments of a planar network
+    (:meth:`activecontour.backends.network.Network.simple`) meet only at their common nodes.
+
+    A uniform grid of cells about the mean segment extent (at least what makes about one cell per
+    segment): each segment is filed, by a counting sort, under every cell its bounding box meets,
+    and only segments filed in the same cell are tested, each pair once, in the cell of the low
+    corner of the intersection of their boxes.  O(S) for segments of even length; stops at the
+    first pair that meets.
+    """
+    cdef Py_ssize_t n = start.shape[0], s, k, i, f, e, cell, cells, rows, cols, r, c, r0, r1, c0, c1
+    cdef Py_ssize_t row, col, position, shared
+    cdef double low_r, low_c, high_r, high_c, size, extent = 0.0
+    cdef double ar, ac, br, bc, cr, cc, dr, dc, o1, o2, o3, o4, corner_r, corner_c
+    cdef Py_ssize_t *first
+    cdef Py_ssize_t *items
+    cdef bint met = False
+    if n < 2:
+        return False
+    low_r, low_c = nodes[start[0], 0], nodes[start[0], 1]
+    high_r, high_c = low_r, low_c
+    for s in range(n):
+        for k in range(2):
+            i = start[s] if k == 0 else end[s]
+            low_r, high_r = min(low_r, nodes[i, 0]), max(high_r, nodes[i, 0])
+            low_c, high_c = min(low_c, nodes[i, 1]), max(high_c, nodes[i, 1])
+        extent += max(abs(nodes[end[s], 0] - nodes[start[s], 0]), abs(nodes[end[s], 1] - nodes[start[s], 1]))
+    size = max(extent / n, sqrt((high_r - low_r) * (high_c - low_c) / n), ((high_r - low_r) + (high_c - low_c)) / n)
+    size = max(size, 1e-12 * max(1.0, max(abs(low_r), abs(high_r), abs(low_c), abs(high_c))))
+    rows = <Py_ssize_t> ((high_r - low_r) / size) + 1
+    cols = <Py_ssize_t> ((high_c - low_c) / size) + 1
+    cells = rows * cols
+    first = <Py_ssize_t *> calloc(cells + 1, sizeof(Py_ssize_t))
+    if first == NULL:
+        raise MemoryError()
+    items = NULL
+    with nogil:
+        for k in range(2):  # count the entries of every cell (shifted by one), then file them
+            if k == 1:
+                for cell in range(cells):
+                    first[cell + 1] += first[cell]
+                items = <Py_ssize_t *> malloc(max(first[cells], 1) * sizeof(Py_ssize_t))
+                if items == NULL:
+                    break
+            for s in range(n):
+                ar, ac, br, bc = nodes[start[s], 0], nodes[start[s], 1], nodes[end[s], 0], nodes[end[s], 1]
+                r0 = min(<Py_ssize_t> ((min(ar, br) - low_r) / size), rows - 1)
+                r1 = min(<Py_ssize_t> ((max(ar, br) - low_r) / size), rows - 1)
+                c0 = min(<Py_ssize_t> ((min(ac, bc) - low_c) / size), cols - 1)
+                c1 = min(<Py_ssize_t> ((max(ac, bc) - low_c) / size), cols - 1)
+                for r in range(r0, r1 + 1):
+                    for c in range(c0, c1 + 1):
+                        if k == 0:
+                            first[r * cols + c + 1] += 1
+                        else:
+                            position = first[r * cols + c]
+                            items[position] = s
+                            first[r * cols + c] = position + 1
+        if items != NULL:
+            for cell in range(cells, 0, -1):  # first[c] ended as the next cell's start
+                first[cell] = first[cell - 1]
+            first[0] = 0
+            for cell in range(cells):
+                if met:
+                    break
+                row, col = cell // cols, cell % cols
+                for i in range(first[cell], first[cell + 1]):
+                    if met:
+                        break
+                    e = items[i]
+                    ar, ac, br, bc = nodes[start[e], 0], nodes[start[e], 1], nodes[end[e], 0], nodes[end[e], 1]
+                    for k in range(i + 1, first[cell + 1]):
+                        f = items[k]
+                        cr, cc, dr, dc = nodes[start[f], 0], nodes[start[f], 1], nodes[end[f], 0], nodes[end[f], 1]
+                        # the boxes meet, and this is the cell of the low corner of their intersection
+                        corner_r = max(min(ar, br), min(cr, dr))
+                        corner_c = max(min(ac, bc), min(cc, dc))
+                        if (corner_r > min(max(ar, br), max(cr, dr)) or corner_c > min(max(ac, bc), max(cc, dc))
+                                or min(<Py_ssize_t> ((corner_r - low_r) / size), rows - 1) != row
+                                or min(<Py_ssize_t> ((corner_c - low_c) / size), cols - 1) != col):
+                            continue
+                        shared = ((start[e] == start[f]) + (start[e] == end[f]) + (end[e] == start[f])
+                                  + (end[e] == end[f]))
+                        o1 = (br - ar) * (cc - ac) - (bc - ac) * (cr - ar)  # c, d against a -> b
+                        o2 = (br - ar) * (dc - ac) - (bc - ac) * (dr - ar)
+                        o3 = (dr - cr) * (ac - cc) - (dc - cc) * (ar - cr)  # a, b against c -> d
+                        o4 = (dr - cr) * (bc - cc) - (dc - cc) * (br - cr)
+                        if shared >= 2:  # the same two nodes: they coincide
+                            met = True
+                        elif shared == 1:
+                            # meeting only at the common node unless collinear and on the same side
+                            if o1 == 0.0 and o2 == 0.0 and (
+                                    (start[e] == start[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) > 0)
+                                    or (end[e] == end[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) > 0)
+                                    or (start[e] == end[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) < 0)
+                                    or (end[e] == start[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) < 0)):
+                                met = True
+                        elif ((o1 > 0.0 and o2 > 0.0) or (o1 < 0.0 and o2 < 0.0)
+                              or (o3 > 0.0 and o4 > 0.0) or (o3 < 0.0 and o4 < 0.0)):
+                            pass  # one lies wholly on one side of the other's line
+                        elif o1 != 0.0 or o2 != 0.0 or o3 != 0.0 or o4 != 0.0:
+                            met = True  # a crossing, or an end on the other segment (boxes meet)
+                        else:  # collinear, boxes meet: they overlap or touch end to end
+                            met = True
+                        if met:
+                            break
+    free(first)
+    if items == NULL:
+        raise MemoryError()
+    free(items)
+    return met

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.energy import (
     energy_of_moments,
     evaluate_partition,
@@ -109,6 +110,9 @@ class Network:
         on_cols = (nodes[:, 1] == -0.5) | (nodes[:, 1] == n - 0.5)
         # a node on the border slides along it: its component across the border is held
         self.free = (moving & ~on_rows, moving & ~on_cols)
+        chosen = np.flatnonzero(self.interface)
+        self._interface_ends = (np.ascontiguousarray(start[chosen], dtype=np.intp),
+                                np.ascontiguousarray(end[chosen], dtype=np.intp))
 
     @classmethod
     def of_classes(cls, classes):
@@ -153,12 +157,18 @@ class Network:
                            np.concatenate(sign))
         return self._faces
 
-    def face_areas(self, nodes):
-        """The signed area of every face (:meth:`faces`)."""
+    def face_areas(self, nodes, which=None):
+        """The signed area of every face (:meth:`faces`), or of the faces ``which`` (indices)."""
         face, segment, sign = self.faces()
+        if which is not None:
+            chosen = np.isin(face, which)
+            face, segment, sign = np.searchsorted(which, face[chosen]), segment[chosen], sign[chosen]
+            count = len(which)
+        else:
+            count = int(face.max()) + 1 if face.size else 0
         a, b = nodes[self.start[segment]], nodes[self.end[segment]]
-        return 0.5 * np.bincount(face, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
-                                 minlength=int(face.max()) + 1 if face.size else 0)
+        twice = sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1])
+        return 0.5 * np.bincount(face, weights=twice, minlength=count)
 
     def region_curves(self, region):
         """Closed curves of a set of regions (bool per region): outer boundaries positive."""
@@ -376,13 +386,15 @@ class Network:
         out[plain] = np.sum(velocity[plain] * unit, axis=1)[:, None] * unit
         return out
 
-    def force(self, nodes, model, params, constants):
-        """``delta J`` with respect to every node (6.41): the segments' loads summed at their ends."""
-        load = partition_load(model, self.boundary(nodes), params, constants)
-        force = np.zeros_like(nodes)
-        np.add.at(force, self.start, load[:, 0])
-        np.add.at(force, self.end, load[:, 1])
-        return force
+    def force(self, nodes, model, params, constants, parts=None):
+        """``delta J`` with respect to every node (6.41): the segments' loads summed at their ends
+        (``parts``: the segments' integrals at these nodes, of
+        :func:`activecontour.energy.partition_moments`)."""
+        load = partition_load(model, self.boundary(nodes), params, constants, parts)
+        count = len(nodes)
+        return np.column_stack([np.bincount(self.start, weights=load[:, 0, d], minlength=count)
+                                + np.bincount(self.end, weights=load[:, 1, d], minlength=count)
+                                for d in range(2)])
 
     def swept(self, before, after):
         """The interfaces' mean normal displacement from ``before`` to ``after`` (px)."""
@@ -394,36 +406,79 @@ class Network:
         return float(normal.sum() / max(length.sum(), 1e-12))
 
     def simple(self, nodes):
-        """No two interfaces cross: the interface segments meet only at their ends (GEOS's
-        ``is_simple`` of them as one multi-line string, a sweep in O(S log S)).  A crossing would
-        make an overlap of two regions, whose energy the functional would count with a negative
-        area."""
-        import shapely
+        """No two interfaces cross: the interface segments meet only at their common nodes (no
+        crossing, touch or overlap; compiled, on a uniform grid:
+        :func:`activecontour._kernels.segments_meet`, O(S)).  A crossing would make an overlap of
+        two regions, whose energy the functional would count with a negative area."""
+        start, end = self._interface_ends
+        return not _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end)
 
-        chosen = self.interface
-        count = int(np.count_nonzero(chosen))
-        if count == 0:
-            return True
-        coordinates = np.empty((2 * count, 2))
-        coordinates[0::2], coordinates[1::2] = nodes[self.start[chosen]], nodes[self.end[chosen]]
-        lines = shapely.from_ragged_array(shapely.GeometryType.MULTILINESTRING, coordinates,
-                                          (np.arange(0, 2 * count + 1, 2), np.array([0, count])))[0]
-        return bool(shapely.is_simple(lines))
+    def steps(self, nodes, velocity):
+        """The admissibility of the steps ``nodes + dt velocity`` of one iteration, for any dt
+        (:class:`_Steps`)."""
+        return _Steps(self, nodes, velocity)
 
-    def admissible(self, before, after, orientation=None):
-        """No segment reversed or collapsed, every vertex in the image domain (cheap tests before
-        the energy; :meth:`simple` is the exact one).  ``orientation``: the signs of the faces'
-        areas at ``before``, when the caller has them."""
-        a, b = self.start, self.end
-        old, new = before[b] - before[a], after[b] - after[a]
-        kept = np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old)
-        m, n = self.shape
-        inside = ((after[:, 0] >= -0.5) & (after[:, 0] <= m - 0.5)
-                  & (after[:, 1] >= -0.5) & (after[:, 1] <= n - 0.5))
-        if not (kept.all() and inside.all()):
+
+class _Steps:
+    """Which steps ``X + dt V`` keep a network a partition of the image (cheap tests before the
+    energy; :meth:`Network.simple` is the exact one): no segment reversed or collapsed (its new
+    direction keeps a quarter of its length along the old one), every vertex in the image
+    domain, and no face turned inside out (each face's signed area keeps its sign, :meth:`Network.faces`).
+
+    The first two are bounds on dt, found once for the iteration (a segment's projection on its
+    old direction and a vertex's coordinates are linear in dt).  A face's area can change sign
+    only where it is small: with every vertex moved by at most ``delta``, a polygon's area changes
+    by at most ``delta L + n delta^2 / 2`` (L its perimeter, n its vertex count: expand the
+    shoelace sum), so only the faces under that bound are measured at a trial.
+    """
+
+    #: relative margin within which a bound is checked on the trial itself (rounding)
+    _MARGIN = 1e-6
+
+    def __init__(self, network, nodes, velocity):
+        start, end = network.start, network.end
+        old, turn = nodes[end] - nodes[start], velocity[end] - velocity[start]
+        along = np.einsum("ij,ij->i", old, turn)
+        size = np.einsum("ij,ij->i", old, old)
+        shrinking = along < 0
+        # (old + dt turn) . old > old . old / 4  <=>  dt along > -3/4 |old|^2
+        self.reverse = (float(np.min(0.75 * size[shrinking] / -along[shrinking])) if shrinking.any()
+                        else np.inf)
+        m, n = network.shape
+        high = np.array([m - 0.5, n - 0.5])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(velocity > 0, (high - nodes) / velocity,
+                            np.where(velocity < 0, (-0.5 - nodes) / velocity, np.inf))
+        self.inside = float(room.min()) if room.size else np.inf
+        face, segment, sign = network.faces()
+        self.face, self.segment, self.sign = face, segment, sign
+        self.network, self.nodes = network, nodes
+        self.areas = network.face_areas(nodes)
+        self.orientation = np.sign(self.areas)
+        firsts = np.flatnonzero(np.diff(face, prepend=-1))  # entries are grouped by face
+        speed = np.hypot(velocity[:, 0], velocity[:, 1])
+        self.speed = np.maximum.reduceat(np.maximum(speed[start[segment]], speed[end[segment]]), firsts)
+        self.perimeter = np.add.reduceat(np.hypot(old[segment, 0], old[segment, 1]), firsts)
+        self.count = np.diff(np.append(firsts, len(face)))
+
+    def admissible(self, dt, trial):
+        """Whether the step of ``dt`` to ``trial`` keeps the network a partition (the class's
+        docstring)."""
+        if not (dt < self.reverse and dt <= self.inside):
             return False
-        orientation = np.sign(self.face_areas(before)) if orientation is None else orientation
-        return bool(np.all(np.sign(self.face_areas(after)) == orientation))
+        if dt >= (1 - self._MARGIN) * min(self.reverse, self.inside):  # at a bound: the trial itself
+            network, start, end = self.network, self.network.start, self.network.end
+            old, new = self.nodes[end] - self.nodes[start], trial[end] - trial[start]
+            m, n = network.shape
+            if not (np.all(np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old))
+                    and np.all((trial >= -0.5) & (trial <= np.array([m - 0.5, n - 0.5])))):
+                return False
+        delta = dt * self.speed
+        bound = delta * self.perimeter + 0.5 * self.count * delta**2
+        risky = np.flatnonzero(np.abs(self.areas) <= (1 + self._MARGIN) * bound)
+        if risky.size == 0:
+            return True
+        return bool(np.all(np.sign(self.network.face_areas(trial, risky)) == self.orientation[risky]))
 
 
 def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callback):
@@ -473,7 +528,9 @@ class _Flow:
         self.remesh()
 
     def evaluate(self, network, nodes):
-        return evaluate_partition(self.model, network.boundary(nodes), self.params, self.n_regions)
+        """J at the nodes, with the segments' integrals that make the force there."""
+        return evaluate_partition(self.model, network.boundary(nodes), self.params, self.n_regions,
+                                  parts=True)
 
     def remesh(self):
         """Resample the interfaces at ``_SPACING`` px; kept only if J does not rise (else not
@@ -545,7 +602,7 @@ class _Flow:
         factors = None
         for iteration in range(1, max_num_iter + 1):
             network, nodes, current = self.network, self.nodes, self.current
-            force = network.force(nodes, self.model, self.params, current.constants)
+            force = network.force(nodes, self.model, self.params, current.constants, current.parts)
             if factors is None:  # the metric of the block's first mesh, for the whole block
                 factors = network.factors(nodes)
             velocity = network.velocity(nodes, force, factors)
@@ -560,10 +617,10 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_last is None else min(2.0 * dt_last, _MAX_STEP / spread)
-            crossed, orientation = None, np.sign(network.face_areas(nodes))
+            crossed, steps = None, network.steps(nodes, velocity)
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
-                if network.admissible(nodes, trial, orientation):
+                if steps.admissible(dt, trial):
                     candidate = self.evaluate(network, trial)
                     if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                         if network.simple(trial):
