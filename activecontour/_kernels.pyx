@@ -614,27 +614,30 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     free(acc)
 
 
-def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end):
-    """Whether two of the segments ``nodes[start[s]] -> nodes[end[s]]`` meet anywhere but at a
+def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+                  Py_ssize_t limit, Py_ssize_t[:, ::1] pairs):
+    """The pairs of the segments ``nodes[start[s]] -> nodes[end[s]]`` that meet anywhere but at a
     node they share: a crossing, a touch (an end on another segment), or an overlap (collinear,
     also of two segments with a common node).  The segments of a planar network
     (:meth:`activecontour.backends.network.Network.simple`) meet only at their common nodes.
 
+    Returns the number of pairs found, stopping at ``limit``; the first ``len(pairs)`` of them
+    go into ``pairs`` (P, 2).
+
     A uniform grid of cells about the mean segment extent (at least what makes about one cell per
     segment): each segment is filed, by a counting sort, under every cell its bounding box meets,
     and only segments filed in the same cell are tested, each pair once, in the cell of the low
-    corner of the intersection of their boxes.  O(S) for segments of even length; stops at the
-    first pair that meets.
+    corner of the intersection of their boxes.  O(S) for segments of even length.
     """
     cdef Py_ssize_t n = start.shape[0], s, k, i, f, e, cell, cells, rows, cols, r, c, r0, r1, c0, c1
-    cdef Py_ssize_t row, col, position, shared
+    cdef Py_ssize_t row, col, position, shared, found = 0, capacity = pairs.shape[0]
     cdef double low_r, low_c, high_r, high_c, size, extent = 0.0
     cdef double ar, ac, br, bc, cr, cc, dr, dc, o1, o2, o3, o4, corner_r, corner_c
     cdef Py_ssize_t *first
     cdef Py_ssize_t *items
-    cdef bint met = False
-    if n < 2:
-        return False
+    cdef bint met
+    if n < 2 or limit <= 0:
+        return 0
     low_r, low_c = nodes[start[0], 0], nodes[start[0], 1]
     high_r, high_c = low_r, low_c
     for s in range(n):
@@ -679,11 +682,11 @@ def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const
                 first[cell] = first[cell - 1]
             first[0] = 0
             for cell in range(cells):
-                if met:
+                if found >= limit:
                     break
                 row, col = cell // cols, cell % cols
                 for i in range(first[cell], first[cell + 1]):
-                    if met:
+                    if found >= limit:
                         break
                     e = items[i]
                     ar, ac, br, bc = nodes[start[e], 0], nodes[start[e], 1], nodes[end[e], 0], nodes[end[e], 1]
@@ -697,6 +700,7 @@ def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const
                                 or min(<Py_ssize_t> ((corner_r - low_r) / size), rows - 1) != row
                                 or min(<Py_ssize_t> ((corner_c - low_c) / size), cols - 1) != col):
                             continue
+                        met = False
                         shared = ((start[e] == start[f]) + (start[e] == end[f]) + (end[e] == start[f])
                                   + (end[e] == end[f]))
                         o1 = (br - ar) * (cc - ac) - (bc - ac) * (cr - ar)  # c, d against a -> b
@@ -721,9 +725,83 @@ def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const
                         else:  # collinear, boxes meet: they overlap or touch end to end
                             met = True
                         if met:
-                            break
+                            if found < capacity:
+                                pairs[found, 0], pairs[found, 1] = e, f
+                            found += 1
+                            if found >= limit:
+                                break
     free(first)
     if items == NULL:
         raise MemoryError()
     free(items)
-    return met
+    return found
+
+
+def band_cholesky(double[:, ::1] band):
+    """Cholesky factorisation ``A = U^T U`` of a symmetric positive definite band matrix, in place.
+
+    ``band[j, w + i - j] = A[i, j]`` for ``j - w <= i <= j`` (column j's entries on and above the
+    diagonal, w the half bandwidth) becomes U in the same layout.  O(n w^2), no fill outside the
+    band.  Returns 0, or ``j + 1`` where the leading minor of order ``j + 1`` is not positive.
+    """
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, first, failed = 0
+    cdef double total
+    with nogil:
+        for j in range(n):
+            first = j - w if j > w else 0
+            for i in range(first, j + 1):
+                total = band[j, w + i - j]
+                for k in range(max(first, i - w), i):
+                    total -= band[i, w + k - i] * band[j, w + k - j]
+                if i < j:
+                    band[j, w + i - j] = total / band[i, w]
+                elif total > 0.0:
+                    band[j, w] = sqrt(total)
+                else:
+                    failed = j + 1
+                    break
+            if failed:
+                break
+    return failed
+
+
+def band_solve(const double[:, ::1] factor, double[::1] rhs):
+    """Solve ``U^T U x = rhs`` in place with the factor of :func:`band_cholesky`."""
+    cdef Py_ssize_t n = factor.shape[0], w = factor.shape[1] - 1, i, j, k
+    cdef double total
+    with nogil:
+        for j in range(n):  # U^T y = rhs
+            total = rhs[j]
+            for k in range(j - w if j > w else 0, j):
+                total -= factor[j, w + k - j] * rhs[k]
+            rhs[j] = total / factor[j, w]
+        for i in range(n - 1, -1, -1):  # U x = y
+            total = rhs[i]
+            for j in range(i + 1, min(n, i + w + 1)):
+                total -= factor[j, w + i - j] * rhs[j]
+            rhs[i] = total / factor[i, w]
+
+
+def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::1] offsets):
+    """The cycles of the map ``i -> following[i]`` (a permutation), each from its smallest
+    element: ``order[offsets[c]:offsets[c + 1]]`` is cycle c in order (``offsets`` holds n + 1).
+    Returns the number of cycles."""
+    cdef Py_ssize_t n = following.shape[0], first, current, count = 0, position = 0
+    cdef unsigned char *seen = <unsigned char *> calloc(max(n, 1), sizeof(unsigned char))
+    if seen == NULL:
+        raise MemoryError()
+    with nogil:
+        for first in range(n):
+            if seen[first]:
+                continue
+            offsets[count] = position
+            count += 1
+            current = first
+            while not seen[current]:
+                seen[current] = 1
+                order[position] = current
+                position += 1
+                current = following[current]
+        offsets[count] = position
+    free(seen)
+    return count

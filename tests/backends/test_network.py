@@ -182,6 +182,46 @@ def test_steps_admit_what_the_direct_tests_admit():
     assert verdicts == {True, False}
 
 
+def test_resampling_keeps_branch_nodes_and_puts_equal_steps_on_the_lines():
+    rng = np.random.default_rng(12)
+    for network, _, nodes in _moved_networks(30, 13):  # off the lattice
+        spacing = rng.uniform(0.5, 2.0)
+        resampled, new_nodes = network.resampled(nodes, spacing)
+        path, offsets, inner, outer, closed = network.polylines()
+        new_path, new_offsets, new_inner, new_outer, new_closed = resampled.polylines()
+        assert np.array_equal(closed, new_closed)
+        for k in range(len(closed)):
+            old_line = nodes[path[offsets[k]:offsets[k + 1]]]
+            new_line = new_nodes[new_path[new_offsets[k]:new_offsets[k + 1]]]
+            if closed[k]:
+                old_line, new_line = np.vstack([old_line, old_line[:1]]), np.vstack([new_line, new_line[:1]])
+            else:  # the branch nodes stay, and the regions on either side
+                np.testing.assert_array_equal(new_line[[0, -1]], old_line[[0, -1]])
+            assert (new_inner[k], new_outer[k]) == (inner[k], outer[k])
+            arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(old_line, axis=0).T))])
+            pieces = max(3 if closed[k] or np.array_equal(old_line[0], old_line[-1]) else 2,
+                         int(np.rint(arc[-1] / spacing)))
+            assert len(new_line) - 1 == pieces
+            # every sample at its arc length along the old line
+            at = np.arange(pieces + 1) * arc[-1] / pieces
+            expected = np.column_stack([np.interp(at, arc, old_line[:, d]) for d in range(2)])
+            np.testing.assert_allclose(new_line, expected, atol=1e-9)
+
+
+def test_velocity_solves_the_h1_system_on_the_free_nodes():
+    # the banded factorisation in the graph's reverse Cuthill-McKee order against the sparse matrix
+    rng = np.random.default_rng(14)
+    for network, _, nodes in _moved_networks(10, 15):
+        force = rng.normal(size=nodes.shape)
+        velocity = network.velocity(nodes, force)
+        matrix = network.stiffness(nodes)
+        for component, free in enumerate(network.free):
+            index = np.flatnonzero(free)
+            assert np.all(velocity[~free, component] == 0)
+            np.testing.assert_allclose(matrix[index][:, index] @ velocity[index, component],
+                                       -force[index, component], atol=1e-9 * max(1.0, np.abs(force).max()))
+
+
 def test_h1_form_integrates_linear_functions_and_kills_constants():
     _, classes = _antialiased((30, 30), _rings((14.2, 15.1), [11.0, 5.0]), [0, 1, 2])
     network = Network.of_classes(classes)
