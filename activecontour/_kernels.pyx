@@ -520,33 +520,42 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     :mod:`activecontour.backends.network`), in one pass: what :func:`edge_integrals` gives for one
     closed curve, kept apart per region and per segment.
 
-    ``moments[k] += (closed integral of G_1 dc, of G_2 dc)`` (per channel, Green's theorem: the
-    region integrals of I and I^2) over the segments with region k on their inner side, and minus
-    those with k on their outer side (``outer < 0``: the image's edge, no region).  With ``parts``
-    of shape (S, 2, 2C) (a (0, 2, 0) array for none), for every segment and each of its ends
-    (phi = 1 - s at the start, s at the end, s the segment's parameter) the integrals in s:
+    ``moments[k] += (area, closed integral of G_1 dc, of G_2 dc)`` (per channel, Green's theorem:
+    the region integrals of 1, I and I^2; the area by the shoelace formula) over the segments with
+    region k on their inner side, and minus those with k on their outer side (``outer < 0``: the
+    image's edge, no region).  With ``parts`` of shape (S, 2, 2C) (a (0, 2, 0) array for none),
+    for every segment and each of its ends (phi = 1 - s at the start, s at the end, s the
+    segment's parameter) the integrals in s:
 
         parts[e, 0 or 1, ch]     = int_0^1 phi I_ch ds,
         parts[e, 0 or 1, C + ch] = int_0^1 phi I_ch^2 ds,
 
     from which a quadratic form's load (6.41) on the segment's ends is the form's combination
     times the segment's normal ``nu |e| = (dv, -du)``.  The pieces between grid lines and their
-    quadrature are those of :func:`edge_integrals`.
+    quadrature are those of :func:`edge_integrals`; a cell's data is read once for consecutive
+    pieces in it (along a segment, and from one segment to the next along a chain).
+
+    Returns the length of the segments that count in the functional's length term: the
+    interfaces, and the image's edge where a region other than 0 lies on it.
     """
     cdef Py_ssize_t channels = values.shape[2], rows = values.shape[0], cols = values.shape[1]
-    cdef Py_ssize_t e, ch, g, a, j, i, o, count = starts.shape[0]
+    cdef Py_ssize_t e, ch, g, a, j, i, o, count = starts.shape[0], last_a = -1, last_j = -1
     cdef bint with_parts = parts.shape[0] > 0
     cdef double nodes[3]
     cdef double weights[3]
-    cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid
+    cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, area, length = 0.0
     cdef double t_edge, t, w, w0, half, third, g1, g2, b_pp, b_qq, b_pq, weight, intensity
     cdef double *acc
-    cdef Cell cell
-    if moments.shape[1] != 2 * channels or (with_parts and (parts.shape[0] != count or parts.shape[1] != 2
-                                                             or parts.shape[2] != 2 * channels)):
-        raise ValueError("moments must be (K, 2C) and parts (S, 2, 2C) or empty")
+    cdef Cell *cells
+    cdef Cell *cell
+    if moments.shape[1] != 1 + 2 * channels or (with_parts and (
+            parts.shape[0] != count or parts.shape[1] != 2 or parts.shape[2] != 2 * channels)):
+        raise ValueError("moments must be (K, 1 + 2C) and parts (S, 2, 2C) or empty")
     acc = <double *> malloc(2 * channels * sizeof(double))
-    if acc == NULL:
+    cells = <Cell *> malloc(channels * sizeof(Cell))
+    if acc == NULL or cells == NULL:
+        free(acc)
+        free(cells)
         raise MemoryError()
     nodes[0], nodes[1], nodes[2] = 0.5 - 0.5 * sqrt(0.6), 0.5, 0.5 + 0.5 * sqrt(0.6)
     weights[0], weights[1], weights[2] = 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0
@@ -572,8 +581,12 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
                     t_mid = t_prev + 0.5 * span
                     a = <Py_ssize_t> min(max(floor(u0 + t_mid * du), 0.0), <double> rows)
                     j = <Py_ssize_t> min(max(floor(v0 + t_mid * dv), 0.0), <double> cols)
+                    if a != last_a or j != last_j:
+                        for ch in range(channels):
+                            _cell(values, table, a, j, ch, &cells[ch])
+                        last_a, last_j = a, j
                     for ch in range(channels):
-                        _cell(values, table, a, j, ch, &cell)
+                        cell = &cells[ch]
                         for g in range(3):
                             t_edge = t_prev + span * nodes[g]
                             t = u0 + t_edge * du - a
@@ -607,11 +620,19 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
                     k_v += 1.0 if dv > 0 else -1.0
                 t_prev = t_next
             i, o = inner[e], outer[e]
+            area = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])
+            moments[i, 0] += area
+            if o >= 0:
+                moments[o, 0] -= area
             for ch in range(2 * channels):
-                moments[i, ch] += acc[ch]
+                moments[i, 1 + ch] += acc[ch]
                 if o >= 0:
-                    moments[o, ch] -= acc[ch]
+                    moments[o, 1 + ch] -= acc[ch]
+            if o >= 0 or i > 0:
+                length += sqrt(du * du + dv * dv)
     free(acc)
+    free(cells)
+    return length
 
 
 def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,

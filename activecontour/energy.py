@@ -162,26 +162,28 @@ def partition_moments(model, boundary, n_classes, *, parts=False):
     parts : ndarray (S, 2, 2C)
         With ``parts`` only.
     """
+    *moments, _, along = _segment_integrals(model, boundary, n_classes, parts)
+    return (*moments, along) if parts else tuple(moments)
+
+
+def _segment_integrals(model, boundary, n_classes, parts):
+    """``(areas, first, second, counted length, parts or None)`` of a partition's boundary in one
+    pass (:func:`activecontour._kernels.segment_integrals`), the background's moments the domain's
+    totals less the others' (as the two-region outside)."""
     channels = model.n_channels
     if boundary.inner.size and max(boundary.inner.max(), boundary.outer.max()) >= n_classes:
         raise ValueError(f"a boundary between more than {n_classes} regions")
     starts, ends = np.ascontiguousarray(boundary.start), np.ascontiguousarray(boundary.end)
-    moments = np.zeros((n_classes, 2 * channels))
+    moments = np.zeros((n_classes, 1 + 2 * channels))
     along = np.empty((len(starts) if parts else 0, 2, 2 * channels))
-    _kernels.segment_integrals(starts, ends, _indices(boundary.inner), _indices(boundary.outer), model.values,
-                               model.table, moments, along)
-    # the signed area by the shoelace formula, per region likewise
-    twice = starts[:, 0] * ends[:, 1] - ends[:, 0] * starts[:, 1]
-    interface = boundary.outer >= 0
-    areas = 0.5 * (np.bincount(boundary.inner, weights=twice, minlength=n_classes)
-                   - np.bincount(boundary.outer[interface], weights=twice[interface], minlength=n_classes))
-    first, second = moments[:, :channels].copy(), moments[:, channels:].copy()
-    # the background: the domain's totals minus the others (as the two-region outside)
+    length = _kernels.segment_integrals(starts, ends, _indices(boundary.inner), _indices(boundary.outer),
+                                        model.values, model.table, moments, along)
+    areas, first, second = moments[:, 0], moments[:, 1:1 + channels], moments[:, 1 + channels:]
     total_area, total_first, total_second = model.totals
     areas[0] = total_area - areas[1:].sum()
     first[0] = total_first - first[1:].sum(axis=0)
     second[0] = total_second - second[1:].sum(axis=0)
-    return (areas, first, second, along) if parts else (areas, first, second)
+    return areas, first, second, length, (along if parts else None)
 
 
 def _indices(labels):
@@ -209,11 +211,8 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None, *, pa
     ``parts`` the evaluation keeps the segments' integrals of :func:`partition_moments` as
     ``parts``, for :func:`partition_load` at the same boundary.
     """
-    *moments, along = partition_moments(model, boundary, n_classes, parts=True) if parts else (
-        *partition_moments(model, boundary, n_classes), None)
-    lengths = boundary.length
-    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
-    evaluation = energy_of_moments(model, params, *moments, float(lengths[counted].sum()), constants)
+    areas, first, second, length, along = _segment_integrals(model, boundary, n_classes, parts)
+    evaluation = energy_of_moments(model, params, areas, first, second, length, constants)
     evaluation.parts = along
     return evaluation
 
