@@ -513,6 +513,17 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
     return count
 
 
+cdef inline void _compensated(double *total, double *carry, double term) noexcept nogil:
+    """``total + carry += term`` by Neumaier's compensated summation (the rounding of each
+    addition collected in ``carry``)."""
+    cdef double summed = total[0] + term
+    if abs(total[0]) >= abs(term):
+        carry[0] += (total[0] - summed) + term
+    else:
+        carry[0] += (term - summed) + total[0]
+    total[0] = summed
+
+
 def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
                       const Py_ssize_t[::1] outer, const double[:, :, ::1] values,
                       const double[:, :, :, ::1] table, double[:, ::1] moments, double[:, :, ::1] parts):
@@ -533,7 +544,10 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     from which a quadratic form's load (6.41) on the segment's ends is the form's combination
     times the segment's normal ``nu |e| = (dv, -du)``.  The pieces between grid lines and their
     quadrature are those of :func:`edge_integrals`; a cell's data is read once for consecutive
-    pieces in it (along a segment, and from one segment to the next along a chain).
+    pieces in it (along a segment, and from one segment to the next along a chain).  The sums over
+    the segments are compensated (Neumaier): Green's integrals add terms of the size of the
+    row-antiderivatives that cancel around a closed curve, and the compensation keeps the result
+    independent of the segments' order to about one rounding.
 
     Returns the length of the segments that count in the functional's length term: the
     interfaces, and the image's edge where a region other than 0 lies on it.
@@ -546,16 +560,20 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, area, length = 0.0
     cdef double t_edge, t, w, w0, half, third, g1, g2, b_pp, b_qq, b_pq, weight, intensity
     cdef double *acc
+    cdef double *carry
+    cdef double length_carry = 0.0
     cdef Cell *cells
     cdef Cell *cell
     if moments.shape[1] != 1 + 2 * channels or (with_parts and (
             parts.shape[0] != count or parts.shape[1] != 2 or parts.shape[2] != 2 * channels)):
         raise ValueError("moments must be (K, 1 + 2C) and parts (S, 2, 2C) or empty")
-    acc = <double *> malloc(2 * channels * sizeof(double))
+    acc = <double *> malloc((2 * channels + 1) * sizeof(double))
     cells = <Cell *> malloc(channels * sizeof(Cell))
-    if acc == NULL or cells == NULL:
+    carry = <double *> calloc(moments.shape[0] * moments.shape[1], sizeof(double))
+    if acc == NULL or cells == NULL or carry == NULL:
         free(acc)
         free(cells)
+        free(carry)
         raise MemoryError()
     nodes[0], nodes[1], nodes[2] = 0.5 - 0.5 * sqrt(0.6), 0.5, 0.5 + 0.5 * sqrt(0.6)
     weights[0], weights[1], weights[2] = 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0
@@ -620,19 +638,20 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
                     k_v += 1.0 if dv > 0 else -1.0
                 t_prev = t_next
             i, o = inner[e], outer[e]
-            area = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])
-            moments[i, 0] += area
-            if o >= 0:
-                moments[o, 0] -= area
-            for ch in range(2 * channels):
-                moments[i, 1 + ch] += acc[ch]
+            acc[2 * channels] = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])  # the area
+            for ch in range(2 * channels + 1):
+                g = 0 if ch == 2 * channels else 1 + ch  # the column: area first, then I, then I^2
+                _compensated(&moments[i, g], &carry[i * moments.shape[1] + g], acc[ch])
                 if o >= 0:
-                    moments[o, 1 + ch] -= acc[ch]
+                    _compensated(&moments[o, g], &carry[o * moments.shape[1] + g], -acc[ch])
             if o >= 0 or i > 0:
-                length += sqrt(du * du + dv * dv)
+                _compensated(&length, &length_carry, sqrt(du * du + dv * dv))
+        for i in range(moments.shape[0] * moments.shape[1]):
+            moments[i // moments.shape[1], i % moments.shape[1]] += carry[i]
     free(acc)
     free(cells)
-    return length
+    free(carry)
+    return length + length_carry
 
 
 def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,

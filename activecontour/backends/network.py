@@ -113,7 +113,7 @@ class Network:
         self.inner, self.outer, self.shape = inner, outer, tuple(shape)
         self.interface = outer >= 0
         self.sides = Sides(inner, outer)
-        self._faces = self._face_counts = None
+        self._faces = self._face_counts = self._moving = None
         m, n = self.shape
         moving = np.zeros(len(nodes), dtype=bool)
         moving[start[self.interface]] = moving[end[self.interface]] = True
@@ -142,6 +142,19 @@ class Network:
         """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
         nodes = self.nodes if nodes is None else nodes
         return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
+
+    def moving_boundary(self, nodes):
+        """:meth:`boundary` without the segments that neither count in J nor move: the image's
+        edge along the background between nodes held there.  The background's moments are the
+        domain's less the other regions' (:func:`activecontour.energy.partition_moments`), so J
+        is the same, at the cost of the interfaces and what slides along the edge."""
+        if self._moving is None:
+            held = ~(self.free[0] | self.free[1])
+            kept = np.flatnonzero(~((self.outer < 0) & (self.inner == 0) & held[self.start] & held[self.end]))
+            inner, outer = self.inner[kept], self.outer[kept]
+            self._moving = (self.start[kept], self.end[kept], inner, outer, Sides(inner, outer))
+        start, end, inner, outer, sides = self._moving
+        return Boundary(nodes[start], nodes[end], inner, outer, sides)
 
     def relabelled(self, mapping):
         """The same network with region k renamed ``mapping[k]``."""
@@ -518,27 +531,28 @@ class Network:
         a, b = self._interface_ends
         tangent = nodes[b] - nodes[a]
         count = len(nodes)
-        normal_sum = np.column_stack([np.bincount(a, weights=tangent[:, 1], minlength=count)
-                                      + np.bincount(b, weights=tangent[:, 1], minlength=count),
-                                      -np.bincount(a, weights=tangent[:, 0], minlength=count)
-                                      - np.bincount(b, weights=tangent[:, 0], minlength=count)])
         plain = self._plain
-        normal_sum = normal_sum[plain]
-        size = np.hypot(normal_sum[:, 0], normal_sum[:, 1])
-        plain, normal_sum, size = plain[size > 0], normal_sum[size > 0], size[size > 0]
+        # the sum of the normals (t_c, -t_r) of the two segments at each plain node
+        normal = np.column_stack([(np.bincount(a, tangent[:, d], count)
+                                   + np.bincount(b, tangent[:, d], count))[plain] for d in (1, 0)])
+        normal[:, 1] *= -1
+        squared = np.einsum("ij,ij->i", normal, normal)
+        some = squared > 0
+        plain, normal = plain[some], normal[some] / np.sqrt(squared[some])[:, None]
         out = velocity.copy()
-        unit = normal_sum / size[:, None]
-        out[plain] = np.einsum("ij,ij->i", velocity[plain], unit)[:, None] * unit
+        out[plain] = np.einsum("ij,ij->i", velocity[plain], normal)[:, None] * normal
         return out
 
     def force(self, nodes, model, params, constants, parts=None):
         """``delta J`` with respect to every node (6.41): the segments' loads summed at their ends
-        (``parts``: the segments' integrals at these nodes, of
-        :func:`activecontour.energy.partition_moments`)."""
-        load = partition_load(model, self.boundary(nodes), params, constants, parts)
+        (``parts``: the integrals along :meth:`moving_boundary` at these nodes, of
+        :func:`activecontour.energy.partition_moments`); at the nodes held on the image's edge (which
+        do not move) without the edge's segments there."""
+        load = partition_load(model, self.moving_boundary(nodes), params, constants, parts)
+        start, end = self._moving[:2]
         count = len(nodes)
-        return np.column_stack([np.bincount(self.start, weights=load[:, 0, d], minlength=count)
-                                + np.bincount(self.end, weights=load[:, 1, d], minlength=count)
+        return np.column_stack([np.bincount(start, weights=load[:, 0, d], minlength=count)
+                                + np.bincount(end, weights=load[:, 1, d], minlength=count)
                                 for d in range(2)])
 
     def swept(self, before, after):
@@ -704,7 +718,7 @@ class _Flow:
 
     def evaluate(self, network, nodes):
         """J at the nodes, with the segments' integrals that make the force there."""
-        return evaluate_partition(self.model, network.boundary(nodes), self.params, self.n_regions,
+        return evaluate_partition(self.model, network.moving_boundary(nodes), self.params, self.n_regions,
                                   parts=True)
 
     def remesh(self):
