@@ -7,12 +7,15 @@ derivative (6.41), on a polygon, or on a level-set function over the pixel grid.
 Parts (arrows point down only: a room imports the rooms below it, never one above)
 -----
 segment            the entry point: ``segment(image, init, backend=..., mu=..., ...)`` (_segment)
+Settings           segment's keywords: defaults, choices, help and checks, stated once (settings)
 segment_sequence   a time-lapse or z-stack, each frame from the last, objects tracked (sequence/)
 segment_many       many images in worker processes, results as they finish (also on Dask: batch/)
 SegmentationResult the result of every backend (result)
 chan_vese_energy   the common evaluator of (6.38) for any contours (evaluate)
 circle, rectangle  initial curves; the default start (initial)
-backends/          polygon (the book's H^1 flow), network (N regions), levelset/, labelfield
+problem            prepare(image, settings): the working frame, noise, mu, parameters, model
+backends/          the registry of solvers: polygon (the book's H^1 flow), network (N regions),
+                   levelset/, labelfield; their options (backends.options)
 objects/           the label image, measurements, touching objects kept apart, metrics
 energy             the discrete functional and its shape derivative (6.41) on stacked curves
 models/            the integrands: two regions, N regions, smooth light, Poisson
@@ -36,26 +39,42 @@ except ImportError as exc:  # a source tree that was never installed, or pulled 
         "in the source tree (needs a C compiler)"
     ) from exc
 
-from activecontour._segment import segment
-from activecontour.batch import segment_many
-from activecontour.evaluate import chan_vese_energy
-from activecontour.initial import circle, rectangle
-from activecontour.io.images import load_image
-from activecontour.result import FlowState, SegmentationResult
-from activecontour.sequence.results import SequenceResult, iter_sequence, segment_sequence
+#: Each public name and the module that defines it, imported on first use (PEP 562): ``import
+#: activecontour`` loads no solver, and ``activecontour --help`` answers without one.
+_PUBLIC = {
+    "FlowState": "activecontour.result",
+    "SegmentationResult": "activecontour.result",
+    "SequenceResult": "activecontour.sequence.results",
+    "Settings": "activecontour.settings",
+    "chan_vese_energy": "activecontour.evaluate",
+    "circle": "activecontour.initial",
+    "iter_sequence": "activecontour.sequence.results",
+    "load_image": "activecontour.io.images",
+    "rectangle": "activecontour.initial",
+    "segment": "activecontour._segment",
+    "segment_many": "activecontour.batch",
+    "segment_sequence": "activecontour.sequence.results",
+}
 
-__all__ = [
-    "FlowState",
-    "SegmentationResult",
-    "SequenceResult",
-    "chan_vese_energy",
-    "circle",
-    "load_image",
-    "rectangle",
-    "iter_sequence",
-    "segment",
-    "segment_many",
-    "segment_sequence",
-]
+__all__ = sorted(_PUBLIC)
 
 __version__ = "0.1.0"
+
+
+def __getattr__(name):
+    """A public name, or a submodule (``activecontour.initial``), imported on first use."""
+    import importlib
+    import importlib.util
+
+    if name in _PUBLIC:
+        value = getattr(importlib.import_module(_PUBLIC[name]), name)
+    elif not name.startswith("__") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value  # found directly from now on
+    return value
+
+
+def __dir__():
+    return sorted({*globals(), *__all__})

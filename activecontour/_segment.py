@@ -1,48 +1,45 @@
-"""`segment`: the one public entry point, shared by the CLI, the viewer and pipelines."""
+"""`segment`: the one public entry point, shared by the CLI, the viewer and pipelines.
+
+The path from the call to the result: the keywords are checked as :class:`~activecontour.settings.Settings`;
+:func:`~activecontour.problem.prepare` turns the image and the settings into the problem (values in
+the working frame, mu, parameters, model); the registry's record of the backend and number of
+regions (:func:`~activecontour.backends.solver_for`) runs on it (on the crop of a region of
+interest, :func:`_solve`); the result is built once, at the end, in the whole image's frame and the
+caller's units, with its objects (:func:`_result`).
+"""
 
 from __future__ import annotations
 
 import dataclasses
 import functools
-import os
 
 import numpy as np
 
-from activecontour.backends import BACKENDS
-from activecontour.backends.options import parse_options
+from activecontour.backends import solver_for
 from activecontour.geometry.raster import mask_to_curves
 from activecontour.geometry.regions import clip_region, complement_region
-from activecontour.imaging.frame import to_frame, working_frame
-from activecontour.imaging.noise import auto_mu, is_auto
-from activecontour.imaging.normalize import intensity_scale, normalize_image, single_image
-from activecontour.imaging.roi import (
-    ROI_INIT_MARGIN,
-    crop_init,
-    init_neighbourhood,
-    resolve_roi,
-    restrict_values,
-)
-from activecontour.io.images import load_image
-from activecontour.models import ChanVeseParameters, noise_model
-from activecontour.models.modes import choose_regions
+from activecontour.imaging.roi import ROI_INIT_MARGIN, crop_init, init_neighbourhood, resolve_roi
 from activecontour.objects.measure import find_objects
-from activecontour.result import build_result, scalar_if_gray
+from activecontour.problem import prepare
+from activecontour.result import SegmentationResult, build_result, scalar_if_gray
+from activecontour.settings import Settings
 
-__all__ = ["BACKENDS", "FITS", "INSIDE", "segment"]
+__all__ = ["segment"]
 
-#: The models of the regions' intensities (``fit``).
-FITS = ("constant", "smooth")
 #: Rounds of the smooth fit's alternation (light field, then contour) at most; a round whose
 #: light step lowers J by less than the light's BIC cost ends it sooner (:func:`_smooth_light`).
 _LIGHT_ROUNDS = 4
 
-#: The choices of ``inside``: which region holds the objects.
-INSIDE = ("auto", "bright", "dark")
+#: The defaults of segment's keywords (stated in :class:`~activecontour.settings.Settings`).
+_DEFAULT = Settings()
 
-def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda_in=1.0,
-            lambda_out=1.0, max_num_iter=500, tol=5e-4, callback=None, c_in=None, c_out=None,
-            color="gray", normalize="range", n_regions=2, fit="constant", noise="gaussian", inside="auto",
-            roi=None, separate=True, channel_axis=None, options=None):
+
+def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega=_DEFAULT.omega,
+            lambda_in=_DEFAULT.lambda_in, lambda_out=_DEFAULT.lambda_out, max_num_iter=_DEFAULT.max_num_iter,
+            tol=_DEFAULT.tol, callback=None, c_in=_DEFAULT.c_in, c_out=_DEFAULT.c_out, color=_DEFAULT.color,
+            normalize=_DEFAULT.normalize, n_regions=_DEFAULT.n_regions, fit=_DEFAULT.fit,
+            noise=_DEFAULT.noise, inside=_DEFAULT.inside, roi=_DEFAULT.roi, separate=_DEFAULT.separate,
+            channel_axis=_DEFAULT.channel_axis, options=_DEFAULT.options):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -162,146 +159,114 @@ def segment(image, init=None, *, backend="polygon", mu="auto", omega=0.0, lambda
         With the objects: ``labels``, ``objects`` (measurements), ``object_contours``, ``classes``
         (:func:`activecontour.objects.measure.find_objects`).
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {backend!r}")
-    if isinstance(max_num_iter, bool) or not isinstance(max_num_iter, (int, np.integer)):
-        raise TypeError(f"max_num_iter must be an integer, got {max_num_iter!r}")
-    if max_num_iter < 0:
-        raise ValueError(f"max_num_iter must be >= 0, got {max_num_iter}")
-    if not (isinstance(tol, (int, float, np.floating)) and np.isfinite(tol) and tol >= 0):
-        raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
+    settings = Settings(backend=backend, mu=mu, omega=omega, lambda_in=lambda_in, lambda_out=lambda_out,
+                        max_num_iter=max_num_iter, tol=tol, c_in=c_in, c_out=c_out, color=color,
+                        normalize=normalize, n_regions=n_regions, fit=fit, noise=noise, inside=inside,
+                        roi=roi, separate=separate, channel_axis=channel_axis, options=options)
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
-    if inside not in INSIDE:
-        raise ValueError(f"inside must be one of {INSIDE}, got {inside!r}")
-    if not isinstance(separate, (bool, np.bool_)):
-        raise TypeError(f"separate must be True or False, got {separate!r}")
-    if options is not None and not isinstance(options, dict):
-        raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
-    _check_regions(n_regions, backend, c_in, c_out, options, roi)
-    if fit not in FITS:
-        raise ValueError(f"fit must be one of {FITS}, got {fit!r}")
-    noise_model(noise)  # a bad name is refused before any work
-    if isinstance(image, (str, os.PathLike)):
-        image = load_image(image)
-    image = single_image(image, channel_axis)
-    values = normalize_image(image, color=color, normalize=normalize)
-    shape = values.shape[:2]
-    if is_auto(n_regions):
-        n_regions = choose_regions(values, mu)
-    if n_regions > 2:
-        if backend == "polygon":
-            from activecontour.backends.network import segment_network as solver
-        else:
-            from activecontour.backends.labelfield import segment_labels as solver
-        solver = functools.partial(solver, n_regions=int(n_regions))
-    else:
-        chosen = BACKENDS[backend]
-        parse_options(chosen.options, backend, options or {})  # before any work: bad keys, types
-        solver = chosen.run
-    solve = functools.partial(
-        _solve, solver, values, init, mu=mu, constants=(omega, lambda_in, lambda_out, c_in, c_out),
-        inside=inside, normalize=normalize, callback=callback, fit=fit, noise=noise,
-        settings=dict(max_num_iter=int(max_num_iter), tol=float(tol), **(options or {})))
-    if isinstance(roi, str) and roi == "init":
+    problem = prepare(image, settings)
+    solver = solver_for(settings.backend, problem.n_regions)
+    run = functools.partial(solver.solve, options=settings.backend_options, n_regions=problem.n_regions,
+                            max_num_iter=int(settings.max_num_iter), tol=float(settings.tol))
+    if isinstance(settings.roi, str):  # "init"
         # the smallest neighbourhood of the init that holds the object: grown while the result
         # reaches the domain's edge (or is empty), e.g. when the curve was drawn inside the object
         margin = ROI_INIT_MARGIN
         while True:
-            neighbourhood = init_neighbourhood(init, shape, margin)
-            result, params, (offset, scale) = solve(neighbourhood)
-            if neighbourhood.all() or not _reaches_edge(result, neighbourhood):
+            neighbourhood = init_neighbourhood(init, problem.shape, margin)
+            solution = _solve(problem, run, init, neighbourhood, callback)
+            if neighbourhood.all() or not _reaches_edge(solution, neighbourhood):
                 break
             margin *= 2
     else:
-        result, params, (offset, scale) = solve(roi)
-    offset, scale = _input_units(image, normalize, offset, scale)
-    result.mu = params.mu
-    result.c_in_image = scalar_if_gray(offset + scale * np.asarray(result.c_in))
-    result.c_out_image = scalar_if_gray(offset + scale * np.asarray(result.c_out))
-    pixels = np.asarray(image)
+        solution = _solve(problem, run, init, settings.roi, callback)
+    return _result(problem, solution)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Solution:
+    """What a backend's run gave, before the result is built: the problem it ran on (the whole
+    image's, or a crop's), its result in that problem's frame (working units), the light field,
+    and the inside in the whole image's frame."""
+
+    problem: object
+    result: SegmentationResult
+    light: np.ndarray | None
+    contours: list
+    mask: np.ndarray
+    phi: np.ndarray | None
+    roi: np.ndarray | None
+
+
+def _solve(problem, run, init, roi, callback):
+    """Run the backend on the image, or on the crop of a region of interest: a :class:`_Solution`."""
+    shape = problem.shape
+    if roi is not None:
+        box, domain = resolve_roi(roi, shape)
+        problem = problem.restricted(box, domain)
+        init = crop_init(init, box, shape)
+        if callback is not None:
+            callback = _whole_image_callback(callback, box, shape)
+    if callback is not None and problem.framed:
+        callback = _in_caller_units(callback, *problem.frame)
+    run = functools.partial(run, callback=callback)
+    if problem.settings.fit == "smooth":
+        result, model, working, light = _smooth_light(problem, init, run)
+    else:
+        (model, working), light = problem.model(), None
+        result = run(model, init, working)
+    result = _make_inside(result, problem.settings.inside, model, working)
+    domain = problem.domain
+    if domain is not None:
+        result = _rebuilt(result, clip_region(result.contours, mask_to_curves(domain)), model, working,
+                          phi=None if result.phi is None else np.where(domain, result.phi, -1.0))
+    return _Solution(problem, result, light, *_in_whole_image(result, problem.box, problem.domain, shape))
+
+
+def _result(problem, solution):
+    """The result, built once: in the whole image's frame and the caller's units, with the region
+    of every pixel and the objects (:func:`activecontour.objects.measure.find_objects`)."""
+    part, result = solution.problem, solution.result
+    energy, energies, c_in, c_out, constants = (result.energy, result.energies, result.c_in, result.c_out,
+                                                result.constants)
+    if part.framed:  # from the working frame to the normalised units
+        offset, scale = part.frame
+        square = scale**2
+        energy, energies = energy * square, energies * square
+        c_in = scalar_if_gray(offset + scale * np.asarray(c_in))
+        c_out = scalar_if_gray(offset + scale * np.asarray(c_out))
+        if constants is not None:
+            constants = offset + scale * np.asarray(constants)
+    classes = result.classes
+    if classes is None:  # two regions: the inside is region 1
+        classes = solution.mask.astype(np.int32)
+        constants = np.array([np.atleast_1d(c_out), np.atleast_1d(c_in)])
+    offset, scale = part.units
+    shape = problem.shape
+    pixels = np.asarray(problem.image)
     if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
         pixels = np.moveaxis(pixels, 0, -1)
     # objects are the connected pieces of each non-background region (N regions: of each class,
     # its sub-pixel curves)
-    by_class = result.contours if result.class_contours is None else result.class_contours[1:]
-    result.object_contours, result.labels, result.objects = find_objects(
-        by_class, shape, pixels, separate=bool(separate))
-    if result.classes is None:  # two regions: the inside is region 1
-        result.classes = result.mask.astype(np.int32)
-        result.constants = np.array([np.atleast_1d(result.c_out), np.atleast_1d(result.c_in)])
-    result.n_regions = int(n_regions)
-    return result
+    by_class = solution.contours if result.class_contours is None else result.class_contours[1:]
+    object_contours, labels, objects = find_objects(by_class, shape, pixels,
+                                                    separate=bool(problem.settings.separate))
+    return SegmentationResult(
+        mask=solution.mask, contours=solution.contours, c_in=c_in, c_out=c_out, energy=energy,
+        energies=energies, n_iter=result.n_iter, status=result.status, backend=result.backend,
+        phi=solution.phi, mu=part.mu, c_in_image=scalar_if_gray(offset + scale * np.asarray(c_in)),
+        c_out_image=scalar_if_gray(offset + scale * np.asarray(c_out)), labels=labels, objects=objects,
+        object_contours=object_contours, classes=classes, constants=constants, light=solution.light,
+        roi=solution.roi, n_regions=problem.n_regions, class_contours=result.class_contours)
 
 
-def _solve(solver, values, init, roi, *, mu, constants, inside, normalize, callback, fit, noise,
-           settings):
-    """Run the backend on the image, or on the crop of a region of interest.
-
-    Returns the result in the whole image's frame, the parameters used, and the affine map
-    ``(low, span)`` of the crop's renormalisation (``(0, 1)`` without one).
-    """
-    shape = values.shape[:2]
-    box, domain = (None, None) if roi is None else resolve_roi(roi, shape, init)
-    rescale = (0.0, 1.0)
-    if box is not None:
-        values = restrict_values(values, box, domain)
-        if normalize == "range":  # the crop by its own range, as segment(image[box]) would
-            low, high = float(values.min()), float(values.max())
-            rescale = (low, high - low if high > low else 1.0)
-            values = (values - rescale[0]) / rescale[1]
-        init = crop_init(init, box, shape)
-        if callback is not None:
-            callback = _whole_image_callback(callback, box, shape)
-    # the backends compute where the image spans [0, 1] (no cancellation, no overflow)
-    frame_offset, frame_scale = working_frame(values)
-    values = to_frame(values, frame_offset, frame_scale)
-    params = ChanVeseParameters(auto_mu(values) * frame_scale**2 if is_auto(mu) else mu, *constants)
-    working = params.in_frame(frame_offset, frame_scale)
-    framed = working is not params
-    if callback is not None and framed:
-        callback = _in_caller_units(callback, frame_offset, frame_scale)
-
-    def run(model, init, params, max_num_iter=settings["max_num_iter"]):
-        return solver(model, init, params, callback=callback, **{**settings, "max_num_iter": max_num_iter})
-
-    build, fit_light = noise_model(noise)
-    if fit == "smooth":
-        result, model, working = _smooth_light(values, init, working, run, build, fit_light)
-    else:
-        model, working = build(values, None, working)
-        result = run(model, init, working)
-    result = _make_inside(result, inside, model, working)
-    if domain is not None:
-        domain_curves = mask_to_curves(domain)
-        result = _rebuilt(result, clip_region(result.contours, domain_curves), model, working,
-                          phi=None if result.phi is None else np.where(domain, result.phi, -1.0))
-    if box is not None:
-        result = _in_whole_image(result, box, domain, shape)
-    if framed:
-        square = frame_scale**2
-        result.energy *= square
-        result.energies = result.energies * square
-        result.c_in = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_in))
-        result.c_out = scalar_if_gray(frame_offset + frame_scale * np.asarray(result.c_out))
-        if getattr(result, "constants", None) is not None:
-            result.constants = frame_offset + frame_scale * np.asarray(result.constants)
-    return result, params, rescale
-
-
-def _reaches_edge(result, domain):
-    """Whether a result is empty or has pixels on the edge of its domain (not the image's)."""
+def _reaches_edge(solution, domain):
+    """Whether a solution is empty or has pixels on the edge of its domain (not the image's)."""
     import scipy.ndimage
 
     edge = domain & ~scipy.ndimage.binary_erosion(domain, border_value=1)
-    return result.status == 3 or bool((result.mask & edge).any())
-
-
-def _input_units(image, normalize, low, span):
-    """``(offset, scale)`` from the functional's units to the input's, after a crop's renormalisation
-    ``(values - low) / span``."""
-    offset, scale = intensity_scale(image, normalize)
-    return offset + scale * low, scale * span
+    return solution.result.status == 3 or bool((solution.mask & edge).any())
 
 
 def _make_inside(result, inside, model, params):
@@ -322,20 +287,22 @@ def _rebuilt(result, contours, model, params, phi):
 
 
 def _in_whole_image(result, box, domain, shape):
-    """A result on a crop, moved into the whole image's frame (the energy stays the crop's)."""
+    """``(contours, mask, phi, roi)`` of a result on a crop in the whole image's frame (the result's
+    own without a crop)."""
+    if box is None:
+        return result.contours, result.mask, result.phi, None
     r0, c0, r1, c1 = box
     offset = np.array([r0, c0], dtype=np.float64)
-    result.contours = [c + offset for c in result.contours]
+    contours = [c + offset for c in result.contours]
     mask = np.zeros(shape, dtype=bool)
     mask[r0:r1, c0:c1] = result.mask
-    result.mask = mask
+    phi = None
     if result.phi is not None:
         phi = np.full(shape, min(float(result.phi.min()), -1.0))
         phi[r0:r1, c0:c1] = result.phi
-        result.phi = phi
-    result.roi = np.zeros(shape, dtype=bool)
-    result.roi[r0:r1, c0:c1] = True if domain is None else domain
-    return result
+    roi = np.zeros(shape, dtype=bool)
+    roi[r0:r1, c0:c1] = True if domain is None else domain
+    return contours, mask, phi, roi
 
 
 def _whole_image_callback(callback, box, shape):
@@ -363,34 +330,11 @@ def _in_caller_units(callback, offset, scale):
     return wrapped
 
 
-def _check_regions(n_regions, backend, c_in, c_out, options, roi):
-    """Refuse what ``n_regions`` cannot do; ``"auto"`` is checked as a K > 2 (it may choose one)."""
-    choices = "an integer >= 2 or 'auto'"
-    if isinstance(n_regions, str) and not is_auto(n_regions):
-        raise ValueError(f"n_regions must be {choices}, got {n_regions!r}")
-    if not is_auto(n_regions):
-        if isinstance(n_regions, bool) or not isinstance(n_regions, (int, np.integer)):
-            raise TypeError(f"n_regions must be {choices}, got {n_regions!r}")
-        if n_regions < 2:
-            raise ValueError(f"n_regions must be {choices}, got {n_regions}")
-        if n_regions == 2:
-            return
-    if c_in is not None or c_out is not None:
-        raise ValueError("c_in and c_out fix the constants of two regions; leave them None for "
-                         f"n_regions={n_regions}")
-    if roi is not None:
-        raise ValueError(f"roi restricts the two-region model; it is not available with "
-                         f"n_regions={n_regions}")
-    if options:
-        raise TypeError(f"options are the two-region backends' settings; n_regions={n_regions} "
-                        "takes none")
-
-
-def _smooth_light(values, init, params, run, build, fit_light):
+def _smooth_light(problem, init, run):
     """``fit="smooth"``: alternate the backend's run (light fixed) and the light's update
-    (partition and constants fixed: least squares, or the Poisson likelihood's optimum).
-    ``build`` and ``fit_light`` are the noise model's (:func:`activecontour.models.noise_model`).
-    Returns the result, its image model and parameters.
+    (partition and constants fixed: least squares, or the Poisson likelihood's optimum), the
+    noise model's two parts (:attr:`activecontour.problem.Problem.noise_model`).  Returns the
+    result, its image model and parameters, and the light field (None: uniform).
 
     When the light is worth its parameters: the light step lowers J by the drop of
     :func:`~activecontour.models.smooth.fit_light`.  Read (6.38) as
@@ -416,22 +360,23 @@ def _smooth_light(values, init, params, run, build, fit_light):
     start runs when its start (the backend's default start on the image corrected by that
     light, or ``init``) has the lower energy.  The alternation continues from the better result,
     and the lowest energy of every run is returned, so the smooth fit never ends above the
-    constant fit.  When that is the constant fit's own result, ``result.light`` is None.
+    constant fit.  When that is the constant fit's own result, the light is None.
     """
     from activecontour.imaging.noise import MU_PER_NOISE_VARIANCE
     from activecontour.models.smooth import LIGHT_TERMS
 
-    noise = auto_mu(values) / MU_PER_NOISE_VARIANCE
+    values = problem.values
+    fit_light = problem.noise_model[1]
+    noise = problem.auto_mu / MU_PER_NOISE_VARIANCE
     worth = noise * (LIGHT_TERMS - 1) * np.log(values.shape[0] * values.shape[1])
-    plain = (*build(values, None, params), None)
+    plain = (*problem.model(), None)
     result = run(plain[0], init, plain[1])
     new, drop = fit_light(values, *_classes_and_constants(result), plain[1])
     if drop <= worth:
-        result.light = None
-        return result, plain[0], plain[1]
+        return result, plain[0], plain[1], None
     one_region = np.zeros(values.shape[:2], dtype=np.intp)
     whole_light = fit_light(values, one_region, np.ones((1, values.shape[2])), plain[1])[0]
-    lit = (*build(values, whole_light, params), whole_light)
+    lit = (*problem.model(whole_light), whole_light)
     runs = [(result, *plain)]
     start_energy = [run(start[0], init, start[1], max_num_iter=0).energy for start in (plain, lit)]
     if start_energy[1] < start_energy[0]:
@@ -443,14 +388,12 @@ def _smooth_light(values, init, params, run, build, fit_light):
             if drop <= worth:
                 break
         light, before = new, result.energy
-        model, model_params = build(values, light, params)
+        model, model_params = problem.model(light)
         result = run(model, result, model_params)
         runs.append((result, model, model_params, light))
         if result.energy >= before:  # the backend's run did not descend from the light step
             break
-    result, model, model_params, light = min(runs, key=lambda entry: entry[0].energy)
-    result.light = light
-    return result, model, model_params
+    return min(runs, key=lambda entry: entry[0].energy)
 
 
 def _classes_and_constants(result):

@@ -7,17 +7,16 @@ types, computed by this package's polygon flow of (6.38) (section 6.5 of *The Sh
 
 from __future__ import annotations
 
-import inspect
-
 import numpy as np
 
 from activecontour._segment import segment
+from activecontour.settings import Settings
 
 __all__ = ["chan_vese"]
 
 #: Our ``tol`` (pixels per iteration) per unit of scikit-image's: its default (1e-3, the default of
 #: :func:`chan_vese` below) becomes the default of :func:`activecontour.segment`
-TOL_SCALE = inspect.signature(segment).parameters["tol"].default / 1e-3
+TOL_SCALE = Settings().tol / 1e-3
 
 #: ``init_level_set`` presets of scikit-image, and what each becomes here (see :func:`chan_vese`)
 INIT_LEVEL_SETS = ("checkerboard", "disk", "small disk")

@@ -10,19 +10,27 @@ import numpy as np
 
 from activecontour.energy import evaluate, evaluate_partition, region_moments
 from activecontour.geometry.curve import as_curve, stack_curves
-from activecontour.imaging.frame import to_frame, working_frame
-from activecontour.models import ChanVeseParameters
+from activecontour.problem import prepare
+from activecontour.settings import Settings
 
 __all__ = ["chan_vese_energy"]
 
-def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="auto", omega=0.0, lambda_in=1.0,
-                     lambda_out=1.0, c_in=None, c_out=None, color="gray", normalize="range",
-                     light=None, noise="gaussian"):
+#: The defaults of the keywords segment and the evaluator share (stated in :class:`Settings`).
+_DEFAULT = Settings()
+
+
+def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu=_DEFAULT.mu,
+                     omega=_DEFAULT.omega, lambda_in=_DEFAULT.lambda_in, lambda_out=_DEFAULT.lambda_out,
+                     c_in=_DEFAULT.c_in, c_out=_DEFAULT.c_out, color=_DEFAULT.color,
+                     normalize=_DEFAULT.normalize, light=None, noise=_DEFAULT.noise,
+                     channel_axis=_DEFAULT.channel_axis):
     """Evaluate the Chan-Vese functional (6.38) of contours on an image: the common evaluator.
 
     Any backend's result can be scored the same way: pass ``result.contours`` (two regions) or
     ``classes=result.classes`` (a result with ``n_regions > 2``, whose class boundaries are those
-    of its label image, see :mod:`activecontour.geometry.partition`).
+    of its label image, see :mod:`activecontour.geometry.partition`).  The image and the keywords
+    are prepared as :func:`activecontour.segment` prepares them (:func:`activecontour.problem.prepare`,
+    the keywords checked by :class:`activecontour.settings.Settings`).
 
     Parameters
     ----------
@@ -54,6 +62,9 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
         intensity is ``c_k b`` (:mod:`activecontour.models.smooth`).  None: the constant fit.
     noise : {"gaussian", "poisson"}
         The fit term, as in :func:`activecontour.segment`.
+    channel_axis : int, optional
+        As in :func:`activecontour.segment`: the axis of a 3-D array that holds the channels (a
+        channel-first (2-4, M, N) array needs it; it could be frames).
 
     Returns
     -------
@@ -69,17 +80,11 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu="au
         (6.38) is not defined.  :func:`activecontour.geometry.topology.region_union` turns such curves
         into the boundary of the region they outline.
     """
-    from activecontour.imaging.noise import auto_mu, is_auto
-    from activecontour.imaging.normalize import normalize_image
-    from activecontour.models import noise_model
-
-    values = normalize_image(image, color=color, normalize=normalize)
-    offset, scale = working_frame(values)
-    values = to_frame(values, offset, scale)
-    params = ChanVeseParameters(auto_mu(values) * scale**2 if is_auto(mu) else mu, omega, lambda_in,
-                                lambda_out, c_in, c_out).in_frame(offset, scale)
-    build = noise_model(noise)[0]
-    model, params = build(values, None if light is None else np.asarray(light, dtype=np.float64), params)
+    problem = prepare(image, Settings(mu=mu, omega=omega, lambda_in=lambda_in, lambda_out=lambda_out,
+                                      c_in=c_in, c_out=c_out, color=color, normalize=normalize, noise=noise,
+                                      channel_axis=channel_axis))
+    scale = problem.frame[1]
+    model, params = problem.model(None if light is None else np.asarray(light, dtype=np.float64))
     if sum(given is not None for given in (contours, classes, regions)) != 1:
         raise TypeError("chan_vese_energy takes one of contours, classes or regions")
     if classes is not None:

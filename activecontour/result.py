@@ -27,6 +27,9 @@ STATUS_MESSAGES = {
 class SegmentationResult:
     """The outcome of :func:`activecontour.segment`.
 
+    A backend makes one in its working frame (:func:`build_result`); ``segment`` builds the one it
+    returns once, at the end, with every part below in place (nothing sets a field afterwards).
+
     Attributes
     ----------
     mask : ndarray of bool, shape (M, N)
@@ -52,13 +55,13 @@ class SegmentationResult:
     phi : ndarray (M, N) or None
         The level-set function (``backend="levelset"``), None for the polygon backend.
     mu : float or None
-        The length weight used (the value ``mu="auto"`` chose), set by :func:`activecontour.segment`.
+        The length weight used (the value ``mu="auto"`` chose).
     c_in_image, c_out_image : float or ndarray (C,) or None
         ``c_in``, ``c_out`` in the input image's own intensity units (``c_in``/``c_out`` are in the
-        normalised units the functional uses), set by :func:`activecontour.segment`.
+        normalised units the functional uses).
     labels : int32 ndarray (M, N) or None
         0 = background, 1..n one id per object (:mod:`activecontour.objects`); with
-        ``separate=True`` touching objects have their own ids.  Set by :func:`activecontour.segment`.
+        ``separate=True`` touching objects have their own ids.
     objects : dict of str to ndarray, or None
         Per-object measurements, one row per id (``regionprops_table`` names; see
         :func:`activecontour.objects.measure` for which columns are exact).
@@ -67,21 +70,20 @@ class SegmentationResult:
         lines; ``contours`` stays the boundary of the inside region, which the energy is of.
     classes : int ndarray (M, N) or None
         The region of each pixel, 0 = background (two regions: ``mask.astype(int)``), the others
-        by increasing mean intensity; set by :func:`activecontour.segment`.
+        by increasing mean intensity.
     light : ndarray (M, N) or None
         The light field b of ``fit="smooth"`` (mean 1): region k's intensity is ``c_k b``; None
         for ``fit="constant"`` and when the smooth fit found the light uniform.
     constants : ndarray (K, C) or None
-        The constant of every region in normalised units (two regions: ``[c_out, c_in]``), set by
-        :func:`activecontour.segment`.  With ``n_regions > 2``, ``c_out`` is the background's and
-        ``c_in`` the area-weighted mean of the others (the inside is every region but the
-        background).
+        The constant of every region in normalised units (two regions: ``[c_out, c_in]``).  With
+        ``n_regions > 2``, ``c_out`` is the background's and ``c_in`` the area-weighted mean of the
+        others (the inside is every region but the background).
     roi : bool ndarray (M, N) or None
         With ``segment(roi=...)``: the domain D the functional was solved on
         (:mod:`activecontour.imaging.roi`); ``energy`` is (6.38) on its bounding box.
     n_regions : int or None
         The number of regions K of the model (the one ``n_regions="auto"`` chose); ``classes``
-        takes values in 0..K-1 and ``constants`` has K rows.  Set by :func:`activecontour.segment`.
+        takes values in 0..K-1 and ``constants`` has K rows.
     class_contours : list of list of ndarray, or None
         With ``n_regions > 2``: the closed curves of every region k (outer boundaries positive,
         holes negative; region 0 the background), the sub-pixel partition whose functional is

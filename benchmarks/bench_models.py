@@ -13,7 +13,8 @@ the objects; thresholds take the bright side); for K regions the mean per-class 
 matching of found to true classes (scipy's linear_sum_assignment), with the per-class values.
 Ours run with ``separate=False``: the times are the segmentation's, not the objects' split.
 
-Then ``n_regions="auto"`` (:func:`activecontour.models.modes.choose_regions`) on the scenes, on
+Then ``n_regions="auto"`` (:func:`activecontour.models.modes.choose_regions`, by
+:attr:`activecontour.problem.Problem.n_regions`) on the scenes, on
 pure noise, two flat regions at SNR 3, a ramp, and scikit-image's coins, camera, page, text and
 clock: the K chosen, the time of the choice, of ``segment(n_regions="auto")`` and of a two-region
 level-set run (``--no-auto`` skips it).
@@ -180,8 +181,8 @@ def scenes_table(nuclei):
 def auto_table():
     import skimage.data
 
-    from activecontour.imaging.normalize import normalize_image
-    from activecontour.models.modes import choose_regions
+    from activecontour.problem import prepare
+    from activecontour.settings import Settings
 
     rng = np.random.default_rng(4)
     halves = np.zeros((256, 256), dtype=int)
@@ -200,7 +201,7 @@ def auto_table():
     for name, image, truth, color in scenes:
         n_true = "-" if truth is None else int(truth.max()) + 1
         t = time.perf_counter()
-        chosen = choose_regions(normalize_image(image, color=color))
+        chosen = prepare(image, Settings(color=color, n_regions="auto")).n_regions
         choice = time.perf_counter() - t
         cells = []
         for backend in ("levelset", "polygon"):

@@ -30,12 +30,11 @@ stall at the finest l is convergence; the run also stops at ``max_num_iter``.
 
 from __future__ import annotations
 
-import dataclasses
 from itertools import pairwise
 
 import numpy as np
 
-from activecontour.backends.options import option, parse_options
+from activecontour.backends.options import PolygonOptions
 from activecontour.energy import evaluate
 from activecontour.geometry import fem, topology
 from activecontour.geometry.curve import edge_lengths, resample, signed_area, stack_curves
@@ -45,14 +44,12 @@ from activecontour.result import FlowState, build_result
 
 __all__ = ["PolygonOptions", "segment_polygon"]
 
-_VELOCITIES = ("h1", "l2")
 _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
 _WINDOW = 5  # iterations over which the movement is averaged for the stopping test
 _MEMORY = 8  # step pairs of the L-BFGS acceleration
 _SMOOTHING = 30.0  # first smoothing length (px) from given curves ...
 _START_SMOOTHING = 2.0  # ... and from the default start or a result, on the boundaries already
-_MIN_SPACING = 0.1  # pixels: the bilinear image has no detail finer than this needs
 _CURVE_STEP = 0.25  # a trial step moves a curve by at most this fraction of its radius (RMS)
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
@@ -66,60 +63,11 @@ _BACKGROUND_SHARE = 1.5  # the global move takes the background when the given c
                          # the share of it that they hold of the objects
 
 
-@dataclasses.dataclass(frozen=True)
-class PolygonOptions:
-    """The options of the polygon backend (``segment(..., options={...})``): each field's doc is
-    its ``help`` (:func:`activecontour.backends.options.option_specs`)."""
-
-    velocity: str = option("h1", "The bilinear form b: H^1 (6.39), the default, or L^2 (6.25).",
-                           choices=_VELOCITIES)
-    spacing: float = option(1.0, (
-        "Target distance between vertices, in pixels (>= 0.1).  About one vertex per pixel resolves "
-        "everything the image resolves; the cost of an iteration grows with the curve's length in "
-        "pixels either way."))
-    max_step: float = option(8.0, (
-        "Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps "
-        "double while they are accepted, up to this; backtracking halves them."),
-                             slider=("step (px)", 0.25, 10.0))
-    smoothing: float | None = option(None, (
-        "First length l in b(V, Y) = int V.Y + l^2 int grad V : grad Y, in pixels (smoothing >= "
-        "min_smoothing).  The book's (6.39) is l = 1 in its units.  In pixel units l = 1 barely "
-        "smooths: on noisy images the fastest (noise-driven) vertex then caps the step and the bulk "
-        "of the curve crawls; a large l alone spreads every local force over l pixels and fills "
-        "corners slowly.  Coarse to fine gets both.  None (default): 30 px from curves or a mask "
-        "given as init, and 2 px from the default start (init=None), from a previous result and "
-        "after the global move (global_start), which already lie on the objects' boundaries "
-        "(measured on benchmarks/bench_robust.py: the same Dice to +-0.0002 in a third to a half "
-        "of the iterations)."))
-    min_smoothing: float = option(1.0, "Last length l of the coarse-to-fine H^1 metric, in pixels (>= 0).")
-    min_area: float = option(4.0, (
-        "Curves enclosing less than this many square pixels are removed (when that does not raise "
-        "the energy), e.g. circles of a grid start that shrink away on the background."))
-    nucleate: bool = option(True, (
-        "When the flow has converged, look for holes and new components that lower the energy (the "
-        "topological derivative, activecontour.geometry.topology.nucleation_sites), insert small circles "
-        "there and continue; repeated at most a few times.  This is how a single initial curve "
-        "finds a hole or a second object it cannot reach by deformation."))
-    accelerate: bool = option(True, (
-        "Combine the velocity with the last few steps (limited-memory BFGS in the metric b: the "
-        "first inverse Hessian guess is b^-1, so without memory the step is the book's velocity).  "
-        "Near a minimum the plain flow converges slowly along the directions the metric and the "
-        "energy weigh differently; this takes them in one step.  Every step still passes the same "
-        "descent test.  The memory is cleared when the vertices change and at each new stage."))
-    global_start: bool = option(True, (
-        "From curves, a mask or 'grid' given as init, the first iteration is a global move: to the "
-        "default start's threshold set (activecontour.initial.threshold_starts) or its complement, "
-        "whichever has the lower (6.38), when that is lower than the given curves' energy (the "
-        "first half of Chan and Vese's alternating minimisation), so the flow then only settles "
-        "details: on scikit-image's camera, from a drawn rectangle, ~70 iterations instead of "
-        "~1000 to the same J within 1 %.  False keeps the flow local to the given curves."))
-
-
-def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **options):
+def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options=None):
     """Minimise (6.38) by the H^1 gradient flow of a polygon (``backend="polygon"``).
 
-    Called by :func:`activecontour.segment`; ``options`` are its ``options``, the fields of
-    :class:`PolygonOptions` (names, types, defaults and their documentation).
+    Called by :func:`activecontour.segment` with its ``options`` read into :class:`PolygonOptions`
+    (names, types, defaults, ranges and their documentation).
 
     Parameters
     ----------
@@ -129,36 +77,18 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, **optio
     max_num_iter : int
     tol : float
     callback : callable or None
-    **options
-        :class:`PolygonOptions` fields.
+    options : PolygonOptions, optional
+        None: the defaults.
 
     Returns
     -------
     SegmentationResult
-
-    Raises
-    ------
-    TypeError
-        For an unknown option (the message lists the valid ones) or an option of the wrong type.
     """
-    chosen = parse_options(PolygonOptions, "polygon", options)
+    chosen = PolygonOptions() if options is None else options
     velocity, spacing, max_step = chosen.velocity, chosen.spacing, chosen.max_step
     smoothing, min_smoothing, min_area = chosen.smoothing, chosen.min_smoothing, chosen.min_area
     nucleate, accelerate, global_start = chosen.nucleate, chosen.accelerate, chosen.global_start
-    if not (np.isfinite(spacing) and spacing >= _MIN_SPACING):
-        raise ValueError(f"spacing must be a number of pixels >= {_MIN_SPACING} (vertices closer than "
-                         f"the image resolves only cost time), got {spacing!r}")
-    if not (np.isfinite(max_step) and max_step > 0):
-        raise ValueError(f"max_step must be a positive number of pixels, got {max_step!r}")
     from_result = hasattr(init, "contours") and hasattr(init, "mask")
-    if not (np.isfinite(min_smoothing) and (smoothing is None or np.isfinite(smoothing))
-            and (smoothing is None or smoothing >= min_smoothing) and min_smoothing >= 0):
-        raise ValueError(
-            f"smoothing and min_smoothing must be pixel lengths with smoothing >= min_smoothing >= 0, "
-            f"got {smoothing!r} and {min_smoothing!r}"
-        )
-    if not (np.isfinite(min_area) and min_area >= 0):
-        raise ValueError(f"min_area must be a number of square pixels >= 0, got {min_area!r}")
     shape = model.shape
     # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
     # exactly: resampling it would cut its corners and move it off its minimum

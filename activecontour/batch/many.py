@@ -10,7 +10,6 @@ path); an exception raised by one image is reported in that image's record and t
 from __future__ import annotations
 
 import functools
-import inspect
 import os
 from collections.abc import Iterable, Sized
 from dataclasses import dataclass
@@ -20,6 +19,7 @@ import numpy as np
 from activecontour._segment import segment
 from activecontour.batch.pool import map_unordered
 from activecontour.result import SegmentationResult
+from activecontour.settings import Settings
 
 __all__ = ["BatchResult", "segment_many"]
 
@@ -88,10 +88,10 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
     Raises
     ------
     TypeError
-        For ``images`` given as one string or path (not an iterable of them), an unknown keyword or
-        ``callback`` (before any work starts).
+        For ``images`` given as one string or path (not an iterable of them), an unknown keyword,
+        a keyword of the wrong type or ``callback`` (before any work starts).
     ValueError
-        For a bad ``jobs`` or ``context``.
+        For a bad ``jobs`` or ``context``, or a keyword out of range (before any work starts).
 
     Examples
     --------
@@ -114,12 +114,13 @@ def segment_many(images, init=None, *, jobs=None, context=None, **segment_kwargs
 
 
 def _segment_task(init, segment_kwargs):
-    """The picklable one-image task, after checking the keywords against segment()'s signature."""
+    """The picklable one-image task, after checking the keywords as settings
+    (:meth:`activecontour.settings.Settings.of`): a bad one is refused before any work."""
     if "callback" in segment_kwargs:
         raise TypeError("callback is not accepted for a batch: the images are segmented in other "
                         "processes (iterate over the results to follow progress)")
     try:
-        inspect.signature(segment).bind(None, init, **segment_kwargs)
+        Settings.of(segment_kwargs)
     except TypeError as exc:
         raise TypeError(f"segment_many/segment_dask: {exc}") from None
     return functools.partial(segment, init=init, **segment_kwargs)  # segment() reads a path itself

@@ -10,16 +10,11 @@ import numpy as np
 
 __all__ = [
     "CHANNEL_COUNTS",
-    "NORMALIZATIONS",
     "channels_last",
     "intensity_scale",
     "normalize_image",
     "single_image",
 ]
-
-_COLOR_MODES = ("gray", "vector")
-#: The choices of ``normalize``: the image's own range (default), its dtype's range, or as given.
-NORMALIZATIONS = ("range", "dtype", None)
 
 
 def channels_last(image):
@@ -55,12 +50,11 @@ def single_image(image, channel_axis=None):
     ----------
     image : ndarray
     channel_axis : int or None
-        The axis holding the channels (1-4 entries) of a 3-D array; None: the rule above.
+        The axis holding the channels (1-4 entries) of a 3-D array; None: the rule above.  (An
+        integer or None: :class:`activecontour.settings.Settings` checks that.)
     """
     image = np.asarray(image)
     if channel_axis is not None:
-        if isinstance(channel_axis, bool) or not isinstance(channel_axis, (int, np.integer)):
-            raise TypeError(f"channel_axis must be an integer axis or None, got {channel_axis!r}")
         if image.ndim != 3 or not -3 <= channel_axis < 3 or image.shape[channel_axis] not in CHANNEL_COUNTS:
             raise ValueError(f"channel_axis={channel_axis} must name an axis of 1-4 channels of a 3-D "
                              f"image, got shape {image.shape}")
@@ -119,13 +113,10 @@ def normalize_image(image, *, color="gray", normalize="range"):
     TypeError
         For a dtype that is not bool, integer or float.
     ValueError
-        For a wrong shape or number of channels, an image smaller than 2 x 2, NaN or infinite
-        values, or an unknown ``color`` or ``normalize``.
+        For a wrong shape or number of channels, an image smaller than 2 x 2, or NaN or infinite
+        values.  (``color`` and ``normalize`` are among :data:`activecontour.settings.COLOR_MODES`
+        and :data:`~activecontour.settings.NORMALIZATIONS`: checked there.)
     """
-    if color not in _COLOR_MODES:
-        raise ValueError(f"color must be one of {_COLOR_MODES}, got {color!r}")
-    if normalize not in NORMALIZATIONS:
-        raise ValueError(f"normalize must be one of {NORMALIZATIONS}, got {normalize!r}")
     image = np.asarray(image)
     if not (image.dtype == bool or np.issubdtype(image.dtype, np.integer)
             or np.issubdtype(image.dtype, np.floating)):
@@ -165,8 +156,6 @@ def intensity_scale(image, normalize="range"):
     the same channels (an alpha channel is not an intensity), to report region constants in the
     input's own units (the luminance weights sum to 1, so it holds for gray from colour too).
     """
-    if normalize not in NORMALIZATIONS:
-        raise ValueError(f"normalize must be one of {NORMALIZATIONS}, got {normalize!r}")
     image = np.asarray(image)
     return _affine(_intensity_channels(image), image.dtype, normalize)
 

@@ -36,8 +36,15 @@ ROI_INIT_MARGIN = 0.25
 ROI_INIT_MIN_MARGIN = 4.0
 
 
-def resolve_roi(roi, shape, init=None):
+def resolve_roi(roi, shape):
     """The crop box and the domain mask inside it (None for a box) of a ``roi`` argument.
+
+    Parameters
+    ----------
+    roi : bool ndarray (M, N) or (r0, c0, r1, c1)
+        A mask or a box (of the kinds :class:`activecontour.settings.Settings` admits; ``"init"``
+        is a mask by then, :func:`init_neighbourhood`).
+    shape : tuple (M, N)
 
     Returns
     -------
@@ -45,10 +52,6 @@ def resolve_roi(roi, shape, init=None):
     domain : bool ndarray (r1 - r0, c1 - c0) or None
     """
     m, n = shape
-    if isinstance(roi, str):
-        if roi != "init":
-            raise ValueError(f"roi must be None, 'init', a bool mask or a box (r0, c0, r1, c1), got {roi!r}")
-        return resolve_roi(init_neighbourhood(init, shape), shape)
     array = np.asarray(roi)
     if array.dtype == bool:
         if array.shape != (m, n):
@@ -59,8 +62,6 @@ def resolve_roi(roi, shape, init=None):
         box = (int(rows[0]), int(cols[0]), int(rows[-1]) + 1, int(cols[-1]) + 1)
         domain = array[box[0]:box[2], box[1]:box[3]]
         return box, (None if domain.all() else domain)
-    if array.shape != (4,) or not np.issubdtype(array.dtype, np.number):
-        raise ValueError(f"roi must be None, 'init', a bool mask or a box (r0, c0, r1, c1), got {roi!r}")
     r0, c0, r1, c1 = (int(v) for v in np.clip(array, 0, [m, n, m, n]))
     if r1 - r0 < 2 or c1 - c0 < 2:
         raise ValueError(f"roi box {tuple(array.tolist())} leaves less than 2 x 2 pixels of the "

@@ -14,10 +14,7 @@ poisson     ``noise="poisson"``: the fit term of photon counts, with uniform or 
 from activecontour.models.base import QuadraticForm
 from activecontour.models.two_region import ChanVeseParameters
 
-__all__ = ["NOISES", "ChanVeseParameters", "QuadraticForm", "noise_model"]
-
-#: The noise models of the fit term (``noise``): (6.38)'s squared error, or photon counts.
-NOISES = ("gaussian", "poisson")
+__all__ = ["ChanVeseParameters", "QuadraticForm", "noise_model"]
 
 
 def noise_model(noise):
@@ -25,17 +22,16 @@ def noise_model(noise):
     None: uniform) and its light update ``fit(values, classes, constants, params, previous)
     -> (light, drop)``.
 
-    Raises
-    ------
-    ValueError
-        For a name not in :data:`NOISES`.
+    Parameters
+    ----------
+    noise : str
+        One of :data:`activecontour.settings.NOISES` (checked there): ``"gaussian"``, (6.38)'s
+        squared error, or ``"poisson"``, the likelihood of photon counts.
     """
-    if isinstance(noise, str) and noise == "poisson":
+    if noise == "poisson":
         from activecontour.models.poisson import fit_poisson_light, poisson_model
 
         return poisson_model, fit_poisson_light
-    if isinstance(noise, str) and noise == "gaussian":
-        from activecontour.models.smooth import fit_light, smooth_light_model
+    from activecontour.models.smooth import fit_light, smooth_light_model
 
-        return smooth_light_model, fit_light
-    raise ValueError(f"noise must be one of {NOISES}, got {noise!r}")
+    return smooth_light_model, fit_light

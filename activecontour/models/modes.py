@@ -88,7 +88,7 @@ _PROMINENCE = 0.5  # a mode's rise above its saddle, over its height
 _SIGNIFICANCE = 3.0  # ... and over the standard deviation of the counts' noise
 
 
-def choose_regions(values, mu="auto", *, max_regions=MAX_REGIONS):
+def choose_regions(values, floor, mu=None, *, max_regions=MAX_REGIONS):
     """``n_regions="auto"`` of :func:`activecontour.segment`: :func:`count_regions` at the noise
     level the length weight assumes.
 
@@ -96,27 +96,25 @@ def choose_regions(values, mu="auto", *, max_regions=MAX_REGIONS):
     sigma is ``sqrt(mu / MU_PER_NOISE_VARIANCE)`` for the larger of ``mu`` and
     :func:`~activecontour.imaging.noise.auto_mu`'s (the image's noise, at least
     ``sqrt(MU_FLOOR / MU_PER_NOISE_VARIANCE)`` = 0.03 of its range): regions are told apart at the
-    resolution the functional resolves.
+    resolution the functional resolves.  :class:`activecontour.problem.Problem` gives the three.
 
     Parameters
     ----------
     values : ndarray (M, N, C)
-        Normalised intensities (:func:`activecontour.imaging.normalize.normalize_image`).
-    mu : float or "auto"
-        The length weight of the run, in the units of ``values``.
+        Normalised intensities in the working frame.
+    floor : float
+        :func:`~activecontour.imaging.noise.auto_mu` of ``values``.
+    mu : float, optional
+        The length weight of the run, in the working frame; None: ``mu="auto"``.
     max_regions : int
 
     Returns
     -------
     int
     """
-    from activecontour.imaging.frame import to_frame, working_frame
-    from activecontour.imaging.noise import MU_PER_NOISE_VARIANCE, auto_mu, is_auto
+    from activecontour.imaging.noise import MU_PER_NOISE_VARIANCE
 
-    offset, scale = working_frame(values)
-    values = to_frame(values, offset, scale)
-    floor = auto_mu(values)
-    mu = floor if is_auto(mu) else max(floor, mu / scale**2)
+    mu = floor if mu is None else max(floor, mu)
     return count_regions(values, np.sqrt(mu / MU_PER_NOISE_VARIANCE), max_regions=max_regions)
 
 

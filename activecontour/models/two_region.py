@@ -37,7 +37,9 @@ class ChanVeseParameters:
     ``c_in``/``c_out`` of None are updated by (6.42) at every evaluation; a number (or one per
     channel) holds them fixed, as the book allows when the intensities are known.
     ``lambda_in``/``lambda_out`` are numbers or, for a vector-valued image, one weight per channel
-    (Chan, Sandberg and Vese 2000).
+    (Chan, Sandberg and Vese 2000).  Their rules are :class:`activecontour.settings.Settings`'
+    (the values of :func:`activecontour.segment` are checked there, once); weights per channel
+    and fixed constants are held as arrays.
     """
 
     mu: float = 0.2
@@ -48,30 +50,14 @@ class ChanVeseParameters:
     c_out: object = None
 
     def __post_init__(self):
-        for name in ("mu", "omega", "lambda_in", "lambda_out"):
+        for name in ("lambda_in", "lambda_out"):
             value = getattr(self, name)
-            if name.startswith("lambda") and isinstance(value, (list, tuple, np.ndarray)):
-                value = np.asarray(value, dtype=np.float64)
-                if value.ndim != 1 or value.size == 0:
-                    raise ValueError(f"{name} must be a number or one number per channel")
-                object.__setattr__(self, name, value)
-            elif isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-                raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-            if not np.all(np.isfinite(value)):
-                raise ValueError(f"{name} must be finite, got {value}")
-        if self.mu < 0:
-            raise ValueError(f"mu must be >= 0 (length weight), got {self.mu}")
-        if np.any(self.lambda_in <= 0) or np.any(self.lambda_out <= 0):
-            raise ValueError(
-                f"lambda_in and lambda_out must be > 0, got {self.lambda_in}, {self.lambda_out}"
-            )
+            if isinstance(value, (list, tuple, np.ndarray)):
+                object.__setattr__(self, name, np.asarray(value, dtype=np.float64))
         for name in ("c_in", "c_out"):
             value = getattr(self, name)
             if value is not None:
-                arr = np.atleast_1d(np.asarray(value, dtype=np.float64))
-                if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-                    raise ValueError(f"{name} must be None, a finite number or one per channel")
-                object.__setattr__(self, name, arr)
+                object.__setattr__(self, name, np.atleast_1d(np.asarray(value, dtype=np.float64)))
 
     def weights(self, n_channels):
         """(lambda_in, lambda_out) per channel, divided by the number of channels.

@@ -6,7 +6,8 @@ Frame 0 starts from ``init``.  Frame t starts
 from frame t-1's contours plus the pieces of its threshold split (the default start's, with frame
 t-1's constants) that frame t-1's inside does not touch, so that objects entering the field or
 appearing are found too; or, where that is lower in (6.38), from the threshold split alone (objects
-that moved further than the flow travels in a few iterations): see :func:`_warm_start`.
+that moved further than the flow travels in a few iterations): see
+:func:`~activecontour.sequence.warm._warm_start`.
 
 Objects keep their identity: each frame's objects (``result.labels``, touching objects apart) are
 matched to the previous frame's by overlap (intersection over union, Hungarian assignment by
@@ -23,6 +24,7 @@ yields (the label stack optionally streamed to a TIFF file).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass, field
 
@@ -30,7 +32,8 @@ import numpy as np
 
 from activecontour.io.stacks import read_frames
 from activecontour.sequence.tracking import _concatenate, _Tracker
-from activecontour.sequence.warm import _warm_kwargs, _warm_start
+from activecontour.sequence.warm import _warm_settings, _warm_start
+from activecontour.settings import Settings
 
 __all__ = ["SequenceFrame", "SequenceResult", "iter_sequence", "segment_sequence"]
 
@@ -185,23 +188,23 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
 
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
+    settings = Settings.of(segment_kwargs)
     source, n_frames = read_frames(frames, axis=axis, select=select)
     tracker = _Tracker()
-    previous = None
-    warm_kwargs = _warm_kwargs(segment_kwargs)
+    previous = warm = None
     for position, (index, image) in enumerate(source):
         if previous is None:
-            result = segment(image, init, **segment_kwargs)
+            result = segment(image, init, **settings.keywords())
             # n_regions="auto" chooses K on the first frame; every frame keeps it (a class means
             # the same region in every frame)
-            segment_kwargs = {**segment_kwargs, "n_regions": result.n_regions}
-            warm_kwargs = _warm_kwargs(segment_kwargs)
+            settings = dataclasses.replace(settings, n_regions=result.n_regions)
+            warm = _warm_settings(settings)
         elif previous.n_regions > 2:  # K regions: the previous frame's classes are the start
-            result = segment(image, previous, **segment_kwargs)
+            result = segment(image, previous, **settings.keywords())
         else:
-            start = _warm_start(previous, image, segment_kwargs)
-            result = segment(image, start, **(segment_kwargs if start is None else warm_kwargs))
-        parents = tracker.update(result)
+            start = _warm_start(previous, image, settings)
+            result = segment(image, start, **(settings if start is None else warm).keywords())
+        result, parents = tracker.update(result)
         frame = SequenceFrame(index, position, n_frames, image, result, parents)
         previous = result
         yield frame

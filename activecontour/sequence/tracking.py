@@ -6,6 +6,8 @@ a split (a dividing cell) ends the parent's track and records it in napari's Tra
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 #: Smallest intersection over union for two objects of consecutive frames to be one object.
@@ -23,15 +25,16 @@ class _Tracker:
         self.next_id = 1
 
     def update(self, result):
-        """Relabel ``result.labels``/``objects`` with track ids; return {child: [parent]}."""
+        """The result with ``labels``/``objects`` in track ids (a new result), and {child: [parent]}."""
         labels = result.labels
         count = int(labels.max(initial=0))
         ids, parents = self._assign(labels, count)
         lookup = np.concatenate([[0], ids]).astype(np.int32)
-        result.labels = lookup[labels]
-        result.objects = dict(result.objects, label=ids[np.asarray(result.objects["label"]) - 1])
+        track_ids = ids[np.asarray(result.objects["label"]) - 1]
+        result = dataclasses.replace(result, labels=lookup[labels],
+                                     objects=dict(result.objects, label=track_ids))
         self.previous = result.labels
-        return parents
+        return result, parents
 
     def _assign(self, labels, count):
         ids = np.zeros(count, dtype=np.int64)

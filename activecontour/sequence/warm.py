@@ -1,30 +1,31 @@
 """Warm starts: frame t started from frame t-1's result plus what its threshold split adds.
 
-See :func:`_warm_start` for the rule; the defaults it reads are :func:`activecontour.segment`'s.
+See :func:`_warm_start` for the rule; the settings are :class:`activecontour.settings.Settings`
+and the frame is prepared as :func:`activecontour.segment` prepares it
+(:func:`activecontour.problem.prepare`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 
-def _warm_kwargs(segment_kwargs):
-    """The keywords of a warm frame: the polygon flow starts at its finest smoothing length (the
+def _warm_settings(settings):
+    """The settings of a warm frame: the polygon flow starts at its finest smoothing length (the
     contours already lie on the boundaries: nothing to move as a whole) and does not search for
     new components by nucleation (the threshold split's new pieces are in the start already).
     Both only save iterations; options the caller gives win."""
-    if segment_kwargs.get("backend", "polygon") != "polygon" or segment_kwargs.get("n_regions", 2) != 2:
-        return segment_kwargs
-    from activecontour.backends.polygon import PolygonOptions
-
-    given = dict(segment_kwargs.get("options") or {})
-    finest = given.get("min_smoothing", PolygonOptions().min_smoothing)
-    return {**segment_kwargs, "options": {"smoothing": finest, "nucleate": False, **given}}
+    if settings.solver.name != "polygon":
+        return settings
+    finest = settings.backend_options.min_smoothing
+    return dataclasses.replace(settings, options={"smoothing": finest, "nucleate": False,
+                                                  **(settings.options or {})})
 
 
-def _warm_start(previous, image, segment_kwargs):
+def _warm_start(previous, image, settings):
     """The start of a frame after the first: the lower in (6.38), on this frame, of
 
     * the previous frame's contours plus the new pieces of this frame's threshold split (objects
@@ -44,16 +45,17 @@ def _warm_start(previous, image, segment_kwargs):
     from activecontour.energy import evaluate
     from activecontour.geometry.curve import stack_curves
     from activecontour.geometry.raster import mask_to_curves
-    from activecontour.imaging.normalize import intensity_scale, normalize_image
-    from activecontour.imaging.tables import ImageModel
     from activecontour.initial import DEFAULT_INIT_BLUR, speck_area
-    from activecontour.models import ChanVeseParameters
+    from activecontour.problem import prepare
 
     if not previous.contours:
         return None  # nothing to follow: the default start, as at frame 0
-    normalize = segment_kwargs.get("normalize", "range")
-    values = normalize_image(image, color=segment_kwargs.get("color", "gray"), normalize=normalize)
-    offset, scale = intensity_scale(image, normalize)
+    # the starts are scored by (6.38) itself (squared error, free constants) with the previous
+    # frame's mu
+    problem = prepare(image, dataclasses.replace(settings, mu=previous.mu, c_in=None, c_out=None,
+                                                 noise="gaussian"))
+    values = problem.normalised
+    offset, scale = problem.units
     c_in = (np.atleast_1d(previous.c_in_image) - offset) / scale
     c_out = (np.atleast_1d(previous.c_out_image) - offset) / scale
     difference = c_in - c_out
@@ -69,9 +71,7 @@ def _warm_start(previous, image, segment_kwargs):
     speck = speck_area(previous.mu, float(np.mean(difference**2)))
     new = mask_to_curves(candidate & ~followed[pieces], min_area=speck)
     starts = [list(previous.contours) + new, mask_to_curves(candidate, min_area=speck)]
-    model = ImageModel(values)
-    params = ChanVeseParameters(previous.mu, segment_kwargs.get("omega", 0.0),
-                                segment_kwargs.get("lambda_in", 1.0), segment_kwargs.get("lambda_out", 1.0))
+    model, params = problem.model()
     energies = [evaluate(model, *stack_curves(curves)[:2], params).energy if curves else np.inf
                 for curves in starts]
     curves = starts[int(np.argmin(energies))]

@@ -16,10 +16,10 @@ IMAGE[10:30, 15:35] = 1.0
     "image, kwargs, error, match",
     [
         (IMAGE, {"backend": "snake"}, ValueError, r"backend must be one of \('polygon', 'levelset'\)"),
-        (IMAGE, {"mu": -1.0}, ValueError, "mu must be >= 0"),
-        (IMAGE, {"lambda_out": 0}, ValueError, "lambda_in and lambda_out must be > 0"),
+        (IMAGE, {"mu": -1.0}, ValueError, "mu must be a finite number >= 0 or 'auto'"),
+        (IMAGE, {"lambda_out": 0}, ValueError, "lambda_out must be a finite number > 0"),
         (IMAGE, {"max_num_iter": 2.5}, TypeError, "max_num_iter must be an integer"),
-        (IMAGE, {"max_num_iter": -1}, ValueError, "max_num_iter must be >= 0"),
+        (IMAGE, {"max_num_iter": -1}, ValueError, "max_num_iter must be an integer >= 0"),
         (IMAGE, {"tol": -1e-3}, ValueError, "tol must be"),
         (IMAGE, {"callback": 3}, TypeError, "callback must be callable"),
         (IMAGE, {"options": {"velocity": "h2"}}, ValueError, r"velocity must be one of \('h1', 'l2'\)"),

@@ -32,11 +32,12 @@ import skimage.measure
 
 import activecontour as ac
 from activecontour import io, synthetic
-from activecontour.geometry.curve import signed_area
+from activecontour.geometry.curve import length, signed_area
 from activecontour.geometry.raster import rasterize
 from activecontour.imaging.normalize import normalize_image
 from activecontour.result import STATUS_MESSAGES
 from app import cli
+from app.cli.outputs import Directories
 
 SHAPE = (48, 64)
 CENTER, RADIUS = (23.0, 33.5), 13.0
@@ -108,7 +109,8 @@ API_USABLE = {
                                         evaluator={"color": "vector"}),
     "RGBA": lambda: usable(np.dstack([IMAGE, IMAGE, IMAGE, np.ones(SHAPE)])),
     "gray + alpha (M, N, 2)": lambda: usable(np.dstack([IMAGE, np.ones(SHAPE)])),
-    "channel-first (3, M, N) with channel_axis=0": lambda: usable(np.stack([IMAGE] * 3, 0), channel_axis=0),
+    "channel-first (3, M, N) with channel_axis=0": lambda: usable(np.stack([IMAGE] * 3, 0), channel_axis=0,
+                                                                  evaluator={"channel_axis": 0}),
     "Fortran-ordered, strided view": lambda: usable(np.asfortranarray(np.repeat(IMAGE, 2, 1))[:, ::2]),
     "rectangle partly outside the image": lambda: usable(IMAGE, ac.rectangle((-20, -20), (40, 50))),
     "two disjoint circles": lambda: usable(IMAGE, [ac.circle((10, 10), 5), ac.circle((23, 33), 8)]),
@@ -170,7 +172,7 @@ def _tiny_spacing_is_refused_or_bounded():
     densities = []
 
     def vertices_per_pixel(state):
-        length = sum(ac.curve.length(c) for c in state.contours)
+        length = sum(length(c) for c in state.contours)
         densities.append(sum(len(c) for c in state.contours) / max(length, 1.0))
 
     try:
@@ -206,7 +208,7 @@ API_REFUSED = {
     "channel_axis on a 2-D image": (lambda: ac.segment(IMAGE, channel_axis=0), ValueError, "channel_axis"),
     "complex image": (lambda: ac.segment(IMAGE.astype(complex)), TypeError, "dtype"),
     "unknown backend": (lambda: ac.segment(IMAGE, backend="snake"), ValueError, "polygon"),
-    "negative mu": (lambda: ac.segment(IMAGE, mu=-1.0), ValueError, "mu must be >= 0"),
+    "negative mu": (lambda: ac.segment(IMAGE, mu=-1.0), ValueError, "mu must be a finite number >= 0"),
     "fractional max_num_iter": (lambda: ac.segment(IMAGE, max_num_iter=1.5), TypeError, "max_num_iter"),
     "NaN tol": (lambda: ac.segment(IMAGE, tol=float("nan")), ValueError, "tol"),
     "init of shape (K, 3)": (lambda: ac.segment(IMAGE, np.zeros((5, 3))), ValueError, r"\(K, 2\)"),
@@ -572,9 +574,9 @@ def test_two_runs_creating_the_same_output_folder_do_not_race(tmp_path, monkeypa
         raise FileExistsError(17, "File exists", str(path))
 
     monkeypatch.setattr(os, "mkdir", other_run_first)
-    created = []
-    cli._make_directory(target, created)  # before: "cannot create ... File exists"
-    assert target.is_dir() and created == []  # made by the other run: not ours to remove
+    directories = Directories()
+    directories.make(target)  # before: "cannot create ... File exists"
+    assert target.is_dir() and directories.created == []  # made by the other run: not ours to remove
 
 
 def test_a_gray_and_alpha_image_reports_c_in_in_the_gray_units():

@@ -1,4 +1,4 @@
-"""README's Python examples run as written, in order, and do what their comments say."""
+"""README's and the docs pages' Python examples run as written, in order, and do what their comments say."""
 
 import re
 from pathlib import Path
@@ -9,10 +9,21 @@ import pytest
 from activecontour import synthetic
 
 README = Path(__file__).resolve().parents[2] / "README.md"
+#: The pages README links, in the order a reader meets them.
+PAGES = [README] + [README.parent / "docs" / f"{name}.md" for name in (
+    "python", "command-line", "formats", "objects", "many-images", "sequences", "scikit-image", "method",
+    "performance")]
 
 
 def python_blocks():
-    return re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
+    """Every ```python block of README and its pages, in reading order."""
+    return [block for page in PAGES
+            for block in re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S)]
+
+
+def test_every_page_readme_links_exists_and_is_listed_here():
+    linked = re.findall(r"\]\((docs/[^)#]+\.md)\)", README.read_text())
+    assert sorted(README.parent / link for link in linked if "gallery" not in link) == sorted(PAGES[1:])
 
 
 def run_blocks(*codes, namespace=None):
@@ -23,7 +34,8 @@ def run_blocks(*codes, namespace=None):
 
 
 def test_readme_python_examples_run(tmp_path, monkeypatch):
-    segmenting, saving = python_blocks()[:2]
+    (segmenting,) = [code for code in python_blocks() if "synthetic.add_noise(image, 0.25" in code]
+    (saving,) = [code for code in python_blocks() if "io.save_result(res, image, \"out/disk\")" in code]
     monkeypatch.chdir(tmp_path)
     namespace = run_blocks(segmenting)
     assert synthetic.dice(namespace["res"].mask, namespace["truth"]) >= 0.98  # README says ~0.99
@@ -57,7 +69,7 @@ def test_readme_summary_line_is_what_the_first_command_prints(tmp_path, monkeypa
 
     text = README.read_text()
     (command,) = re.findall(r"&& (activecontour segment \S+ -o \S+)\n", text)
-    (line,) = [ln for ln in re.findall(r"```text\n(.*?)```", text, flags=re.S)[1].splitlines() if ln]
+    (line,) = [ln for ln in re.findall(r"```text\n(.*?)```", text, flags=re.S)[0].splitlines() if ln]
     (tmp_path / "sample_images").mkdir()
     shutil.copy(README.parent / "sample_images" / "disk_noisy.png", tmp_path / "sample_images")
     monkeypatch.chdir(tmp_path)
@@ -70,7 +82,7 @@ def test_readme_summary_line_is_what_the_first_command_prints(tmp_path, monkeypa
 
 def test_the_gallery_page_shows_figures_the_script_wrote():
     docs = README.parent / "docs"
-    assert "docs/gallery.md" in README.read_text()
+    assert "docs/gallery.md" in README.read_text() and "docs/gallery/" in README.read_text()
     page = (docs / "gallery.md").read_text()
     figures = re.findall(r"!\[[^\]]*\]\((gallery/[^)]+\.png)\)", page)
     assert len(figures) >= 10 and all((docs / figure).is_file() for figure in figures)

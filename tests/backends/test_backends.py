@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 
 import activecontour as ac
-from activecontour.backends import BACKENDS
+from activecontour.backends import BACKENDS, SOLVERS
 from activecontour.backends import levelset as levelset_package
-from activecontour.backends.levelset import driver
 from activecontour.backends.options import option
 from activecontour.geometry.curve import edge_lengths
 from app import cli
@@ -56,12 +55,19 @@ def _with_default(options_class, name, default):
                                       bases=(options_class,), frozen=True)
 
 
+def _change_default(monkeypatch, backend, name, default):
+    """The registry's record of ``backend`` with one default of its options changed."""
+    record = BACKENDS[backend]
+    changed = dataclasses.replace(record, options=_with_default(record.options, name, default))
+    monkeypatch.setitem(SOLVERS, record.name, changed)
+
+
 def test_levelset_reads_its_defaults_from_the_dataclass(monkeypatch):
     # phi is clipped to +-band: the default band is what the backend uses
     image = _disk_image()
     result = ac.segment(image, backend="levelset", max_num_iter=3)
     assert np.max(np.abs(result.phi)) == levelset_package.LevelSetOptions().band
-    monkeypatch.setattr(driver, "LevelSetOptions", _with_default(driver.LevelSetOptions, "band", 6.0))
+    _change_default(monkeypatch, "levelset", "band", 6.0)
     result = ac.segment(image, backend="levelset", max_num_iter=3)
     assert np.max(np.abs(result.phi)) == 6.0
 
@@ -69,8 +75,6 @@ def test_levelset_reads_its_defaults_from_the_dataclass(monkeypatch):
 def test_polygon_reads_its_defaults_from_the_dataclass(monkeypatch):
     # the vertices of the result are about `spacing` apart (remeshed to it): a changed default
     # spacing moves them apart without any option given
-    from activecontour.backends import polygon as flow
-
     image = _disk_image()
     init = ac.circle((32.0, 32.0), 20.0, 400)
 
@@ -79,7 +83,7 @@ def test_polygon_reads_its_defaults_from_the_dataclass(monkeypatch):
         return np.mean(np.concatenate([edge_lengths(c) for c in result.contours]))
 
     assert 0.5 < mean_edge() < 2.0  # the default, 1 px
-    monkeypatch.setattr(flow, "PolygonOptions", _with_default(flow.PolygonOptions, "spacing", 4.0))
+    _change_default(monkeypatch, "polygon", "spacing", 4.0)
     assert 2.0 < mean_edge() < 8.0
 
 

@@ -16,7 +16,7 @@ import scipy.ndimage
 
 import activecontour as ac
 from activecontour import synthetic as sy
-from activecontour.geometry.raster import mask_to_curves
+from activecontour.geometry.raster import mask_to_curves, rasterize
 
 BACKENDS = ("levelset", "polygon")
 DEFAULT_TOL = inspect.signature(ac.segment).parameters["tol"].default
@@ -62,7 +62,7 @@ def test_noise_pixel_is_removed(backend):
     image = reference.astype(float)
     image[8, 3] = 1.0
     start = ac.circle((4.5, 4.5), 4.6)  # around the square and the noise pixel
-    assert ac.raster.rasterize([start], image.shape)[8, 3]
+    assert rasterize([start], image.shape)[8, 3]
     result = ac.segment(image, start, backend=backend, mu=0.3)
     assert result.success
     np.testing.assert_array_equal(result.mask, reference)

@@ -12,7 +12,7 @@ from shapely.geometry import MultiPolygon, Polygon, shape
 
 import activecontour as ac
 from activecontour import io
-from activecontour.geometry.curve import to_xy
+from activecontour.geometry.curve import signed_area, to_xy
 
 
 @pytest.fixture(scope="module", params=["polygon", "levelset"])
@@ -39,10 +39,10 @@ def svg_geometry(path):
 def nested_geometry(curves):
     """(row, col) curves as one shapely MultiPolygon in (x, y): each hole (negative signed area)
     with the smallest outer boundary that contains it."""
-    outers = [Polygon(to_xy(c)) for c in curves if ac.curve.signed_area(c) > 0]
+    outers = [Polygon(to_xy(c)) for c in curves if signed_area(c) > 0]
     holes = {i: [] for i in range(len(outers))}
     for c in curves:
-        if ac.curve.signed_area(c) < 0:
+        if signed_area(c) < 0:
             ring = Polygon(to_xy(c))
             owner = min((i for i, o in enumerate(outers) if o.contains(ring.representative_point())),
                         key=lambda i: outers[i].area)

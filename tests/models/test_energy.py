@@ -146,21 +146,6 @@ def test_energy_is_infinite_without_inside_or_outside():
 
 
 @pytest.mark.parametrize(
-    "kwargs, error, match",
-    [
-        ({"mu": -1.0}, ValueError, "mu must be >= 0"),
-        ({"lambda_in": 0.0}, ValueError, "lambda_in and lambda_out must be > 0"),
-        ({"omega": np.nan}, ValueError, "omega must be finite"),
-        ({"mu": "big"}, TypeError, "mu must be a number"),
-        ({"c_in": [np.nan]}, ValueError, "c_in must be"),
-    ],
-)
-def test_parameters_are_validated(kwargs, error, match):
-    with pytest.raises(error, match=match):
-        ChanVeseParameters(**kwargs)
-
-
-@pytest.mark.parametrize(
     "vertex",
     [(-100.0, -100.0), (5.0, 1e10), (1e200, 1e200), (-0.6, 10.0), (10.0, 39.5 + 1e-6)],
 )

@@ -9,31 +9,8 @@ import numpy as np
 from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
 from activecontour.backends.levelset.scheme import _Problem, _swept_area
 from activecontour.backends.levelset.zeroset import level_set_contours
-from activecontour.backends.options import option, parse_options
+from activecontour.backends.options import LevelSetOptions
 from activecontour.result import FlowState, build_result
-
-
-@dataclasses.dataclass(frozen=True)
-class LevelSetOptions:
-    """The options of the level-set backend (``segment(..., options={...})``): each field's doc is
-    its ``help`` (:func:`activecontour.backends.options.option_specs`)."""
-
-    dt: float = option(16.0, (
-        "First step, pixels of travel at the typical force, at most half the width of the start's "
-        "regions (but not below dt_min)."), slider=("first step (px)", 1.0, 64.0))
-    dt_min: float = option(1.0, (
-        "Below this ceiling the smoothed-force stages end and the unsmoothed stage runs, with steps "
-        "up to dt_min and the force within the band only (no single pixel far from Gamma flips)."))
-    dt_max: float = option(64.0, (
-        "Largest step (pixels), the ceiling of the first stage.  A dt outside [dt_min, dt_max] "
-        "widens the defaults; bounds given explicitly must satisfy dt_min <= dt <= dt_max."))
-    band: float = option(4.0, (
-        "Narrow band: phi is the signed distance up to band pixels from Gamma and is clipped to "
-        "+-band beyond.  At least 2."))
-    checkerboard_period: float = option(16.0, "Side (pixels) of the squares of the 'checkerboard' start.")
-    max_backtracks: int = option(3, (
-        "Halvings of the step of the final stage before an iteration counts as stationary."))
-
 
 #: The options' defaults as a dict (the settings :class:`_Problem` reads).
 DEFAULT_OPTIONS = dataclasses.asdict(LevelSetOptions())
@@ -44,43 +21,17 @@ _SETTLED = 0.02  # a smoothed-force stage has settled when Gamma moves < 2% of t
 _RECHECKS = 2  # smoothed steps tried after the unsmoothed stage ends (see segment_levelset)
 
 
-def _parse_options(options):
-    settings = dataclasses.asdict(parse_options(LevelSetOptions, "levelset", options))
-    for name in ("dt", "dt_min", "dt_max", "band", "checkerboard_period"):
-        value = settings[name]
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"option {name!r} must be a positive finite number, got {value!r}")
-        settings[name] = float(value)
-    value = settings["max_backtracks"]
-    if value < 0:
-        raise ValueError(f"option 'max_backtracks' must be an integer >= 0, got {value!r}")
-    settings["max_backtracks"] = int(value)
-    # a first step outside the default range widens it (a viewer's step slider, say); only
-    # bounds given explicitly must hold
-    if "dt_min" not in options:
-        settings["dt_min"] = min(settings["dt_min"], settings["dt"])
-    if "dt_max" not in options:
-        settings["dt_max"] = max(settings["dt_max"], settings["dt"])
-    if not settings["dt_min"] <= settings["dt"] <= settings["dt_max"]:
-        raise ValueError(
-            f"options must satisfy dt_min <= dt <= dt_max, got dt_min={settings['dt_min']}, "
-            f"dt={settings['dt']}, dt_max={settings['dt_max']}"
-        )
-    if settings["band"] < 2.0:
-        raise ValueError(f"option 'band' must be at least 2 (pixels), got {settings['band']}")
-    return settings
-
-
 # --------------------------------------------------------------------------------------------
 # The backend
 
 
-def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **options):
+def segment_levelset(model, init, params, *, max_num_iter, tol, callback, options=None):
     """Minimise the Chan-Vese functional (6.38) with a level set over the pixel grid.
 
-    Called by :func:`activecontour.segment` with ``backend="levelset"``; its ``options={...}``
-    are the fields of :class:`LevelSetOptions`.  The scheme, the step schedule and the
-    energy are described in :mod:`activecontour.backends.levelset`.
+    Called by :func:`activecontour.segment` with ``backend="levelset"``, its ``options={...}``
+    read into :class:`LevelSetOptions` (names, types, defaults, ranges and their documentation).
+    The scheme, the step schedule and the energy are described in
+    :mod:`activecontour.backends.levelset`.
 
     Parameters
     ----------
@@ -110,9 +61,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     callback : callable or None
         Called with a :class:`~activecontour.result.FlowState` (contours and ``phi``) after every
         accepted iteration; returning True stops the flow (status 2).
-
-    **options
-        The fields of :class:`LevelSetOptions` (names, types, defaults and their documentation).
+    options : LevelSetOptions, optional
+        None: the defaults.
 
     Returns
     -------
@@ -129,13 +79,13 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
 
     Raises
     ------
-    TypeError
-        For an unknown option (the message lists the valid ones) or an option of the wrong type.
     ValueError
-        For an unknown ``init`` string, a mask of the wrong shape, an init with nothing inside,
-        or an option out of range.  (An init that covers the whole image is a valid start.)
+        For an unknown ``init`` string, a mask of the wrong shape or an init with nothing inside.
+        (An init that covers the whole image is a valid start.)
     """
-    settings = _parse_options(options)
+    options = LevelSetOptions() if options is None else options
+    settings = dataclasses.asdict(options)
+    settings["dt_min"], settings["dt_max"] = options.step_bounds()
     shape = tuple(model.shape)
     if isinstance(init, str) and init == "checkerboard":
         # squares of at most a quarter of the smaller side: a small image gets several of them
@@ -247,7 +197,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, **opti
     result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
                           status=status, backend="levelset", phi=phi)
     if not result.mask.any():  # collapsed, or the empty set is lower: phi says the same
-        result.phi = np.full(shape, -settings["band"], dtype=np.float32)
+        return dataclasses.replace(result, phi=np.full(shape, -settings["band"], dtype=np.float32))
     return result
 
 

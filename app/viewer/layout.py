@@ -1,7 +1,7 @@
 """The viewer's window layout: the image with its curves, the readouts, the controls.
 
 :func:`build_layout` places every artist and widget in figure coordinates and returns them in a
-:class:`Layout`; it connects nothing (:class:`viewer.Viewer` wires the behaviour).  The window::
+:class:`Layout`; it connects nothing (:class:`.window.Viewer` wires the behaviour).  The window::
 
     +------------------------------+  iteration, energy / c_in / c_out / contours
     |                              |  [energy history plot]
@@ -27,9 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from activecontour.backends import BACKENDS
-
-from .viewer_tools import INIT_MODES, TextField
+from .tools import INIT_MODES, TextField
 
 __all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS",
            "Layout", "build_layout", "contour_color", "fit_text", "refit_texts", "set_slider_value",
@@ -52,12 +50,12 @@ SLIDERS = (
     ("lambda_out", "lambda_out", 0.05, 5.0, "linear"),
 )
 
-#: backend -> (option, label, lowest, highest) of the "step" slider, the option its options
-#: dataclass marks with a slider (:meth:`activecontour.backends.Backend.step_slider`): the polygon
-#: flow's largest trial displacement in pixels (``max_step``), the level set's first step (``dt``).
-#: Its starting value is the backend's own default.
-STEP_OPTIONS = {name: backend.step_slider() for name, backend in BACKENDS.items()
-                if backend.step_slider() is not None}
+#: backend -> (option, label, lowest, highest) of the "step" slider: the polygon flow's largest
+#: trial displacement in pixels (``max_step``), the level set's first step (``dt``), options of
+#: the backends' options dataclasses (:data:`activecontour.backends.BACKENDS`).  Its starting
+#: value is the backend's own default.
+STEP_OPTIONS = {"polygon": ("max_step", "step (px)", 0.25, 10.0),
+                "levelset": ("dt", "first step (px)", 1.0, 64.0)}
 
 #: The window's size in inches (at matplotlib's default 100 dpi: 1200 x 740 pixels).
 DEFAULT_SIZE = (12.0, 7.4)
