@@ -32,7 +32,7 @@ Three stages, each a model of how touching objects look, each cheap to skip:
 Cost: an object whose outline lies within :data:`MIN_WAIST_DEPTH` of its convex hull has no
 waist, no neck and no concave corner: it skips stages 1 and 2 after one convex hull of its polygon
 (O(K log K) for K vertices), and stage 3 after a block-averaged look at its intensities
-(:func:`_may_have_contrast`), so an image of convex objects pays almost nothing for the split.
+(:func:`_block_spread`), so an image of convex objects pays almost nothing for the split.
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
 ``res.labels``, ``benchmarks/bench_objects.py``): the corner stage takes the touching-ellipse
@@ -110,7 +110,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     smaller side (:class:`_PartGraph`), merged parts' shapes are added up rather than measured
     again (:class:`_PartShapes`), and the split by contrast and the cut work on each part's box.
     An object without a concavity ``MIN_WAIST_DEPTH`` deep and without a contrast
-    (:func:`_may_have_contrast`) costs one convex hull of its outline.
+    (:func:`_block_spread`) costs one convex hull of its outline and one look at its pixels.
 
     Parameters
     ----------
@@ -128,30 +128,36 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     """
     import scipy.ndimage
 
-    boxes = scipy.ndimage.find_objects(labels, max_label=len(objects))
     if image is not None:
-        from activecontour.imaging.noise import estimate_noise
-
         image = np.asarray(image, dtype=np.float64)
         image = image.mean(axis=2) if image.ndim == 3 else image
         # the least contrast of a split by intensity: a number of noise sigmas, and on a noise-free
-        # image a fraction of its range (shading is not two objects)
-        least = max(CONTRAST_DEPTH * float(estimate_noise(image[:, :, None])[0]),
-                    CONTRAST_FLOOR * float(np.ptp(image)))
+        # image a fraction of its range (shading is not two objects); the noise is estimated
+        # only for an object whose blocks differ by more than that fraction
+        floor = CONTRAST_FLOOR * float(np.ptp(image))
+        least = None
     result = []
-    for k, (curves, box) in enumerate(zip(objects, boxes, strict=True)):
-        if box is None:
+    for k, curves in enumerate(objects):
+        box = _box(curves[0], labels.shape)
+        inside = labels[box] == k + 1 if box is not None else None
+        if inside is None or not inside.any():
             result.append(curves)
             continue
         concave = _hull_depth(curves[0]).max() >= MIN_WAIST_DEPTH
-        contrast = image is not None and _may_have_contrast(labels[box] == k + 1, image[box], least,
-                                                            min_radius)
+        contrast = False
+        if image is not None:
+            spread = _block_spread(inside, image[box], min_radius)
+            if spread > floor and least is None:
+                from activecontour.imaging.noise import estimate_noise
+
+                least = max(CONTRAST_DEPTH * float(estimate_noise(image[:, :, None])[0]), floor)
+            contrast = spread > floor and spread > least
         if not concave and not contrast:
             result.append(curves)
             continue
         low = np.array([box[0].start - 1, box[1].start - 1])
         # the outline's shape decides (holes filled): the rim around a hole is no neck
-        window = np.pad(scipy.ndimage.binary_fill_holes(labels[box] == k + 1), 1)
+        window = np.pad(scipy.ndimage.binary_fill_holes(inside), 1)
         parts = window.astype(np.int32)
         if concave:
             concavity = _concavity(window, curves[0] - low)
@@ -286,24 +292,30 @@ def _without_small(mask, area):
     return (np.bincount(pieces.ravel(), minlength=count + 1) >= area)[pieces] & mask
 
 
-def _may_have_contrast(mask, values, least, min_radius):
-    """Whether an object (a bool mask and the image under its box) may hold a split by contrast:
-    the means of the square blocks wholly inside it differ by more than ``least``.
+def _box(outline, shape):
+    """The pixels whose centres the outer boundary may enclose: a pair of slices, or None."""
+    low = np.maximum(np.ceil(outline.min(axis=0)).astype(int), 0)
+    high = np.minimum(np.floor(outline.max(axis=0)).astype(int) + 1, shape)
+    return None if np.any(high <= low) else (slice(low[0], high[0]), slice(low[1], high[1]))
 
-    A split needs two pieces whose smoothed intensities differ by ``least`` and each at least
+
+def _block_spread(mask, values, min_radius):
+    """How much the means of the square blocks wholly inside an object (a bool mask and the image
+    under its box) differ: a split by contrast needs more than its least contrast.
+
+    A split needs two pieces whose smoothed intensities differ by that much, each at least
     ``CONTRAST_SIZE_RATIO`` of the largest (:func:`_contrast_parts`); blocks of side
     ``max(2 min_radius, sqrt(area) / 32)`` fit inside such pieces, and their means carry the
-    noise divided by the side, far below ``least`` on an object of one intensity.  An object too
-    small for a block is always tried."""
+    noise divided by the side, far below the least contrast on an object of one intensity.  An
+    object too small for a block gives infinity (it is always tried)."""
     side = int(max(2 * min_radius, np.sqrt(np.count_nonzero(mask)) / 32))
     m, n = (mask.shape[0] // side) * side, (mask.shape[1] // side) * side
     if m == 0 or n == 0:
-        return True
+        return np.inf
     full = mask[:m, :n].reshape(m // side, side, n // side, side).all(axis=(1, 3))
     if not full.any():
-        return True
-    means = values[:m, :n].reshape(m // side, side, n // side, side).mean(axis=(1, 3))[full]
-    return bool(np.ptp(means) > least)
+        return np.inf
+    return float(np.ptp(values[:m, :n].reshape(m // side, side, n // side, side).mean(axis=(1, 3))[full]))
 
 
 def _contrast_parts(parts, values, least, min_radius):

@@ -11,11 +11,11 @@ from activecontour.geometry.curve import orient
 from activecontour.objects.metrics import match_instances
 from activecontour.objects.split import (
     MIN_WAIST_DEPTH,
+    _block_spread,
     _concave_corners,
     _corner_parts,
     _ellipse_fit,
     _hull_depth,
-    _may_have_contrast,
     split_touching,
 )
 
@@ -159,6 +159,7 @@ def test_the_ellipse_fit_is_exact_on_an_ellipse():
 # ---- the cheap tests that spare single objects -------------------------------------------------
 
 def test_a_convex_object_skips_the_split(monkeypatch):
+    import activecontour.imaging.noise as noise
     import activecontour.objects.split as split
 
     disk = [ac.circle((300.0, 300.0), 250.0, n=2000)]
@@ -171,6 +172,7 @@ def test_a_convex_object_skips_the_split(monkeypatch):
 
     for name in ("_boundary_distance", "_may_have_necks", "_contrast_parts", "_corner_parts"):
         monkeypatch.setattr(split, name, refuse)
+    monkeypatch.setattr(noise, "estimate_noise", refuse)  # nor did it need the noise
     noisy = synthetic.add_noise((labels > 0).astype(float), 0.3, seed=2)
     assert split_touching([disk], labels, noisy)[0] is disk
 
@@ -179,6 +181,7 @@ def test_the_block_means_see_a_contrast_and_no_noise():
     rr, cc = np.mgrid[:80, :80]
     mask = np.hypot(rr - 40, cc - 40) <= 30
     flat = synthetic.add_noise(mask * 1.0, 0.3, seed=3)
-    assert not _may_have_contrast(mask, flat, 2 * 0.3, 3.0)
+    # blocks of 6 x 6: their means carry the noise / 6, well below the least contrast 2 sigma
+    assert _block_spread(mask, flat, 3.0) < 2 * 0.3
     halves = synthetic.add_noise(mask * np.where(cc < 40, 1.0, 0.5), 0.3 / 3, seed=3)
-    assert _may_have_contrast(mask, halves, 2 * 0.3 / 3, 3.0)
+    assert _block_spread(mask, halves, 3.0) > 0.5 - 2 * 0.3 / 3  # the step, less the noise
