@@ -35,13 +35,25 @@ waist, no neck and no concave corner: it skips stages 1 and 2 after one convex h
 (:func:`_block_spread`), so an image of convex objects pays almost nothing for the split.
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
-``res.labels``, ``benchmarks/bench_objects.py``): the corner stage takes the touching-ellipse
-family from a mean of 0.78 (necks alone) to 0.83 and keeps the singles (horse silhouettes, rings,
-3 px strokes, bent rods, stars, ellipses of aspect 3) unsplit as often as the necks alone; a
-distance-transform-marker watershed of the same sub-pixel region (no neck test) scores 0.75 on
-ellipses and 0.96 on disks but splits nearly every single (F1 0.09), and cut-line decompositions
-that trust ellipse fits alone (without the neck stage) split 13-95 of the 120 singles for the
-same gain.
+``res.labels``, ``benchmarks/bench_objects.py``; worst seed / mean):
+
+==========================================  =================  ===============  ============
+split                                       touching ellipses  touching disks   singles cut
+==========================================  =================  ===============  ============
+necks alone (stage 1, the split until now)  0.14 / 0.78        0.48 / 0.91      4 of 120
+necks, then concave corners (this module)   0.28 / 0.83        0.48 / 0.92      5 of 120
+distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
+segmented mask (``min_distance=5``)
+corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
+neck stage; several settings)               0.83-0.87          0.85-0.87
+Otsu + distance watershed (the scikit-      0.42 / 0.78        0.72 / 0.96      nearly all
+image gallery pipeline, for reference)
+==========================================  =================  ===============  ============
+
+The corner stage is what wins on elongated objects side by side; the necks keep the singles
+whole.  What is left is small and crowded: the worst seeds of both touching families have radii
+of 6-9 px at SNR 2-3 with 1-1.5 px of blur, where the converged contour rounds the contacts
+until neither a neck nor a corner is left (on those seeds the pipeline scores 0.42 and 0.72).
 """
 
 from __future__ import annotations
@@ -94,9 +106,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     (:func:`_contrast_parts`): a bright object touching a dim one, or two separated by a dark
     seam, when the two classes of the smoothed intensity differ by ``CONTRAST_DEPTH`` noise
     sigmas (and ``CONTRAST_FLOOR`` of the image's range) and every piece is a blob of a size
-    comparable to the others.  On the DSB 2018 nuclei image (``benchmarks/bench_objects.py``)
-    this takes F1 from 0.68 to 0.74 (polygon) and from 0.70 to 0.74 (level set); the synthetic
-    clumps, of equal brightness, are unchanged, and so are skimage's coins (25 and 29 objects).
+    comparable to the others.  On the DSB 2018 nuclei image this took F1 from 0.68 to 0.74
+    (before the corner stage; with it, 0.78, ``benchmarks/bench_objects.py``); the families, of
+    one brightness, are unchanged, and so are skimage's coins (25 objects).
 
     The split is applied to the sub-pixel polygon: the parts' pixels, grown over the object's
     bounding box, become cells whose shared borders are straightened (``shapely.coverage_simplify``
