@@ -24,8 +24,10 @@ The flow stalls when the contour stops getting anywhere: its mean normal displac
 sweeps over its length, in pixels) between the start and the end of a block of five iterations,
 per iteration, falls below ``tol`` (see :class:`_Movement`).  No energy scale enters, so the test
 means the same on every image: a relative energy decrease would stop earlier the larger or noisier
-the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next at 10 tol; a
-stall at the finest l is convergence; the run also stops at ``max_num_iter``.
+the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next after one
+block below 10 tol; convergence at the finest l takes two blocks in a row below tol (one slow
+block can be a pause: on scikit-image's cat a lobe still retracting moved 0.5 % of the mask after
+such a stop); the run also stops at ``max_num_iter``.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ __all__ = ["PolygonOptions", "segment_polygon"]
 _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
 _WINDOW = 5  # iterations over which the movement is averaged for the stopping test
+_STILL_BLOCKS = 2  # consecutive slow blocks that make convergence: one can be a pause (see _Movement)
 _MEMORY = 8  # step pairs of the L-BFGS acceleration
 _SMOOTHING = 30.0  # first smoothing length (px) from given curves ...
 _START_SMOOTHING = 2.0  # ... and from the default start or a result, on the boundaries already
@@ -144,7 +147,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
                 status = 2
                 break
         finest = flow.smoothing <= min_smoothing or not flow.h1
-        if movement.last < (tol if finest else _STAGE_TOL * tol):
+        # a coarse stage gives way after one slow block; convergence takes _STILL_BLOCKS in a row
+        if movement.still(tol if finest else _STAGE_TOL * tol) >= (_STILL_BLOCKS if finest else 1):
             if not finest:
                 flow.refine(min_smoothing)
             elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
@@ -363,7 +367,7 @@ class _Movement:
     length.  It means the same on every image (no energy scale enters), and a contour that only
     jitters about a fixed place (steps at the edge of stability on noise) gets nowhere and counts
     as still.  A remesh, a topology repair or a removed curve changes the vertices: the block
-    restarts there.
+    restarts there.  ``blocks`` holds every block's measure since the stage began.
     """
 
     def __init__(self):
@@ -385,11 +389,20 @@ class _Movement:
         edge_normal = np.column_stack([d[:, 1], -d[:, 0]])  # nu |e|
         vertex_normal = 0.5 * (edge_normal + edge_normal[previous])  # nu times the vertex's share
         swept = np.abs(np.einsum("ij,ij->i", points - start, vertex_normal)).sum()
-        self.last = swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count
+        self.blocks.append(swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count)
         self.start, self.count = points.copy(), 0
 
+    def still(self, threshold):
+        """How many of the last blocks, in a row, moved less than ``threshold`` px per iteration."""
+        count = 0
+        for moved in reversed(self.blocks):
+            if moved >= threshold:
+                break
+            count += 1
+        return count
+
     def clear(self):
-        self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
+        self.start, self.offsets, self.count, self.blocks = None, None, 0, []
 
 
 def _size_limit(geometry, v):
