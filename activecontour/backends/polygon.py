@@ -18,7 +18,9 @@ Per iteration k, on the polygon(s) Gamma^k:
    depend on the image contrast) and a 300 px travel takes tens of iterations.
 4. Mesh health: when an edge is shorter than half or longer than twice ``spacing``, the curve
    is resampled at equal arc length; the resampled curve is kept only if its energy is not above
-   the previous iterate's, so the recorded energy sequence never increases.
+   the previous iterate's, so the recorded energy sequence never increases.  The start is taken
+   as given: only its edges longer than twice ``spacing`` are split (the same polygon), so a
+   previous result restarts at its own energy and mask.
 
 The flow stalls when the contour stops getting anywhere: its mean normal displacement (the area it
 sweeps over its length, in pixels) between the start and the end of a block of five iterations,

@@ -39,7 +39,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
     init : None, ndarray (K, 2), list of them, bool ndarray (M, N), SegmentationResult, or str
         None: the default start (:func:`activecontour.initial.initial_curves`).  Curves, masks
         and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are
-        inside).  A result of either backend: its ``phi`` when it has one, else its contours.
+        inside).  A result of either backend: its ``phi`` when it has one (its zero set kept
+        exactly: the same energy and mask), else its contours.
         ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels,
         at most a quarter of the image's smaller side (:func:`checkerboard_level_set`); it has no
         preferred phase, so when the functional is symmetric (omega = 0, lambda_in = lambda_out,
