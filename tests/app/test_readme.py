@@ -97,4 +97,4 @@ def test_readme_objects_example_runs():
     res, pair, truth = namespace["res"], namespace["pair"], namespace["truth"]
     assert len(res.objects["area"]) == res.labels.max()
     assert pair.labels.max() == 2 and not (pair.mask & ~pair.roi).any()
-    assert set(np.unique(truth[pair.mask])) <= {0, 4, 5}  # the two ellipses around (33, 145)
+    assert set(np.unique(truth[pair.mask])) <= {0, 16, 17}  # the two ellipses around (225, 30)
