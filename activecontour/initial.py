@@ -202,9 +202,13 @@ def _object_class(smooth, values=None, mu=0.0, split=None):
         label = smooth[:, :, 0] >= threshold
     else:
         label = smooth @ direction >= threshold
-    if label.all() or not label.any():
+    count = np.count_nonzero(label)
+    if count in (0, label.size):
         return np.zeros(smooth.shape[:2], dtype=bool), 0.0
-    low, high = values[~label].mean(axis=0), values[label].mean(axis=0)
+    # the class means from sums over the label, without copying either class's pixels
+    inside = np.array([values[:, :, ch].sum(where=label) for ch in range(values.shape[2])])
+    total = values.sum(axis=(0, 1))
+    low, high = (total - inside) / (label.size - count), inside / count
     border = np.concatenate([label[0], label[-1], label[:, 0], label[:, -1]])
     contrast = float(np.mean((high - low) ** 2))
     return (~label if border.mean() > 0.5 else label), contrast

@@ -113,7 +113,7 @@ class Network:
         self.inner, self.outer, self.shape = inner, outer, tuple(shape)
         self.interface = outer >= 0
         self.sides = Sides(inner, outer)
-        self._faces = self._face_counts = self._moving = None
+        self._faces = self._face_counts = self._moving = self._pieces = None
         m, n = self.shape
         moving = np.zeros(len(nodes), dtype=bool)
         moving[start[self.interface]] = moving[end[self.interface]] = True
@@ -360,15 +360,29 @@ class Network:
         """The interfaces that are closed loops (no junction, off the border), each as
         ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
         the interface segments, joined at the nodes of degree two."""
+        if self._pieces is None:
+            self._pieces = self._interface_pieces()
+        chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
+        if chosen.size == 0:
+            return []
+        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
+                                 minlength=count)
+        return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k])) for k in closed]
+
+    def _interface_pieces(self):
+        """The graph part of :meth:`closed_loops`: the interface segments, the piece of each, the
+        number of pieces, the closed ones, each segment's orientation against its piece's first,
+        the segments in order of their piece and where each piece's begin."""
         import scipy.sparse
         from scipy.sparse.csgraph import connected_components
 
         chosen = np.flatnonzero(self.interface)
         if chosen.size == 0:
-            return []
+            return chosen, chosen, 0, chosen, chosen, chosen, chosen
         ends = np.concatenate([self.start[chosen], self.end[chosen]])
         owner = np.tile(np.arange(chosen.size), 2)
-        degree = np.bincount(ends, minlength=len(nodes))
+        degree = np.bincount(ends, minlength=len(self.nodes))
         branch = (degree != 2) | ~(self.free[0] & self.free[1])
         order = np.argsort(ends, kind="stable")
         pairs = order[~branch[ends[order]]].reshape(-1, 2)  # the two segments at a degree-two node
@@ -377,18 +391,14 @@ class Network:
         count, piece = connected_components(graph, directed=False)
         open_piece = np.zeros(count, dtype=bool)
         open_piece[piece[branch[self.start[chosen]] | branch[self.end[chosen]]]] = True
-        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
         # a loop's segments are oriented either way, their sides named accordingly: orient them
         # all as the piece's first one
         first = np.full(count, -1)
         first[piece[::-1]] = np.arange(chosen.size)[::-1]
         sign = np.where(self.inner[chosen] == self.inner[chosen][first[piece]], 1.0, -1.0)
-        twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
-                                 minlength=count)
         by_piece = np.argsort(piece, kind="stable")
         bounds = np.searchsorted(piece[by_piece], np.arange(count + 1))
-        return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k]))
-                for k in np.flatnonzero(~open_piece)]
+        return chosen, piece, count, np.flatnonzero(~open_piece), sign, by_piece, bounds
 
     def without_island(self, nodes, loop):
         """The network without the closed interface loop of segments ``loop``, the region inside
