@@ -340,7 +340,10 @@ def test_an_image_whose_files_cannot_be_written_does_not_stop_the_next(small, tm
         return real_replace(src, dst)
 
     monkeypatch.setattr(os, "replace", full_disk_for_disk_png)
-    status, stdout, stderr = run(capsys, "segment", path, second, "-o", tmp_path / "out")
+    # --jobs 1: the patched os.replace is this process's; the workers of --jobs 2 would have it only
+    # when forked, not from a fork server (chosen once this process runs threads, as under
+    # pytest-xdist). Workers that fail to write: test_cli_batch's failing-images test.
+    status, stdout, stderr = run(capsys, "segment", path, second, "-o", tmp_path / "out", "--jobs", "1")
     assert status == 2
     assert stderr.splitlines()[0].endswith(f"No space left on device: "
                                            f"{str(tmp_path / 'out' / 'disk_contours.json')!r}")
