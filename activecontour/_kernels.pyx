@@ -6,9 +6,12 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`build_tables`, :func:`edge_integrals` -- :mod:`activecontour.image`, :mod:`activecontour.energy`
   (the row-antiderivative tables and the exact integrals along the edges, (6.38) and (6.41));
 * :func:`cyclic_thomas` -- :mod:`activecontour.fem` (the block-cyclic tridiagonal solve of (6.40));
-* :func:`crossings`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas` --
-  :mod:`activecontour.topology`, :mod:`activecontour.curve`;
-* :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask).
+* :func:`segments_meet`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas` --
+  :mod:`activecontour.topology`, :mod:`activecontour.curve` (crossing curves) and
+  :mod:`activecontour.backends.network` (a network's segments that meet);
+* :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
+* :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
+  :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
@@ -185,6 +188,16 @@ cdef inline void _cells(const double[:, :, ::1] values, const double[:, :, :, ::
         cell.pq3 = cell.dp * cell.dq / 3.0
 
 
+cdef inline (double, double) _green(const Cell *cell, double t, double w) noexcept nogil:
+    """``(G_1, G_2)`` at local (t, w) of the cell: the row-antiderivatives of I and I^2 from padded
+    row 0, whose closed integrals ``G dc`` are the region integrals of I and I^2 (Green's theorem)."""
+    cdef double w0 = 1.0 - w
+    return ((w0 * (cell.t1 + t * (cell.p0 + t * cell.hp)) + w * (cell.r1 + t * (cell.q0 + t * cell.hq))),
+            (w0 * w0 * (cell.t2 + t * (cell.pp1 + t * (cell.pp2 + t * cell.pp3)))
+             + 2.0 * w * w0 * (cell.t3 + t * (cell.pq1 + t * (cell.pq2 + t * cell.pq3)))
+             + w * w * (cell.r2 + t * (cell.qq1 + t * (cell.qq2 + t * cell.qq3)))))
+
+
 def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
                    const double[:, :, ::1] values, const double[:, :, :, ::1] table, Py_ssize_t anchor,
                    bint moments, double[::1] s1, double[::1] s2, double[::1] sums, double[:, :, ::1] parts):
@@ -220,7 +233,7 @@ def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index
     cdef double to_start[3]  # ... in the load on the edge's start (phi = 1 - s) and end (phi = s)
     cdef double to_end[3]
     cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, at, weight
-    cdef double w0, intensity, g1, g2, length, area = 0.0, total_length = 0.0
+    cdef double intensity, g1, g2, length, area = 0.0, total_length = 0.0
     cdef double tangent_r, tangent_c, step_u, step_v, inverse_u, inverse_v
     cdef double *start_r
     cdef double *start_c
@@ -288,14 +301,7 @@ def edge_integrals(const double[:, ::1] points, const Py_ssize_t[::1] next_index
                         cell = &cells[ch]
                         if moments:
                             for g in range(3):
-                                w0 = 1.0 - w[g]
-                                g1 = (w0 * (cell.t1 + t[g] * (cell.p0 + t[g] * cell.hp))
-                                      + w[g] * (cell.r1 + t[g] * (cell.q0 + t[g] * cell.hq)))
-                                g2 = (w0 * w0 * (cell.t2 + t[g] * (cell.pp1 + t[g] * (cell.pp2 + t[g] * cell.pp3)))
-                                      + 2.0 * w[g] * w0 * (cell.t3 + t[g] * (cell.pq1 + t[g] * (cell.pq2
-                                                                                               + t[g] * cell.pq3)))
-                                      + w[g] * w[g] * (cell.r2 + t[g] * (cell.qq1 + t[g] * (cell.qq2
-                                                                                            + t[g] * cell.qq3))))
+                                g1, g2 = _green(cell, t[g], w[g])
                                 acc[ch] += moment[g] * g1
                                 acc[channels + ch] += moment[g] * g2
                         if n_parts:
@@ -464,19 +470,21 @@ cdef void _free_grid(Grid *grid) noexcept nogil:
     free(grid.first_col)
 
 
-cdef int _file_edges(const double[:, ::1] points, const Py_ssize_t[::1] next_index, double size,
-                     bint rows_only, Grid *grid) noexcept nogil:
-    """File every edge under each cell its bounding box meets (under each band of rows it meets,
-    with ``rows_only``; horizontal edges then under none): a counting sort, O(edges + cells).
-    Returns -1 when out of memory (the grid is then freed)."""
-    cdef Py_ssize_t n = points.shape[0], e, b, r, c, r1, c1, cells, position
-    cdef double high_r = points[0, 0], high_c = points[0, 1]
-    grid.low_r, grid.low_c, grid.scale = points[0, 0], points[0, 1], 1.0 / size
+cdef int _file_edges(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+                     double size, bint rows_only, Grid *grid) noexcept nogil:
+    """File every segment ``nodes[start[e]] -> nodes[end[e]]`` under each cell its bounding box
+    meets (under each band of rows it meets, with ``rows_only``; horizontal segments then under
+    none): a counting sort, O(segments + cells), in segment order within a cell.  Returns -1 when
+    out of memory (the grid is then freed)."""
+    cdef Py_ssize_t n = start.shape[0], e, a, b, r, c, r1, c1, cells, position
+    cdef double high_r = nodes[start[0], 0], high_c = nodes[start[0], 1]
+    grid.low_r, grid.low_c, grid.scale = high_r, high_c, 1.0 / size
     for e in range(n):
-        grid.low_r = min(grid.low_r, points[e, 0])
-        grid.low_c = min(grid.low_c, points[e, 1])
-        high_r = max(high_r, points[e, 0])
-        high_c = max(high_c, points[e, 1])
+        a, b = start[e], end[e]
+        grid.low_r = min(grid.low_r, nodes[a, 0], nodes[b, 0])
+        grid.low_c = min(grid.low_c, nodes[a, 1], nodes[b, 1])
+        high_r = max(high_r, nodes[a, 0], nodes[b, 0])
+        high_c = max(high_c, nodes[a, 1], nodes[b, 1])
     grid.rows = <Py_ssize_t> ((high_r - grid.low_r) * grid.scale) + 1
     grid.cols = 1 if rows_only else <Py_ssize_t> ((high_c - grid.low_c) * grid.scale) + 1
     cells = grid.rows * grid.cols
@@ -488,17 +496,17 @@ cdef int _file_edges(const double[:, ::1] points, const Py_ssize_t[::1] next_ind
         _free_grid(grid)
         return -1
     for e in range(n):  # count the entries of every cell (shifted by one: start[c + 1])
-        b = next_index[e]
-        if rows_only and points[e, 0] == points[b, 0]:
+        a, b = start[e], end[e]
+        if rows_only and nodes[a, 0] == nodes[b, 0]:
             grid.first_row[e] = -1
             continue
-        grid.first_row[e] = _cell_of(min(points[e, 0], points[b, 0]), grid.low_r, grid.scale, grid.rows)
-        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, grid.scale, grid.rows)
+        grid.first_row[e] = _cell_of(min(nodes[a, 0], nodes[b, 0]), grid.low_r, grid.scale, grid.rows)
+        r1 = _cell_of(max(nodes[a, 0], nodes[b, 0]), grid.low_r, grid.scale, grid.rows)
         if rows_only:
             grid.first_col[e], c1 = 0, 0
         else:
-            grid.first_col[e] = _cell_of(min(points[e, 1], points[b, 1]), grid.low_c, grid.scale, grid.cols)
-            c1 = _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, grid.scale, grid.cols)
+            grid.first_col[e] = _cell_of(min(nodes[a, 1], nodes[b, 1]), grid.low_c, grid.scale, grid.cols)
+            c1 = _cell_of(max(nodes[a, 1], nodes[b, 1]), grid.low_c, grid.scale, grid.cols)
         for r in range(grid.first_row[e], r1 + 1):
             for c in range(grid.first_col[e], c1 + 1):
                 grid.start[r * grid.cols + c + 1] += 1
@@ -508,12 +516,12 @@ cdef int _file_edges(const double[:, ::1] points, const Py_ssize_t[::1] next_ind
     if grid.items == NULL:
         _free_grid(grid)
         return -1
-    for e in range(n):  # fill, in edge order within each cell; start[c] ends as the next cell's start
+    for e in range(n):  # fill, in segment order within each cell; start[c] ends as the next cell's start
         if grid.first_row[e] < 0:
             continue
-        b = next_index[e]
-        r1 = _cell_of(max(points[e, 0], points[b, 0]), grid.low_r, grid.scale, grid.rows)
-        c1 = 0 if rows_only else _cell_of(max(points[e, 1], points[b, 1]), grid.low_c, grid.scale, grid.cols)
+        a, b = start[e], end[e]
+        r1 = _cell_of(max(nodes[a, 0], nodes[b, 0]), grid.low_r, grid.scale, grid.rows)
+        c1 = 0 if rows_only else _cell_of(max(nodes[a, 1], nodes[b, 1]), grid.low_c, grid.scale, grid.cols)
         for r in range(grid.first_row[e], r1 + 1):
             for c in range(grid.first_col[e], c1 + 1):
                 position = grid.start[r * grid.cols + c]
@@ -525,22 +533,22 @@ cdef int _file_edges(const double[:, ::1] points, const Py_ssize_t[::1] next_ind
     return 0
 
 
-cdef double _cell_size(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
+cdef double _cell_size(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
                        bint rows_only) noexcept nogil:
-    """A cell side for :func:`_file_edges`: the mean edge extent (along the rows, with
-    ``rows_only``), at least what makes about one cell per edge, so the grid has O(edges) cells
-    and each edge meets a few."""
-    cdef Py_ssize_t n = points.shape[0], e, b
-    cdef double extent = 0.0, low_r = points[0, 0], high_r = points[0, 0]
-    cdef double low_c = points[0, 1], high_c = points[0, 1], size
+    """A cell side for :func:`_file_edges`: the mean segment extent (along the rows, with
+    ``rows_only``), at least what makes about one cell per segment, so the grid has O(segments)
+    cells and each segment meets a few."""
+    cdef Py_ssize_t n = start.shape[0], e, a, b
+    cdef double extent = 0.0, low_r = nodes[start[0], 0], high_r = low_r
+    cdef double low_c = nodes[start[0], 1], high_c = low_c, size
     for e in range(n):
-        b = next_index[e]
-        low_r, high_r = min(low_r, points[e, 0]), max(high_r, points[e, 0])
-        low_c, high_c = min(low_c, points[e, 1]), max(high_c, points[e, 1])
+        a, b = start[e], end[e]
+        low_r, high_r = min(low_r, nodes[a, 0], nodes[b, 0]), max(high_r, nodes[a, 0], nodes[b, 0])
+        low_c, high_c = min(low_c, nodes[a, 1], nodes[b, 1]), max(high_c, nodes[a, 1], nodes[b, 1])
         if rows_only:
-            extent += abs(points[b, 0] - points[e, 0])
+            extent += abs(nodes[b, 0] - nodes[a, 0])
         else:
-            extent += max(abs(points[b, 0] - points[e, 0]), abs(points[b, 1] - points[e, 1]))
+            extent += max(abs(nodes[b, 0] - nodes[a, 0]), abs(nodes[b, 1] - nodes[a, 1]))
     size = extent / n
     if rows_only:
         size = max(size, (high_r - low_r) / n)
@@ -551,72 +559,121 @@ cdef double _cell_size(const double[:, ::1] points, const Py_ssize_t[::1] next_i
     return max(size, 1e-12 * max(1.0, max(abs(low_r), abs(high_r), abs(low_c), abs(high_c))))
 
 
-def crossings(const double[:, ::1] points, const Py_ssize_t[::1] next_index, Py_ssize_t[::1] first,
-              Py_ssize_t[::1] second, double[::1] s_out, double[::1] t_out):
-    """The pairs of non-adjacent edges that cross properly: ``first[k] < second[k]`` with the
-    crossing at parameter ``s_out[k]`` on the first and ``t_out[k]`` on the second, both in (0, 1).
+cdef bint _touch(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+                 Py_ssize_t e, Py_ssize_t f) noexcept nogil:
+    """Segments e and f meet anywhere but at a node they share: a crossing, a touch (an end on
+    the other segment), or an overlap (collinear, also of two segments with a common node)."""
+    cdef double ar = nodes[start[e], 0], ac = nodes[start[e], 1], br = nodes[end[e], 0], bc = nodes[end[e], 1]
+    cdef double cr = nodes[start[f], 0], cc = nodes[start[f], 1], dr = nodes[end[f], 0], dc = nodes[end[f], 1]
+    cdef double o1, o2, o3, o4, along
+    cdef Py_ssize_t shared
+    if (max(min(ar, br), min(cr, dr)) > min(max(ar, br), max(cr, dr))
+            or max(min(ac, bc), min(cc, dc)) > min(max(ac, bc), max(cc, dc))):
+        return False  # their boxes do not meet
+    shared = (start[e] == start[f]) + (start[e] == end[f]) + (end[e] == start[f]) + (end[e] == end[f])
+    if shared >= 2:  # the same two nodes: they coincide
+        return True
+    o1 = (br - ar) * (cc - ac) - (bc - ac) * (cr - ar)  # c, d against a -> b
+    o2 = (br - ar) * (dc - ac) - (bc - ac) * (dr - ar)
+    if shared == 1:
+        # meeting only at the common node unless collinear and on the same side
+        along = (br - ar) * (dr - cr) + (bc - ac) * (dc - cc)
+        return o1 == 0.0 and o2 == 0.0 and (
+            ((start[e] == start[f] or end[e] == end[f]) and along > 0)
+            or ((start[e] == end[f] or end[e] == start[f]) and along < 0))
+    o3 = (dr - cr) * (ac - cc) - (dc - cc) * (ar - cr)  # a, b against c -> d
+    o4 = (dr - cr) * (bc - cc) - (dc - cc) * (br - cr)
+    # unless one lies wholly on one side of the other's line: a crossing, an end on the other
+    # segment, or collinear with meeting boxes (an overlap or a touch)
+    return not ((o1 > 0.0 and o2 > 0.0) or (o1 < 0.0 and o2 < 0.0)
+                or (o3 > 0.0 and o4 > 0.0) or (o3 < 0.0 and o4 < 0.0))
 
-    Returns the number of pairs; only as many as the output arrays hold are stored (call again
-    with longer ones when the count exceeds them).  The order is the grid's, not sorted.
 
-    Every edge is filed under each cell of a uniform grid that its bounding box meets (cells
-    about the mean edge extent, about one per edge: :func:`_cell_size`); two edges can cross only
-    when their boxes meet, so only edges sharing a cell are tested, each pair once: in the cell
-    of the low corner of the intersection of their boxes.  O(edges) for curves of even spacing,
-    whatever their number.
+def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+                  bint touching, Py_ssize_t limit, Py_ssize_t[:, ::1] pairs, double[:, ::1] where):
+    """The pairs ``e < f`` of the segments ``nodes[start[s]] -> nodes[end[s]]`` that meet.
+
+    ``touching`` False (closed curves, :func:`activecontour.geometry.topology.crossings`): the
+    pairs without a common node that cross properly, at ``where[k] = (s, t)`` on e and f, both in
+    (0, 1).  ``touching`` True (a planar network,
+    :meth:`activecontour.backends.network.Network.simple`): the pairs that meet anywhere but at a
+    node they share -- a crossing, a touch (an end on another segment), or an overlap (collinear,
+    also of two segments with a common node); ``where`` may then be a (0, 2) array.
+
+    Returns the number of pairs found, stopping at ``limit``; the first ``len(pairs)`` of them go
+    into ``pairs`` (P, 2) (and ``where``, as far as it holds them): call again with longer ones
+    when the count exceeds them.  The order is the grid's, not sorted.
+
+    Every segment is filed under each cell of a uniform grid that its bounding box meets (cells
+    about the mean segment extent, about one per segment: :func:`_cell_size`); two segments can
+    meet only when their boxes do, so only segments sharing a cell are tested, each pair once: in
+    the first cell both meet (that of the low corner of the intersection of their boxes).  O(S)
+    for segments of even length, whatever their number.
     """
-    cdef Py_ssize_t n = points.shape[0], capacity = first.shape[0], found = 0
-    cdef Py_ssize_t cell, i, k, e, f, b, d, row, col
+    cdef Py_ssize_t n = start.shape[0], capacity = pairs.shape[0], found = 0
+    cdef Py_ssize_t cell, i, k, e, f, row, col
     cdef double r0, r1, u0, u1, q0, q1, denominator, s, t
+    cdef bint met
     cdef Grid grid
-    if n < 4:
+    if n < 2 or limit <= 0:
         return 0
     with nogil:
-        if _file_edges(points, next_index, _cell_size(points, next_index, False), False, &grid) != 0:
+        if _file_edges(nodes, start, end, _cell_size(nodes, start, end, False), False, &grid) != 0:
             with gil:
                 raise MemoryError()
         for cell in range(grid.rows * grid.cols):
+            if found >= limit:
+                break
             row, col = cell // grid.cols, cell % grid.cols
             for i in range(grid.start[cell], grid.start[cell + 1]):
+                if found >= limit:
+                    break
                 for k in range(i + 1, grid.start[cell + 1]):
-                    e, f = grid.items[i], grid.items[k]  # e < f: filed in edge order
+                    e, f = grid.items[i], grid.items[k]  # e < f: filed in segment order
                     # each pair once: in the first cell both meet
                     if (max(grid.first_row[e], grid.first_row[f]) != row
                             or max(grid.first_col[e], grid.first_col[f]) != col):
                         continue
-                    b, d = next_index[e], next_index[f]
-                    if b == f or d == e:
-                        continue
-                    r0, r1 = points[b, 0] - points[e, 0], points[b, 1] - points[e, 1]
-                    u0, u1 = points[d, 0] - points[f, 0], points[d, 1] - points[f, 1]
-                    denominator = r0 * u1 - r1 * u0
-                    if denominator == 0.0:
-                        continue
-                    q0, q1 = points[f, 0] - points[e, 0], points[f, 1] - points[e, 1]
-                    s = (q0 * u1 - q1 * u0) / denominator
-                    t = (q0 * r1 - q1 * r0) / denominator
-                    if 0.0 < s < 1.0 and 0.0 < t < 1.0:
+                    if touching:
+                        met = _touch(nodes, start, end, e, f)
+                    else:
+                        if start[e] == start[f] or start[e] == end[f] or end[e] == start[f] or end[e] == end[f]:
+                            continue  # neighbours along a curve
+                        r0, r1 = nodes[end[e], 0] - nodes[start[e], 0], nodes[end[e], 1] - nodes[start[e], 1]
+                        u0, u1 = nodes[end[f], 0] - nodes[start[f], 0], nodes[end[f], 1] - nodes[start[f], 1]
+                        denominator = r0 * u1 - r1 * u0
+                        if denominator == 0.0:
+                            continue
+                        q0, q1 = nodes[start[f], 0] - nodes[start[e], 0], nodes[start[f], 1] - nodes[start[e], 1]
+                        s = (q0 * u1 - q1 * u0) / denominator
+                        t = (q0 * r1 - q1 * r0) / denominator
+                        met = 0.0 < s < 1.0 and 0.0 < t < 1.0
+                        if met and found < where.shape[0]:
+                            where[found, 0], where[found, 1] = s, t
+                    if met:
                         if found < capacity:
-                            first[found], second[found], s_out[found], t_out[found] = e, f, s, t
+                            pairs[found, 0], pairs[found, 1] = e, f
                         found += 1
+                        if found >= limit:
+                            break
         _free_grid(&grid)
     return found
 
 
-def winding_banded(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
+def winding_banded(const double[:, ::1] points, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
                    const double[:, ::1] probes, long long[::1] out):
-    """:func:`winding` through bands of rows: every edge is filed under the bands its rows meet
-    (:func:`_file_edges`), and a probe meets only the edges of its band.  The same count, in
-    O(probes x edges per band + edges) instead of O(probes x edges)."""
+    """:func:`winding` through bands of rows: every edge ``start[e] -> end[e]`` is filed under the
+    bands its rows meet (:func:`_file_edges`), and a probe meets only the edges of its band.  The
+    same count, in O(probes x edges per band + edges) instead of O(probes x edges)."""
     cdef Py_ssize_t i, k, e, count, band
     cdef double r, c, r0, r1, t, high_r
     cdef bint upward
     cdef Grid grid
-    if points.shape[0] == 0:
+    if start.shape[0] == 0:
         out[:] = 0
         return
     with nogil:
-        if _file_edges(points, next_index, _cell_size(points, next_index, True), True, &grid) != 0:
+        if _file_edges(points, start, end, _cell_size(points, start, end, True), True, &grid) != 0:
             with gil:
                 raise MemoryError()
         high_r = grid.low_r + grid.rows / grid.scale
@@ -627,12 +684,12 @@ def winding_banded(const double[:, ::1] points, const Py_ssize_t[::1] next_index
                 band = _cell_of(r, grid.low_r, grid.scale, grid.rows)
                 for k in range(grid.start[band], grid.start[band + 1]):
                     e = grid.items[k]
-                    r0, r1 = points[e, 0], points[next_index[e], 0]
+                    r0, r1 = points[start[e], 0], points[end[e], 0]
                     upward = r0 <= r < r1
                     if not (upward or r1 <= r < r0):
                         continue
                     t = (r - r0) / (r1 - r0)
-                    if points[e, 1] + t * (points[next_index[e], 1] - points[e, 1]) > c:
+                    if points[start[e], 1] + t * (points[end[e], 1] - points[start[e], 1]) > c:
                         count += -1 if upward else 1  # as in :func:`winding`
             out[i] = count
         _free_grid(&grid)
@@ -1014,3 +1071,205 @@ def mask_contours(const unsigned char[:, ::1] mask):
         return points_out, offsets_out[:(count + 1) * sizeof(Py_ssize_t)]
     finally:
         _free_tracer(&tracer)
+
+
+cdef inline void _compensated(double *total, double *carry, double term) noexcept nogil:
+    """``total + carry += term`` by Neumaier's compensated summation (the rounding of each
+    addition collected in ``carry``)."""
+    cdef double summed = total[0] + term
+    if abs(total[0]) >= abs(term):
+        carry[0] += (total[0] - summed) + term
+    else:
+        carry[0] += (term - summed) + total[0]
+    total[0] = summed
+
+
+def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
+                      const Py_ssize_t[::1] outer, const double[:, :, ::1] values,
+                      const double[:, :, :, ::1] table, Py_ssize_t anchor, double[:, ::1] moments,
+                      double[:, :, ::1] parts):
+    """The exact edge integrals of a partition's boundary segments (the N-region network of
+    :mod:`activecontour.backends.network`), in one pass: what :func:`edge_integrals` gives for one
+    closed curve, kept apart per region and per segment.
+
+    ``moments[k] += (area, closed integral of G_1 dc, of G_2 dc)`` (per channel, Green's theorem:
+    the region integrals of 1, I and I^2; the area by the shoelace formula) over the segments with
+    region k on their inner side, and minus those with k on their outer side (``outer < 0``: the
+    image's edge, no region).  With ``parts`` of shape (S, 2, 2C) (a (0, 2, 0) array for none),
+    for every segment and each of its ends (phi = 1 - s at the start, s at the end, s the
+    segment's parameter) the integrals in s:
+
+        parts[e, 0 or 1, ch]     = int_0^1 phi I_ch ds,
+        parts[e, 0 or 1, C + ch] = int_0^1 phi I_ch^2 ds,
+
+    from which a quadratic form's load (6.41) on the segment's ends is the form's combination
+    times the segment's normal ``nu |e| = (dv, -du)``.  The pieces between grid lines and their
+    quadrature are those of :func:`edge_integrals`; a cell's data is read once for consecutive
+    pieces in it (along a segment, and from one segment to the next along a chain).  The sums over
+    the segments are compensated (Neumaier): Green's integrals add terms of the size of the
+    row-antiderivatives that cancel around a closed curve, and the compensation keeps the result
+    independent of the segments' order to about one rounding.
+
+    Returns the length of the segments that count in the functional's length term: the
+    interfaces, and the image's edge where a region other than 0 lies on it.
+    """
+    cdef Py_ssize_t channels = values.shape[2], rows = values.shape[0], cols = values.shape[1]
+    cdef Py_ssize_t e, ch, g, a, j, i, o, count = starts.shape[0], last_a = -1, last_j = -1
+    cdef bint with_parts = parts.shape[0] > 0
+    cdef double nodes[3]
+    cdef double weights[3]
+    cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, area, length = 0.0
+    cdef double t_edge, t, w, g1, g2, weight, intensity
+    cdef double *acc
+    cdef double *carry
+    cdef double length_carry = 0.0
+    cdef Cell *cells
+    cdef Cell *cell
+    if moments.shape[1] != 1 + 2 * channels or (with_parts and (
+            parts.shape[0] != count or parts.shape[1] != 2 or parts.shape[2] != 2 * channels)):
+        raise ValueError("moments must be (K, 1 + 2C) and parts (S, 2, 2C) or empty")
+    acc = <double *> malloc((2 * channels + 1) * sizeof(double))
+    cells = <Cell *> malloc(channels * sizeof(Cell))
+    carry = <double *> calloc(moments.shape[0] * moments.shape[1], sizeof(double))
+    if acc == NULL or cells == NULL or carry == NULL:
+        free(acc)
+        free(cells)
+        free(carry)
+        raise MemoryError()
+    nodes[0], nodes[1], nodes[2] = 0.5 - 0.5 * sqrt(0.6), 0.5, 0.5 + 0.5 * sqrt(0.6)
+    weights[0], weights[1], weights[2] = 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0
+    with nogil:
+        for e in range(count):
+            u0, v0 = starts[e, 0] + 1.0, starts[e, 1] + 1.0
+            du, dv = ends[e, 0] + 1.0 - u0, ends[e, 1] + 1.0 - v0
+            for ch in range(2 * channels):
+                acc[ch] = 0.0
+                if with_parts:
+                    parts[e, 0, ch] = 0.0
+                    parts[e, 1, ch] = 0.0
+            # next grid lines in the direction of travel
+            k_u = _floor(u0) + 1.0 if du > 0 else -_floor(-u0) - 1.0
+            k_v = _floor(v0) + 1.0 if dv > 0 else -_floor(-v0) - 1.0
+            t_prev = 0.0
+            while True:
+                t_u = (k_u - u0) / du if du != 0.0 else 2.0
+                t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
+                t_next = min(t_u, t_v, 1.0)
+                span = t_next - t_prev
+                if span > 0.0:
+                    t_mid = t_prev + 0.5 * span
+                    # the cell of the piece's middle (clamped to the padded image: >= 0, so a
+                    # truncation is its floor)
+                    a = <Py_ssize_t> min(max(u0 + t_mid * du, 0.0), <double> rows)
+                    j = <Py_ssize_t> min(max(v0 + t_mid * dv, 0.0), <double> cols)
+                    if a != last_a or j != last_j:
+                        _cells(values, table, anchor, a, j, cells)
+                        last_a, last_j = a, j
+                    for ch in range(channels):
+                        cell = &cells[ch]
+                        for g in range(3):
+                            t_edge = t_prev + span * nodes[g]
+                            t = u0 + t_edge * du - a
+                            w = v0 + t_edge * dv - j
+                            g1, g2 = _green(cell, t, w)
+                            weight = span * weights[g]
+                            acc[ch] += weight * dv * g1
+                            acc[channels + ch] += weight * dv * g2
+                            if with_parts:
+                                intensity = (1.0 - w) * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
+                                parts[e, 0, ch] += weight * (1.0 - t_edge) * intensity
+                                parts[e, 1, ch] += weight * t_edge * intensity
+                                parts[e, 0, channels + ch] += weight * (1.0 - t_edge) * intensity * intensity
+                                parts[e, 1, channels + ch] += weight * t_edge * intensity * intensity
+                if t_next >= 1.0:
+                    break
+                if t_u <= t_next:
+                    k_u += 1.0 if du > 0 else -1.0
+                if t_v <= t_next:
+                    k_v += 1.0 if dv > 0 else -1.0
+                t_prev = t_next
+            i, o = inner[e], outer[e]
+            acc[2 * channels] = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])  # the area
+            for ch in range(2 * channels + 1):
+                g = 0 if ch == 2 * channels else 1 + ch  # the column: area first, then I, then I^2
+                _compensated(&moments[i, g], &carry[i * moments.shape[1] + g], acc[ch])
+                if o >= 0:
+                    _compensated(&moments[o, g], &carry[o * moments.shape[1] + g], -acc[ch])
+            if o >= 0 or i > 0:
+                _compensated(&length, &length_carry, sqrt(du * du + dv * dv))
+        for i in range(moments.shape[0] * moments.shape[1]):
+            moments[i // moments.shape[1], i % moments.shape[1]] += carry[i]
+    free(acc)
+    free(cells)
+    free(carry)
+    return length + length_carry
+
+
+def band_cholesky(double[:, ::1] band):
+    """Cholesky factorisation ``A = U^T U`` of a symmetric positive definite band matrix, in place.
+
+    ``band[j, w + i - j] = A[i, j]`` for ``j - w <= i <= j`` (column j's entries on and above the
+    diagonal, w the half bandwidth) becomes U in the same layout.  O(n w^2), no fill outside the
+    band.  Returns 0, or ``j + 1`` where the leading minor of order ``j + 1`` is not positive.
+    """
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, first, failed = 0
+    cdef double total
+    with nogil:
+        for j in range(n):
+            first = j - w if j > w else 0
+            for i in range(first, j + 1):
+                total = band[j, w + i - j]
+                for k in range(max(first, i - w), i):
+                    total -= band[i, w + k - i] * band[j, w + k - j]
+                if i < j:
+                    band[j, w + i - j] = total / band[i, w]
+                elif total > 0.0:
+                    band[j, w] = sqrt(total)
+                else:
+                    failed = j + 1
+                    break
+            if failed:
+                break
+    return failed
+
+
+def band_solve(const double[:, ::1] factor, double[::1] rhs):
+    """Solve ``U^T U x = rhs`` in place with the factor of :func:`band_cholesky`."""
+    cdef Py_ssize_t n = factor.shape[0], w = factor.shape[1] - 1, i, j, k
+    cdef double total
+    with nogil:
+        for j in range(n):  # U^T y = rhs
+            total = rhs[j]
+            for k in range(j - w if j > w else 0, j):
+                total -= factor[j, w + k - j] * rhs[k]
+            rhs[j] = total / factor[j, w]
+        for i in range(n - 1, -1, -1):  # U x = y
+            total = rhs[i]
+            for j in range(i + 1, min(n, i + w + 1)):
+                total -= factor[j, w + i - j] * rhs[j]
+            rhs[i] = total / factor[i, w]
+
+
+def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::1] offsets):
+    """The cycles of the map ``i -> following[i]`` (a permutation), each from its smallest
+    element: ``order[offsets[c]:offsets[c + 1]]`` is cycle c in order (``offsets`` holds n + 1).
+    Returns the number of cycles."""
+    cdef Py_ssize_t n = following.shape[0], first, current, count = 0, position = 0
+    cdef unsigned char *seen = <unsigned char *> calloc(max(n, 1), sizeof(unsigned char))
+    if seen == NULL:
+        raise MemoryError()
+    with nogil:
+        for first in range(n):
+            if seen[first]:
+                continue
+            offsets[count] = position
+            count += 1
+            current = first
+            while not seen[current]:
+                seen[current] = 1
+                order[position] = current
+                position += 1
+                current = following[current]
+        offsets[count] = position
+    free(seen)
+    return count

@@ -181,7 +181,9 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
             margin *= 2
     else:
         solution = _solve(problem, run, init, settings.roi, callback)
-    return _result(problem, solution)
+    fields, objects_of = _result_fields(problem, solution)
+    del problem, solution  # the normalised image goes before the objects' pass, the peak of memory
+    return _with_objects(fields, *objects_of)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -224,9 +226,10 @@ def _solve(problem, run, init, roi, callback):
     return _Solution(problem, result, light, *_in_whole_image(result, problem.box, problem.domain, shape))
 
 
-def _result(problem, solution):
-    """The result, built once: in the whole image's frame and the caller's units, with the region
-    of every pixel and the objects (:func:`activecontour.objects.measure.find_objects`)."""
+def _result_fields(problem, solution):
+    """The result's fields, in the whole image's frame and the caller's units, but the objects;
+    and what the objects are found from (:func:`_with_objects`).  They hold neither the problem
+    nor the backend's result."""
     part, result = solution.problem, solution.result
     energy, energies, c_in, c_out, constants = (result.energy, result.energies, result.c_in, result.c_out,
                                                 result.constants)
@@ -238,9 +241,7 @@ def _result(problem, solution):
         c_out = scalar_if_gray(offset + scale * np.asarray(c_out))
         if constants is not None:
             constants = offset + scale * np.asarray(constants)
-    classes = result.classes
-    if classes is None:  # two regions: the inside is region 1
-        classes = solution.mask.astype(np.int32)
+    if result.classes is None:  # two regions: the inside is region 1 (the classes made after the objects)
         constants = np.array([np.atleast_1d(c_out), np.atleast_1d(c_in)])
     offset, scale = part.units
     shape = problem.shape
@@ -250,15 +251,23 @@ def _result(problem, solution):
     # objects are the connected pieces of each non-background region (N regions: of each class,
     # its sub-pixel curves)
     by_class = solution.contours if result.class_contours is None else result.class_contours[1:]
-    object_contours, labels, objects = find_objects(by_class, shape, pixels,
-                                                    separate=bool(problem.settings.separate))
-    return SegmentationResult(
+    fields = dict(
         mask=solution.mask, contours=solution.contours, c_in=c_in, c_out=c_out, energy=energy,
         energies=energies, n_iter=result.n_iter, status=result.status, backend=result.backend,
         phi=solution.phi, mu=part.mu, c_in_image=scalar_if_gray(offset + scale * np.asarray(c_in)),
-        c_out_image=scalar_if_gray(offset + scale * np.asarray(c_out)), labels=labels, objects=objects,
-        object_contours=object_contours, classes=classes, constants=constants, light=solution.light,
-        roi=solution.roi, n_regions=problem.n_regions, class_contours=result.class_contours)
+        c_out_image=scalar_if_gray(offset + scale * np.asarray(c_out)), classes=result.classes,
+        constants=constants, light=solution.light, roi=solution.roi, n_regions=problem.n_regions,
+        class_contours=result.class_contours)
+    return fields, (by_class, shape, pixels, bool(problem.settings.separate))
+
+
+def _with_objects(fields, by_class, shape, pixels, separate):
+    """The result: its fields with the objects (:func:`activecontour.objects.measure.find_objects`)
+    and, for two regions, the classes of its mask."""
+    object_contours, labels, objects = find_objects(by_class, shape, pixels, separate=separate)
+    if fields["classes"] is None:
+        fields["classes"] = fields["mask"].astype(np.int32)
+    return SegmentationResult(**fields, labels=labels, objects=objects, object_contours=object_contours)
 
 
 def _reaches_edge(solution, domain):

@@ -35,6 +35,7 @@ __all__ = [
     "split_curves",
     "stack_curves",
     "stacked_next",
+    "subdivide",
     "take_curves",
     "take_vertices",
     "tangential_gradient",
@@ -356,34 +357,28 @@ def split_curves(points, offsets):
     return [points[a:b].copy() for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def resample_stacked(points, next_index, offsets, spacing, which, *, min_vertices=8):
-    """:func:`resample` of the stacked curves that ``which`` (a bool per curve) selects, the others
-    kept as they are, in one pass over all vertices (no loop over the curves).
+def resample_stacked(points, next_index, offsets, spacing, *, min_vertices=8):
+    """:func:`resample` of every stacked curve, in one pass over all vertices (no loop over the
+    curves).
 
     Returns ``(points, next_index, offsets)``.
     """
+    if len(offsets) == 1:
+        return points, next_index, offsets
     d = np.take(points, next_index, axis=0) - points
     h = np.hypot(d[:, 0], d[:, 1])
-    counts = np.diff(offsets)
-    if not which.any():
-        return points, next_index, offsets
     total = np.add.reduceat(h, offsets[:-1])
-    n_new = np.where(which, np.maximum(min_vertices, np.round(total / spacing).astype(np.intp)), counts)
-    new_offsets = np.concatenate([[0], np.cumsum(n_new)]).astype(np.intp)
-    out = np.empty((new_offsets[-1], 2))
-    out[np.repeat(~which, n_new)] = points[np.repeat(~which, counts)]
-    chosen = np.flatnonzero(which)
-    m = n_new[chosen]
-    owner = np.repeat(chosen, m)
-    k = np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m)  # the vertex's number in its curve
+    m = np.maximum(min_vertices, np.round(total / spacing).astype(np.intp))
+    new_offsets = np.concatenate([[0], np.cumsum(m)]).astype(np.intp)
+    owner = np.repeat(np.arange(len(m)), m)
+    k = np.arange(new_offsets[-1]) - np.repeat(new_offsets[:-1], m)  # the vertex's number in its curve
     # arc length along all curves; each curve's vertices at equal steps of its own length
     cumulative = np.cumsum(h)
-    arc = k * (total[owner] / n_new[owner]) + (cumulative - h)[offsets[:-1]][owner]
+    arc = k * (total[owner] / m[owner]) + (cumulative - h)[offsets[:-1]][owner]
     edge = np.clip(np.searchsorted(cumulative, arc, side="right"), offsets[owner], offsets[owner + 1] - 1)
     along = arc - (cumulative[edge] - h[edge])
     fraction = np.divide(along, h[edge], out=np.zeros_like(along), where=h[edge] > 0)
-    along_edge = fraction[:, None] * np.take(d, edge, axis=0)
-    out[np.repeat(which, n_new)] = np.take(points, edge, axis=0) + along_edge
+    out = np.take(points, edge, axis=0) + fraction[:, None] * np.take(d, edge, axis=0)
     return out, stacked_next(new_offsets), new_offsets
 
 
@@ -395,3 +390,39 @@ def to_xy(points):
 def from_xy(points):
     """(x, y) -> (row, col), the inverse of :func:`to_xy`."""
     return to_xy(points)
+
+
+def subdivide(points, lengths, spacing, longest=None):
+    """The same closed polygons with their long edges split into equal pieces: nothing moves.
+
+    Every edge longer than ``longest`` (``spacing`` by default) becomes ``ceil(h / spacing)``
+    pieces; the other edges stay.  The polygons, and so their region and every integral over it,
+    are unchanged (the new vertices lie on the old edges), unlike :func:`resample`, whose chords
+    cut the corners.
+
+    Parameters
+    ----------
+    points : ndarray (sum K_i, 2)
+        The curves stacked one after the other, each vertex once (as :func:`stack_curves`).
+    lengths : ndarray (n,) of int
+        K_i, the number of vertices of each curve.
+    spacing, longest : float or ndarray (sum K_i,)
+        Per edge, when arrays (the edge from each vertex).
+
+    Returns
+    -------
+    points : ndarray (sum L_i, 2)
+    lengths : ndarray (n,) of int
+        L_i, the new number of vertices of each curve.
+    """
+    lengths = np.asarray(lengths, dtype=np.intp)
+    longest = spacing if longest is None else longest
+    curve_first = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    index = np.arange(len(points))
+    end = points[curve_first + (index - curve_first + 1) % np.repeat(lengths, lengths)]
+    h = np.hypot(*(end - points).T)
+    count = np.where(h > longest, np.ceil(h / spacing), 1).astype(np.intp)
+    edge = np.repeat(index, count)
+    t = (np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)) / count[edge]
+    dense = points[edge] + t[:, None] * (end - points)[edge]
+    return dense, np.add.reduceat(count, np.cumsum(lengths) - lengths) if len(lengths) else lengths

@@ -80,11 +80,17 @@ def mask_to_curves(mask, *, min_area=0.0):
     half-way between inside and outside pixel centres and :func:`rasterize` of the result gives
     the mask back.  With ``positive_orientation="high"`` the mask lies on the same side of every
     curve, which makes outer boundaries positive and holes negative in our convention.  Curves
-    with ``|area| <= min_area`` are dropped.
+    with ``|area| <= min_area`` are dropped.  Only the mask's bounding box is traced (the same
+    curves: a small object in a large image costs its box, not the image).
     """
-    points, offsets = _kernels.mask_contours(np.ascontiguousarray(mask, dtype=bool).view(np.uint8))
-    return _closed_curves(np.frombuffer(points, dtype=np.float64).reshape(-1, 2),
-                          np.frombuffer(offsets, dtype=np.intp), min_area)
+    mask = np.asarray(mask, dtype=bool)
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if rows.size == 0:
+        return []
+    box = np.ascontiguousarray(mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1])
+    points, offsets = _kernels.mask_contours(box.view(np.uint8))
+    points = np.frombuffer(points, dtype=np.float64).reshape(-1, 2) + (rows[0], cols[0])
+    return _closed_curves(points, np.frombuffer(offsets, dtype=np.intp), min_area)
 
 
 def level_curves(padded, level, *, min_area=0.0):

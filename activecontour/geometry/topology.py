@@ -25,6 +25,8 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import curve_areas, signed_area, split_curves, stack_curves, take_curves
+from activecontour.geometry.regions import nesting
+from activecontour.geometry.regions import polygons as valid_polygons
 
 __all__ = ["border_overlap", "crossings", "curve_areas", "nucleation_sites", "region_problem",
            "region_union", "repair", "repair_stacked", "winding_number"]
@@ -42,7 +44,8 @@ _CROSSINGS = 64
 def crossings(points, next_index):
     """Pairs of non-adjacent edges that cross, with the crossing's parameter on each edge.
 
-    Found in compiled code (:func:`activecontour._kernels.crossings`: a uniform grid, O(K)).
+    Found in compiled code (:func:`activecontour._kernels.segments_meet`, the network's test too:
+    a uniform grid, O(K)).
 
     Returns
     -------
@@ -53,17 +56,17 @@ def crossings(points, next_index):
         both strictly inside (0, 1).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    next_index = np.ascontiguousarray(next_index, dtype=np.intp)
+    start, end = np.arange(len(points)), np.ascontiguousarray(next_index, dtype=np.intp)
     capacity = _CROSSINGS
     while True:
-        first, second = np.empty(capacity, dtype=np.intp), np.empty(capacity, dtype=np.intp)
-        s, t = np.empty(capacity), np.empty(capacity)
-        found = _kernels.crossings(points, next_index, first, second, s, t)
+        pairs, where = np.empty((capacity, 2), dtype=np.intp), np.empty((capacity, 2))
+        found = _kernels.segments_meet(points, start, end, False, len(points) ** 2, pairs, where)
         if found <= capacity:
             break
         capacity = found
-    order = np.lexsort((second[:found], first[:found]))
-    return first[order], second[order], s[order], t[order]
+    pairs, where = pairs[:found], where[:found]
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    return pairs[order, 0], pairs[order, 1], where[order, 0], where[order, 1]
 
 
 def winding_number(points, next_index, probes):
@@ -79,7 +82,7 @@ def winding_number(points, next_index, probes):
     if len(probes) * len(points) <= _DIRECT_WORK:
         _kernels.winding(points, next_index, probes, out)
     else:
-        _kernels.winding_banded(points, next_index, probes, out)
+        _kernels.winding_banded(points, np.arange(len(points)), next_index, probes, out)
     return out
 
 
@@ -230,12 +233,9 @@ def region_problem(curves):
     if invalid.size:
         i = int(invalid[0])
         return f"contours[{i}] crosses or touches itself ({shapely.is_valid_reason(polygons[i])})"
-    inner, outer = _within_pairs(polygons)
-    pairs = set(zip(inner.tolist(), outer.tolist(), strict=True))
-    for i, j in pairs:
-        if (j, i) in pairs:
-            return f"contours[{min(i, j)}] and contours[{max(i, j)}] are the same curve"
-    depth = np.bincount(inner, minlength=len(curves))
+    depth, parent, same = nesting(polygons)
+    if same:
+        return f"contours[{same[0][0]}] and contours[{same[0][1]}] are the same curve"
     areas = curve_areas(points, next_index, offsets)
     wrong = np.flatnonzero((areas > 0) != (depth % 2 == 0))
     if wrong.size:
@@ -244,9 +244,9 @@ def region_problem(curves):
                 f"{depth[i]} other contours: outer boundaries must be positive and holes negative, "
                 "and no contour may cross another")
     holes = {i: [] for i in np.flatnonzero(depth % 2 == 0).tolist()}
-    for i, j in pairs:
-        if depth[i] % 2 == 1 and depth[j] == depth[i] - 1:
-            holes[j].append(shapely.get_exterior_ring(polygons[i]))
+    for i in np.flatnonzero(depth % 2 == 1).tolist():
+        if parent[i] in holes:
+            holes[parent[i]].append(shapely.get_exterior_ring(polygons[i]))
     shells = [shapely.Polygon(shapely.get_exterior_ring(polygons[i]), holes[i]) for i in holes]
     region = shapely.MultiPolygon(shells)
     if not shapely.is_valid(region):
@@ -273,14 +273,12 @@ def region_union(curves, *, signed=False):
     import shapely
     from shapely.geometry.polygon import orient
 
-    polygons = [shapely.make_valid(shapely.Polygon(np.asarray(c, dtype=np.float64))) for c in curves]
+    polygons = valid_polygons(curves)
     if signed:
         areas = np.array([signed_area(np.asarray(c, dtype=np.float64)) for c in curves])
         order, adds = np.argsort(-np.abs(areas), kind="stable"), areas > 0
     else:
-        inner, outer = _within_pairs(np.array(polygons, dtype=object))
-        strictly = ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
-        depth = np.bincount(inner[strictly], minlength=len(polygons))
+        depth = nesting(polygons)[0]
         order, adds = np.argsort(depth, kind="stable"), depth % 2 == 0
     region = shapely.Polygon()
     for i in order:
@@ -292,19 +290,6 @@ def region_union(curves, *, signed=False):
             out.append(np.asarray(polygon.exterior.coords)[:-1])
             out.extend(np.asarray(ring.coords)[:-1] for ring in polygon.interiors)
     return out
-
-
-def _within_pairs(polygons):
-    """The pairs ``(inner, outer)`` of distinct polygons with ``inner`` within ``outer``: the pairs
-    whose boxes meet (an STR tree), then one vectorised test (the tree's own "within" predicate
-    costs ~50x more on a thousand polygons)."""
-    import shapely
-
-    inner, outer = shapely.STRtree(polygons).query(polygons)
-    distinct = inner != outer
-    inner, outer = inner[distinct], outer[distinct]
-    within = shapely.within(polygons[inner], polygons[outer])
-    return inner[within], outer[within]
 
 
 def _chains(sequence, n_points):
