@@ -100,9 +100,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
     nucleate, accelerate, global_start = chosen.nucleate, chosen.accelerate, chosen.global_start
     from_result = hasattr(init, "contours") and hasattr(init, "mask")
     shape = model.shape
-    # the start is the given region exactly (a previous result's energy and mask): long edges are
-    # split, nothing is cut; the remesh takes short edges when that lowers the energy
-    geometry = _subdivided(stack_curves(initial_curves(init, shape, model.image, params.mu)), spacing)
+    # a given start is kept exactly (a previous result's energy and mask): long edges are split,
+    # nothing is cut, and the remesh takes short edges when that lowers the energy; the starts we
+    # draw ourselves (the default start, the global move's threshold set) are at the spacing
+    start = stack_curves(initial_curves(init, shape, model.image, params.mu))
+    geometry = _resampled(start, spacing) if init is None else _subdivided(start, spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
@@ -195,7 +197,7 @@ def _global_move(model, params, geometry, energy, spacing):
     chosen = background if shares[1] > _BACKGROUND_SHARE * shares[0] else objects
     if not chosen:
         return None
-    moved = _subdivided(stack_curves(chosen), spacing)
+    moved = _resampled(stack_curves(chosen), spacing)
     new = evaluate(model, *moved[:2], params, gradient=True)
     return (moved, new) if new.energy < energy else None
 

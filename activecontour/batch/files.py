@@ -5,11 +5,13 @@ from __future__ import annotations
 import glob
 import os
 
+from activecontour.io.images import IMAGE_SUFFIXES
+
 __all__ = ["INPUT_SUFFIXES", "find_images"]
 
-#: File name suffixes taken as images when a folder is listed (compared in lower case).
-INPUT_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp", ".gif", ".webp", ".pgm", ".ppm",
-                  ".pnm")
+#: File name suffixes taken as images when a folder is listed (compared in lower case): the ones
+#: :func:`activecontour.io.load_image` reads.
+INPUT_SUFFIXES = IMAGE_SUFFIXES
 
 
 _GLOB_CHARACTERS = frozenset("*?[")
