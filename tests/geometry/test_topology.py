@@ -27,6 +27,27 @@ def test_crossings_are_found_and_exact():
     assert topology.crossings(*stack_curves([square])[:2])[0].size == 0
 
 
+def test_one_grid_test_for_curves_and_networks():
+    """_kernels.segments_meet serves both: for curves (touching=False) the proper crossings with
+    their parameters, for a network (touching=True) also a touch and a collinear overlap, and
+    never two segments that only share a node."""
+    from activecontour import _kernels
+
+    nodes = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, -1.0], [2.0, 3.0],  # 0-1 crossed by 2-3 at (2, 0)
+                      [4.0, 2.0], [4.0, -2.0],  # 1-4 and 1-5 share node 1 only
+                      [6.0, 0.0], [5.0, 0.0], [8.0, 0.0],  # 6-8 and 7-8 overlap along 7-8
+                      [10.0, -1.0], [10.0, 1.0], [10.0, 0.0], [12.0, 0.0]])  # 11 lies on 9-10
+    start = np.array([0, 2, 1, 1, 6, 7, 9, 11], dtype=np.intp)
+    end = np.array([1, 3, 4, 5, 8, 8, 10, 12], dtype=np.intp)
+    pairs, where = np.empty((16, 2), dtype=np.intp), np.empty((16, 2))
+    found = _kernels.segments_meet(nodes, start, end, False, 100, pairs, where)
+    assert found == 1 and tuple(pairs[0]) == (0, 1)
+    np.testing.assert_allclose(where[0], [0.5, 0.25])  # (2, 0): half of 0-1, a quarter of 2-3
+    found = _kernels.segments_meet(nodes, start, end, True, 100, pairs, np.empty((0, 2)))
+    assert sorted(map(tuple, pairs[:found])) == [(0, 1), (4, 5), (6, 7)]
+    assert _kernels.segments_meet(nodes, start, end, True, 1, pairs, np.empty((0, 2))) == 1  # the limit
+
+
 def test_repair_of_overlapping_curves_is_their_union():
     a = ac.circle((20.0, 20.0), 10.0, 200)
     b = ac.circle((20.0, 32.0), 10.0, 200)
