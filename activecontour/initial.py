@@ -2,17 +2,37 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from activecontour.geometry.curve import as_curve, orient, signed_area
 from activecontour.geometry.raster import mask_to_curves
 
-__all__ = ["circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_split",
-           "threshold_starts"]
+__all__ = ["Start", "circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_mask",
+           "threshold_split", "threshold_starts"]
 
 #: Radius of the default initial circle, as a fraction of the image's smaller side (the same as
 #: ``skimage.segmentation.morphological_chan_vese``'s default circle).
 DEFAULT_RADIUS_FRACTION = 3.0 / 8.0
+
+
+@dataclass
+class Start:
+    """Curves that lie on the objects' boundaries already, as an ``init``: like a result, they are
+    taken as oriented and started with the small smoothing length of a start on the boundaries
+    (a sequence's warm start, the object a ``roi="init"`` run continues from).
+
+    Attributes
+    ----------
+    contours : list of ndarray (K, 2)
+        Oriented as a result's (outer boundaries positive, holes negative).
+    mask : bool ndarray (M, N)
+        Their inside.
+    """
+
+    contours: list
+    mask: np.ndarray
 
 
 def circle(center, radius, n=None):
@@ -306,6 +326,24 @@ def default_init(shape, values=None, mu=0.0):
     return threshold_starts(values, mu)[0] or fallback
 
 
+def threshold_mask(values, mu=0.0, inside="auto"):
+    """The default start's object class, a bool (M, N) mask, and its contrast ``(c_in - c_out)^2``
+    (the mean over channels; 0 for an image with one class): the threshold set of
+    :func:`default_init` with every piece (:func:`threshold_starts` drops the specks).
+
+    ``inside``: which class is the objects, as ``segment``'s: ``"auto"`` the one covering less
+    of the border, ``"bright"``/``"dark"`` the one of the larger/smaller mean (over channels).
+    """
+    smooth = _blurred(values)
+    split = _split_that_holds_at_twice_the_scale(values, smooth, mu)
+    mask, contrast = _object_class(smooth, values, mu, split)
+    if inside != "auto" and contrast > 0:
+        brighter = np.mean(values[mask]) > np.mean(values[~mask])
+        if brighter != (inside == "bright"):
+            mask = ~mask
+    return mask, contrast
+
+
 def threshold_starts(values, mu=0.0, *, background=False):
     """The curves of the default start's object class, and with ``background`` of the other one.
 
@@ -318,10 +356,7 @@ def threshold_starts(values, mu=0.0, *, background=False):
     list of (list of ndarray (K, 2))
         One or two curve lists.
     """
-    smooth = _blurred(values)
-    split = _split_that_holds_at_twice_the_scale(values, smooth, mu)
-    inside, contrast = _object_class(smooth, values, mu, split)
-    del smooth  # image-sized: free before tracing the mask's outlines
+    inside, contrast = threshold_mask(values, mu)
     if contrast <= 0:
         return [[]] * (1 + background)
     speck = speck_area(mu, contrast)
