@@ -199,7 +199,7 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
         solution = _pointed(problem, run, init, callback)
     else:
         solution = _solve(problem, run, init, settings.roi, callback)
-    return _result(problem, solution)
+    return _result(problem, solution, getattr(init, "seeds", None))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -242,9 +242,10 @@ def _solve(problem, run, init, roi, callback):
     return _Solution(problem, result, light, *_in_whole_image(result, problem.box, problem.domain, shape))
 
 
-def _result(problem, solution):
+def _result(problem, solution, seeds=None):
     """The result, built once: in the whole image's frame and the caller's units, with the region
-    of every pixel and the objects (:func:`activecontour.objects.measure.find_objects`)."""
+    of every pixel and the objects (:func:`activecontour.objects.measure.find_objects`; ``seeds``:
+    a :class:`~activecontour.initial.Start`'s, the objects of the frame before)."""
     part, result = solution.problem, solution.result
     energy, energies, c_in, c_out, constants = (result.energy, result.energies, result.c_in, result.c_out,
                                                 result.constants)
@@ -269,7 +270,7 @@ def _result(problem, solution):
     min_size = _min_size(problem.settings.min_size, part.mu, constants)
     object_contours, labels, objects = find_objects(by_class, shape, pixels,
                                                     separate=bool(problem.settings.separate),
-                                                    min_size=min_size)
+                                                    min_size=min_size, seeds=seeds)
     return SegmentationResult(
         mask=solution.mask, contours=solution.contours, c_in=c_in, c_out=c_out, energy=energy,
         energies=energies, n_iter=result.n_iter, status=result.status, backend=result.backend,

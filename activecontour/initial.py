@@ -29,10 +29,15 @@ class Start:
         Oriented as a result's (outer boundaries positive, holes negative).
     mask : bool ndarray (M, N)
         Their inside.
+    seeds : int ndarray (M, N), optional
+        The objects these curves were (a sequence's frame before: its ``labels``): objects that
+        hold two of them are cut between them
+        (:func:`activecontour.objects.measure.split_by_seeds`), so touching objects keep apart.
     """
 
     contours: list
     mask: np.ndarray
+    seeds: np.ndarray | None = None
 
 
 def circle(center, radius, n=None):

@@ -32,7 +32,8 @@ from activecontour.geometry.raster import rasterize
 from activecontour.geometry.regions import group_curves, top_left
 from activecontour.objects.split import split_touching
 
-__all__ = ["default_min_size", "find_objects", "group_curves", "label_image", "measure", "polygon_moments"]
+__all__ = ["SEED_SHARE", "default_min_size", "find_objects", "group_curves", "label_image", "measure",
+           "polygon_moments", "split_by_seeds"]
 
 
 def default_min_size(mu, constants):
@@ -65,7 +66,84 @@ def default_min_size(mu, constants):
     return speck_area(mu, contrast) if contrast > 0 else DEFAULT_INIT_MIN_AREA
 
 
-def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0):
+#: A seed (an object of the frame before, :func:`split_by_seeds`) claims a part of an object when at
+#: least this fraction of its area lies inside the object: a neighbour that grew into its
+#: contact by a few pixels does not.
+SEED_SHARE = 0.5
+
+
+def split_by_seeds(objects, labels, seeds, image=None):
+    """Touching objects kept apart by the objects they were: the previous frame's objects seed
+    the split of this frame's.
+
+    An object that holds two or more seeds (ids of ``seeds`` with at least ``SEED_SHARE`` of
+    their pixels inside it) is cut between them: its pixels (holes filled) go to the seeds by the
+    watershed of their distance to the outline, from markers that are each seed's pixels inside
+    it less a pixel along the borders between seeds (so that the cut follows the neck the two
+    objects make now, where there is one, not the line of the frame before); the sub-pixel
+    polygon is then cut along the parts' borders as :func:`split_touching` cuts it.  Objects that
+    touch keep apart however deep the contact, and two objects that merged without a waist stay
+    two while they overlap.  Every other object is split by :func:`split_touching` (an object
+    entering the field against another, a dividing cell).
+
+    Objects move between frames: the seeds must still overlap their objects by ``SEED_SHARE``,
+    i.e. move by less than about a third of their radius a frame.
+
+    Parameters
+    ----------
+    objects : list of list of ndarray
+        Object k: outer boundary, then holes; id k + 1 in ``labels``.
+    labels : int ndarray (M, N)
+    seeds : int ndarray (M, N)
+        The previous frame's objects (0: background), e.g. its ``result.labels``.
+    image : ndarray, optional
+        As :func:`split_touching` takes it.
+
+    Returns
+    -------
+    list of list of ndarray
+        The objects, cut ones replaced by their parts.
+    """
+    import scipy.ndimage
+    import skimage.segmentation
+
+    from activecontour.objects.split import _cut
+
+    boxes = scipy.ndimage.find_objects(labels, max_label=len(objects))
+    seed_area = np.bincount(seeds.ravel())
+    result, rest = [], []
+    for k, (curves, box) in enumerate(zip(objects, boxes, strict=True)):
+        if box is None:
+            rest.append(k)
+            continue
+        window = scipy.ndimage.binary_fill_holes(labels[box] == k + 1)
+        held = seeds[box] * window
+        counts = np.bincount(held.ravel(), minlength=seed_area.size)
+        counts[0] = 0
+        claiming = np.flatnonzero(counts >= SEED_SHARE * np.maximum(seed_area, 1))
+        if len(claiming) < 2:
+            rest.append(k)
+            continue
+        lookup = np.zeros(seed_area.size, dtype=np.int32)
+        lookup[claiming] = np.arange(1, len(claiming) + 1)
+        markers = lookup[held]
+        inner = markers * (scipy.ndimage.minimum_filter(markers, size=3, mode="nearest") ==
+                           scipy.ndimage.maximum_filter(markers, size=3, mode="nearest"))
+        for part in range(1, len(claiming) + 1):  # a seed of one pixel's width keeps its pixels
+            if not (inner == part).any():
+                inner[markers == part] = part
+        window = np.pad(window, 1)
+        parts = skimage.segmentation.watershed(-scipy.ndimage.distance_transform_edt(window),
+                                               np.pad(inner, 1), mask=window)
+        result.extend(_cut(curves, parts, np.array([box[0].start - 1, box[1].start - 1])))
+    if rest:
+        lookup = np.zeros(len(objects) + 1, dtype=labels.dtype)
+        lookup[np.array(rest) + 1] = np.arange(1, len(rest) + 1)
+        result.extend(split_touching([objects[k] for k in rest], lookup[labels], image))
+    return result
+
+
+def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, seeds=None):
     """The objects of a result: their curves, the label image and the measurement table.
 
     Parameters
@@ -84,6 +162,9 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0):
     min_size : float
         Objects (after the split) whose area (px^2, of the sub-pixel outline, holes subtracted)
         is below this are left out.
+    seeds : int ndarray (M, N), optional
+        The objects of the frame before (a sequence's): with ``separate``, objects that hold two
+        of them are cut between them (:func:`split_by_seeds`).
 
     Returns
     -------
@@ -99,7 +180,8 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0):
     for k, curves in enumerate(by_class):
         found = group_curves(curves)
         if separate and found:
-            found = split_touching(found, label_image(found, shape), image)
+            found = (split_touching(found, label_image(found, shape), image) if seeds is None else
+                     split_by_seeds(found, label_image(found, shape), seeds, image))
         if min_size > 0:
             found = [curves for curves in found if sum(map(signed_area, curves)) >= min_size]
         objects += found

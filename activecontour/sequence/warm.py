@@ -74,4 +74,4 @@ def _warm_start(previous, image, settings):
     energies = [evaluate(model, *stack_curves(curves)[:2], params).energy if curves else np.inf
                 for curves in starts]
     curves = starts[int(np.argmin(energies))]
-    return Start(contours=curves, mask=previous.mask) if curves else None
+    return Start(contours=curves, mask=previous.mask, seeds=previous.labels) if curves else None
