@@ -8,11 +8,13 @@ The parts live in modules named after what they hold; this module gathers their 
 :mod:`~activecontour.io.contours`  contour files: JSON, CSV, NPZ and the formats' dispatch
 :mod:`~activecontour.io.vector`  the (x, y) formats, GeoJSON and SVG
 :mod:`~activecontour.io.objects`  one id per object: label image, GeoJSON, ImageJ ROIs, CSV
+:mod:`~activecontour.io.sequences`  a segmented sequence: labels, tracks, objects, contact sheet
 =============================  ================================================================
 
 Every writer renders its whole output in memory first and then moves it into place with
 :func:`os.replace`: a failure never leaves a half-written file.  :func:`save_result` writes a
-result's mask, overlay and contour files as a group: all of them or none.
+result's mask, overlay and contour files as a group: all of them or none; :func:`save_sequence`
+a sequence's files likewise.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from activecontour.imaging.normalize import channels_last
-from activecontour.io.atomic import sweep_temporaries, write_group
+from activecontour.io.atomic import check_protected, sweep_temporaries, write_group
 from activecontour.io.contours import (
     CONTOUR_FORMATS,
     CONVENTION,
@@ -46,6 +48,7 @@ from activecontour.io.pictures import (
     write_mask,
     write_overlay,
 )
+from activecontour.io.sequences import save_sequence, sequence_paths
 
 __all__ = [
     "COLORS",
@@ -62,6 +65,8 @@ __all__ = [
     "read_mask",
     "read_metadata",
     "save_result",
+    "save_sequence",
+    "sequence_paths",
     "sweep_temporaries",
     "write_contours",
     "write_mask",
@@ -125,10 +130,7 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
             f"image has shape {image.shape}, but the result's mask has shape {mask.shape}"
         )
     paths = output_paths(output_stem, formats, objects)
-    protected = [Path(p) for p in protect]
-    for path in paths:
-        if any(_same_file(path, other) for other in protected):
-            raise ValueError(f"refusing to overwrite the input file {os.fspath(path)!r}")
+    check_protected(paths, protect)
     contents = [
         encode_mask(paths[0], mask),
         encode_overlay(paths[1], image, result, color, thickness, OVERLAY_MAX_SIDE),
@@ -177,10 +179,3 @@ def output_stem(directory, source):
     safe = "".join("_" if unicodedata.category(ch)[0] == "C" or ch in "/\\" else ch for ch in stem)
     safe = "_" * (len(safe) - len(safe.lstrip("."))) + safe.lstrip(".")
     return Path(directory) / (safe or "image")
-
-
-def _same_file(a, b):
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return os.path.abspath(a) == os.path.abspath(b)

@@ -16,7 +16,8 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["STALE_AFTER_S", "sweep_temporaries", "temporary_file", "write_atomically", "write_group"]
+__all__ = ["STALE_AFTER_S", "check_protected", "sweep_temporaries", "temporary_file", "write_atomically",
+           "write_group"]
 
 #: A temporary file older than this (seconds) is swept whoever wrote it (a writer on another
 #: machine of a shared file system, whose process cannot be asked after).
@@ -61,6 +62,21 @@ def write_group(items):
         raise
     for _, backup in backups:
         _remove_quietly(backup)
+
+
+def check_protected(paths, protect):
+    """Raise ValueError when one of ``paths`` is one of the files ``protect`` (an input that an
+    output must never overwrite), compared as files where they exist, else as absolute paths."""
+    for path in paths:
+        if any(_same_file(path, other) for other in protect):
+            raise ValueError(f"refusing to overwrite the input file {os.fspath(path)!r}")
+
+
+def _same_file(a, b):
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.abspath(a) == os.path.abspath(b)
 
 
 def temporary_file(path):

@@ -17,7 +17,12 @@ import numpy as np
 
 from activecontour.imaging.normalize import channels_last
 
-__all__ = ["MAX_PIXELS", "SizeLimitError", "load_image"]
+__all__ = ["IMAGE_SUFFIXES", "MAX_PIXELS", "SizeLimitError", "load_image"]
+
+#: File name endings of the images :func:`load_image` reads, compared in lower case: what a folder
+#: of images (a batch's input, a sequence's frames) is taken to hold.
+IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".jp2", ".bmp", ".gif", ".webp", ".pgm",
+                  ".ppm", ".pnm")
 
 #: The largest image :func:`load_image` reads by default, in pixels (rows x columns): 2**27, e.g.
 #: 11585 x 11585 or 16384 x 8192.  Segmenting takes about 30 bytes per pixel (an 8192^2 image about

@@ -158,7 +158,9 @@ def _roi_zip(objects, ids):
             name = f"{int(label):05d}"
             roi = roifile.ImagejRoi.frompoints(to_xy(curves[0]) + IMAGEJ_OFFSET, name=name)
             roi.roitype = roifile.ROI_TYPE.POLYGON
-            archive.writestr(f"{name}.roi", roi.tobytes())
+            # a fixed date (zip's earliest): the same objects give the same bytes, whenever written
+            member = zipfile.ZipInfo(f"{name}.roi", date_time=(1980, 1, 1, 0, 0, 0))
+            archive.writestr(member, roi.tobytes(), compress_type=zipfile.ZIP_DEFLATED)
     return buffer.getvalue()
 
 

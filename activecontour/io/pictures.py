@@ -21,22 +21,25 @@ from activecontour.io.images import MAX_PIXELS, load_image
 __all__ = [
     "COLORS",
     "DISPLAY_PERCENTILES",
-    "IMAGE_SUFFIXES",
     "contrasting_color",
     "display_rgb",
     "encode_mask",
     "line_width",
     "OVERLAY_MAX_SIDE",
+    "PICTURE_SUFFIXES",
     "REGION_COLORS",
     "encode_overlay",
+    "encode_picture",
     "read_mask",
     "render_overlay",
+    "rgb_color",
     "write_mask",
     "write_overlay",
 ]
 
-#: Suffixes of the lossless formats masks and overlays are written in.
-IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".bmp")
+#: Suffixes of the lossless formats masks and overlays are written in (the formats read are
+#: :data:`activecontour.io.images.IMAGE_SUFFIXES`).
+PICTURE_SUFFIXES = (".png", ".tif", ".tiff", ".bmp")
 
 #: Named overlay colours, RGB.
 COLORS = {
@@ -118,9 +121,7 @@ def encode_mask(path, mask):
     """The bytes of the mask file ``path`` (its suffix picks the format), for :func:`write_mask`."""
     import cv2
 
-    suffix = Path(path).suffix.lower()
-    if suffix not in IMAGE_SUFFIXES:
-        raise ValueError(f"mask file must end in one of {IMAGE_SUFFIXES}, got {os.fspath(path)!r}")
+    suffix = _check_suffix(path, "mask")
     mask = np.asarray(mask)
     if mask.ndim != 2 or mask.size == 0:
         raise ValueError(f"mask must be a 2-D array of shape (M, N), got shape {mask.shape}")
@@ -190,7 +191,7 @@ def render_overlay(image, contours, color="auto", thickness="auto", max_side=Non
     if max_side is not None and not (isinstance(max_side, (int, np.integer)) and max_side >= 16):
         raise ValueError(f"max_side must be None or an integer >= 16, got {max_side!r}")
     if not (isinstance(color, str) and color == "auto"):
-        color = _rgb_color(color)
+        color = rgb_color(color)
     rgb = display_rgb(image)
     scale = 1.0
     if max_side is not None and max(rgb.shape[:2]) > max_side:
@@ -284,21 +285,33 @@ def display_rgb(image):
 
 def encode_overlay(path, image, contours, color, thickness, max_side=None):
     """The bytes of the overlay file ``path``, for :func:`write_overlay`."""
+    _check_suffix(path, "overlay")
+    return encode_picture(path, render_overlay(image, contours, color, thickness, max_side))
+
+
+def encode_picture(path, rgb):
+    """The bytes of an RGB picture (M, N, 3) uint8 in the lossless format of ``path``'s suffix
+    (:data:`PICTURE_SUFFIXES`)."""
     import cv2
 
-    suffix = Path(path).suffix.lower()
-    if suffix not in IMAGE_SUFFIXES:
-        raise ValueError(
-            f"overlay file must end in one of {IMAGE_SUFFIXES}, got {os.fspath(path)!r}"
-        )
-    rgb = render_overlay(image, contours, color, thickness, max_side)
+    suffix = _check_suffix(path, "picture")
     ok, buffer = cv2.imencode(suffix, np.ascontiguousarray(rgb[:, :, ::-1]))  # OpenCV wants BGR
     if not ok:
-        raise ValueError(f"OpenCV could not encode an overlay as {suffix}")
+        raise ValueError(f"OpenCV could not encode a picture as {suffix}")
     return buffer.tobytes()
 
 
-def _rgb_color(color):
+def _check_suffix(path, kind):
+    """``path``'s suffix, lower case, when it is one of :data:`PICTURE_SUFFIXES`."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in PICTURE_SUFFIXES:
+        raise ValueError(f"{kind} file must end in one of {PICTURE_SUFFIXES}, got {os.fspath(path)!r}")
+    return suffix
+
+
+def rgb_color(color):
+    """An overlay colour as an RGB triple in 0..255: a name from :data:`COLORS` or a triple;
+    ValueError naming the valid ones otherwise."""
     if isinstance(color, str):
         if color.lower() not in COLORS:
             raise ValueError(f"color must be one of {tuple(COLORS)} or an RGB triple, got {color!r}")

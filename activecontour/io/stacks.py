@@ -10,17 +10,29 @@ import re
 
 import numpy as np
 
-from activecontour.io.images import load_image, tiff_is_single_image
+from activecontour.io.images import IMAGE_SUFFIXES, load_image, tiff_frame_count, tiff_is_single_image
 
-__all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "read_frames"]
+__all__ = ["VIDEO_SUFFIXES", "is_stack", "read_frames"]
 
 #: File name endings read as videos (OpenCV); other files are images or (multi-page) TIFFs.
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".wmv", ".mpg", ".mpeg", ".webm", ".ogv")
-#: Frame files a folder may hold (read by :func:`activecontour.io.images.load_image`).
-IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp", ".webp", ".jp2", ".pgm", ".ppm")
 
 
 # ------------------------------------------------------------------------------------- reading
+
+
+def is_stack(path, axis=0):
+    """Whether the file ``path`` holds a sequence of frames: a video, or a TIFF with more than one
+    frame along ``axis``.  A file no reader opens is not a stack (reading it as an image says why)."""
+    lower = os.fspath(path).lower()
+    if lower.endswith(VIDEO_SUFFIXES):
+        return True
+    if lower.endswith((".tif", ".tiff")):
+        try:
+            return tiff_frame_count(path, axis) > 1
+        except Exception:  # not a readable TIFF: load_image says why, in one line
+            return False
+    return False
 
 
 def read_frames(frames, *, axis=0, select=None):

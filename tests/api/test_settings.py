@@ -143,9 +143,9 @@ def test_specs_carry_default_help_kind_and_choices():
 
 
 def test_the_command_line_defaults_are_the_settings():
-    from app import cli
+    from app.cli.parser import build_parser
 
-    args = cli.build_parser().parse_args(["segment", "image.png"])
+    args = build_parser().parse_args(["segment", "image.png"])
     defaults = Settings()
     shown = [name for name in vars(args) if name in {field.name for field in dataclasses.fields(Settings)}]
     assert len(shown) >= 14

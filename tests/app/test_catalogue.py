@@ -37,6 +37,7 @@ from activecontour.geometry.raster import rasterize
 from activecontour.imaging.normalize import normalize_image
 from activecontour.result import STATUS_MESSAGES
 from app import cli
+from app.cli.outputs import Directories
 
 SHAPE = (48, 64)
 CENTER, RADIUS = (23.0, 33.5), 13.0
@@ -573,9 +574,9 @@ def test_two_runs_creating_the_same_output_folder_do_not_race(tmp_path, monkeypa
         raise FileExistsError(17, "File exists", str(path))
 
     monkeypatch.setattr(os, "mkdir", other_run_first)
-    created = []
-    cli._make_directory(target, created)  # before: "cannot create ... File exists"
-    assert target.is_dir() and created == []  # made by the other run: not ours to remove
+    directories = Directories()
+    directories.make(target)  # before: "cannot create ... File exists"
+    assert target.is_dir() and directories.created == []  # made by the other run: not ours to remove
 
 
 def test_a_gray_and_alpha_image_reports_c_in_in_the_gray_units():

@@ -16,6 +16,7 @@ import pytest
 import app
 from activecontour import io, synthetic
 from app import cli
+from app.cli.progress import ImageProgress
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_images"
 SIZE = (48, 64)
@@ -117,7 +118,7 @@ def test_the_same_image_named_twice_is_segmented_once(small, tmp_path, capsys):
 
 def test_progress_bar_only_on_a_terminal(small, tmp_path, capsys, monkeypatch):
     path, _ = small
-    monkeypatch.setattr(cli, "_is_terminal", lambda stream: True)
+    monkeypatch.setattr("app.cli.segment.is_terminal", lambda stream: True)
     status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "a", "--max-iter", 3)
     assert status == 0
     assert "\r" in stderr and "[" in stderr and "/3" in stderr
@@ -153,6 +154,7 @@ def bad_text_image(folder):
         ("no image", ["required"]),
         ("missing init mask", ["--init-mask", "not found"]),
         ("c_in per channel of a gray image", ["--c-in", "2 values"]),
+        ("a one-column image", ["(100, 1)", "2 x 2"]),  # its own shape, not a corner's
     ],
 )
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(small, tmp_path, capsys, case, words):
@@ -199,6 +201,9 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(small, tmp_path, cap
         argv += ["--init-mask", tmp_path / "nope.png"]
     elif case == "c_in per channel of a gray image":
         argv += ["--c-in", "0.2,0.3"]
+    elif case == "a one-column image":
+        argv[1] = tmp_path / "column.png"
+        cv2.imwrite(str(argv[1]), np.arange(100, dtype=np.uint8)[:, None])
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
     status, stdout, stderr = run(capsys, *argv)
     assert_one_line_error(status, stderr, *words)
@@ -234,10 +239,8 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
     path, _ = small
     calls = []
 
-    def launch(image_path, *, backend="polygon", mu=0.5, omega=0.0, lambda_in=1.0, lambda_out=1.0,
-               max_num_iter=500, tol=1e-3, init=None):
-        calls.append(dict(image_path=image_path, backend=backend, mu=mu, max_num_iter=max_num_iter,
-                          init=init))
+    def launch(image_path, settings, *, image=None, init=None, max_pixels=None):
+        calls.append(dict(image_path=image_path, image=image, init=init, **settings.keywords()))
         return 0
 
     viewer = types.ModuleType("app.viewer")
@@ -249,13 +252,15 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
     assert status == 0, stderr
     (call,) = calls
     assert call["image_path"] == str(path) and call["mu"] == 0.25 and call["max_num_iter"] == 40
+    assert call["image"].shape == SIZE  # read once, by the command line
     assert np.allclose(np.hypot(call["init"][:, 0] - 20, call["init"][:, 1] - 30), 8.0)
-    # an option the viewer does not take is refused rather than silently dropped
-    status, _, stderr = run(capsys, "view", path, "--c-in", "0.5")
-    assert_one_line_error(status, stderr, "--c-in")
+    # every setting the view command takes reaches the viewer, none is silently dropped
+    status, _, stderr = run(capsys, "view", path, "--c-in", "0.5", "--noise", "poisson")
+    assert status == 0, stderr
+    assert calls[-1]["c_in"] == 0.5 and calls[-1]["noise"] == "poisson"
     status, _, stderr = run(capsys, "view", path.parent / "missing.png")
     assert_one_line_error(status, stderr, "not found")
-    assert len(calls) == 1
+    assert len(calls) == 2
 
 
 def test_installed_console_script(small, tmp_path):
@@ -347,10 +352,14 @@ def test_an_image_whose_files_cannot_be_written_does_not_stop_the_next(small, tm
 @pytest.mark.parametrize(
     "option, message",
     [
-        ("smoothing=abc", "--option smoothing: expected a number (default automatic), got 'abc'"),
-        ("smoothing=inf", "--option smoothing: expected a number (default automatic), got inf"),
-        ("nucleate=3", "--option nucleate: expected true or false (default True), got 3"),
-        ("velocity=1", "--option velocity: expected text (default 'h1'), got 1"),
+        # the library's message (the options dataclass states each rule once), the option named
+        ("smoothing=abc", "--option smoothing: option 'smoothing' must be a number or None, got 'abc' "
+                          "(backend 'polygon')"),
+        ("smoothing=inf", "--option smoothing: smoothing and min_smoothing must be pixel lengths with "
+                          "smoothing >= min_smoothing >= 0, got inf and 1.0"),
+        ("nucleate=3", "--option nucleate: option 'nucleate' must be True or False, got 3 (backend "
+                       "'polygon')"),
+        ("velocity=1", "--option velocity: option 'velocity' must be text, got 1 (backend 'polygon')"),
     ],
 )
 def test_backend_option_of_the_wrong_kind_gets_one_true_line(small, tmp_path, capsys, option, message):
@@ -374,7 +383,7 @@ def test_progress_shows_file_k_of_n_elapsed_and_time_left():
 
     now = [0.0]
     stream = stdio.StringIO()
-    progress = cli._Progress(3, stream=stream, clock=lambda: now[0])
+    progress = ImageProgress(3, stream=stream, clock=lambda: now[0])
     progress.start(1, "/data/a.png")
     assert "[1/3] a.png: loading" in stream.getvalue() and "elapsed 0:00 left ?" in stream.getvalue()
     now[0] = 4.0
@@ -395,7 +404,7 @@ def test_progress_of_a_single_image_bounds_the_time_left_by_the_iteration_rate()
 
     now = [0.0]
     stream = stdio.StringIO()
-    progress = cli._Progress(1, stream=stream, clock=lambda: now[0])
+    progress = ImageProgress(1, stream=stream, clock=lambda: now[0])
     progress.start(1, "/data/a.png")
     now[0] = 2.0  # loaded; the first iteration reports at 2 s
     progress(types.SimpleNamespace(iteration=1, max_num_iter=101, energy=3.0))
@@ -476,3 +485,25 @@ def test_help_says_what_the_default_start_is(command, capsys):
     text = " ".join(out.split())
     assert "centred circle" not in text and "default_init" in text and "two-means" in text
     assert "centred circle" not in ac.segment.__doc__ and "default_init" in ac.segment.__doc__
+
+
+_IMPORTED_BY_HELP = """
+import contextlib, io, sys
+from app import cli
+for argv in (["--help"], ["segment", "--help"], ["view", "--help"], ["--version"],
+             ["segment", "x.png", "--mu", "-1"]):
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        cli.main(argv)
+print(" ".join(sorted(sys.modules)))
+"""
+
+
+def test_help_and_argument_errors_import_no_backend_and_no_image_library():
+    completed = subprocess.run([sys.executable, "-c", _IMPORTED_BY_HELP], capture_output=True, text=True,
+                               cwd=Path(__file__).resolve().parents[2], check=True)
+    modules = set(completed.stdout.split())
+    assert "app.cli.parser" in modules and "activecontour.settings" in modules  # it did build the parser
+    heavy = {"scipy", "cv2", "skimage", "matplotlib", "shapely", "tifffile", "roifile"}
+    assert not {name for name in modules if name.split(".")[0] in heavy}
+    solvers = {"activecontour.backends." + name for name in ("polygon", "network", "labelfield", "levelset")}
+    assert not modules & solvers

@@ -73,7 +73,7 @@ def test_a_glob_is_expanded_sorted_and_a_second_run_skips_the_outputs(folder, ca
 
 def test_one_progress_display_for_a_batch(folder, tmp_path, capsys, monkeypatch):
     path, _ = folder
-    monkeypatch.setattr(cli, "_is_terminal", lambda stream: True)
+    monkeypatch.setattr("app.cli.segment.is_terminal", lambda stream: True)
     status, stdout, stderr = run(capsys, "segment", path, "-o", tmp_path / "out", "--jobs", 2)
     assert status == 0
     assert len(stdout.splitlines()) == 4
@@ -166,7 +166,7 @@ def test_ctrl_c_stops_a_parallel_batch_without_tracebacks(folder, tmp_path):
 def test_the_batch_status_line_estimates_the_time_left_from_the_images_done():
     import io as text_io
 
-    from app.batch import BatchProgress
+    from app.cli.progress import BatchProgress
 
     now = [100.0]
     stream = text_io.StringIO()

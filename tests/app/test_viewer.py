@@ -17,6 +17,7 @@ import pytest  # noqa: E402
 from matplotlib.backend_bases import CloseEvent, KeyEvent, MouseEvent, ResizeEvent  # noqa: E402
 
 import activecontour as ac  # noqa: E402
+import app.viewer.window as window  # noqa: E402
 from activecontour import synthetic  # noqa: E402
 from activecontour.geometry.curve import length, signed_area  # noqa: E402
 from activecontour.geometry.raster import mask_to_curves  # noqa: E402
@@ -24,7 +25,7 @@ from activecontour.io import read_contours, read_mask, write_mask  # noqa: E402
 from activecontour.io.pictures import display_rgb  # noqa: E402
 from app import viewer as viewer_module  # noqa: E402
 from app.viewer import SHORTCUTS, Viewer, launch  # noqa: E402
-from app.viewer_layout import DEFAULT_SIZE  # noqa: E402
+from app.viewer.layout import DEFAULT_SIZE  # noqa: E402
 
 SIZE = (128, 128)
 CENTER, RADIUS = (60.0, 66.0), 30.0
@@ -455,7 +456,7 @@ def test_backend_radio_selects_the_backend(disk_image, make_viewer):
         assert viewer.result is None and "run failed" in viewer.message
         return
     # an untouched step slider leaves the backend's own default (and its rules) in force
-    assert "options" not in viewer.parameters()
+    assert viewer.parameters()["options"] is None
     viewer.step_sliders["levelset"].set_val(DEFAULT_OPTIONS["dt"] / 2)
     assert viewer.parameters()["options"] == {"dt": DEFAULT_OPTIONS["dt"] / 2}
     assert viewer.result.backend == "levelset"
@@ -489,7 +490,8 @@ def test_screenshot_shows_the_contour_on_the_object_boundary(disk_image, make_vi
 
 def test_launch_reports_bad_image_and_missing_display(tmp_path, disk_image, capsys):
     assert launch(tmp_path / "missing.png") == 2
-    assert "not found" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "not found" in err and err.startswith("activecontour: error: ") and len(err.splitlines()) == 1
     path = tmp_path / "disk.png"
     write_mask(path, disk_image[1])
     figures = plt.get_fignums()
@@ -505,8 +507,9 @@ def test_bad_constructor_arguments(disk_image, tmp_path):
         Viewer(image, backend="snake")
     with pytest.raises(ValueError, match="mu must be a finite number"):
         Viewer(image, mu=float("nan"))
-    with pytest.raises(ValueError, match="max_num_iter must be an integer"):
-        Viewer(image, max_num_iter=0)
+    with pytest.raises(ValueError, match="max_num_iter must be"):
+        Viewer(image, max_num_iter=-1)
+    plt.close(Viewer(image, max_num_iter=0).fig)  # as segment allows: the start, no iteration
     with pytest.raises(ValueError, match="formats must be chosen from"):
         Viewer(image, formats=("docx",))
     with pytest.raises(ValueError, match="outside the image"):
@@ -555,7 +558,7 @@ def headless_launch(monkeypatch):
             super().__init__(*args, **kwargs)
             built.append(self)
 
-    monkeypatch.setattr(viewer_module, "Viewer", Recorded)
+    monkeypatch.setattr(window, "Viewer", Recorded)
     yield built
     for viewer in built:
         plt.close(viewer.fig)
@@ -615,7 +618,6 @@ def test_without_a_drawn_init_the_viewer_passes_none(disk_image, make_viewer, mo
         return real(image, init, **kwargs)
 
     monkeypatch.setattr(ac, "segment", spy)
-    monkeypatch.setattr(viewer_module, "segment", spy)
     viewer = make_viewer(image, max_num_iter=40)
     assert calls == [(None, 0)]  # what the dashed curve shows: the library's start
     assert_same_contours(viewer.init_curves, real(image, None, max_num_iter=0).contours)
@@ -934,7 +936,7 @@ def test_step_sliders_start_at_the_options_dataclass_defaults(disk_image, make_v
     # the slider of each backend is an option of its dataclass, starting at that field's default
     from activecontour.backends import BACKENDS
     from activecontour.backends.polygon import PolygonOptions
-    from app.viewer_layout import STEP_OPTIONS
+    from app.viewer.layout import STEP_OPTIONS
 
     viewer = make_viewer(disk_image[0])
     assert set(viewer.step_sliders) == set(BACKENDS)

@@ -39,6 +39,8 @@ def test_key_k_cycles_the_regions_and_a_run_draws_each_region_in_its_colour(ring
     assert viewer.parameters()["n_regions"] == 2
     key(viewer, "k")
     assert viewer.parameters()["n_regions"] == 3 and "regions: 3" in viewer.message
+    # more regions take no backend options (the registry's solver for K > 2): no step slider
+    assert not viewer.step_sliders["polygon"].ax.get_visible() and viewer.parameters()["options"] is None
     key(viewer, " ")
     res = viewer.result
     assert res.n_regions == 3

@@ -84,3 +84,15 @@ def test_labels_png_refuses_more_ids_than_16_bits(result_and_image):
     with pytest.raises(ValueError, match="labels-tif"):
         encode_objects(big, "labels")
     assert encode_objects(res, "labels")[:4] == b"\x89PNG"
+
+
+def test_every_object_format_is_the_same_bytes_whenever_written(result_and_image, monkeypatch):
+    import time
+
+    from activecontour.io.objects import OBJECT_FORMATS, encode_objects
+
+    res, _ = result_and_image
+    first = {fmt: encode_objects(res, fmt) for fmt in OBJECT_FORMATS}
+    later = time.localtime(time.time() + 3 * 86400)  # three days on: a zip's member dates would differ
+    monkeypatch.setattr(time, "localtime", lambda *args: later)
+    assert {fmt: encode_objects(res, fmt) for fmt in OBJECT_FORMATS} == first

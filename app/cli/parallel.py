@@ -1,6 +1,6 @@
 """The parallel loop of ``activecontour segment --jobs N``: whole images in worker processes.
 
-Each worker runs the command line's own per-image step (``app.cli._segment_one``: read, check,
+Each worker runs the command line's own per-image step (:func:`.segment.segment_one`: read,
 segment, write the files all or none), so the files are the same bytes whatever the number of jobs,
 and an image that fails leaves no file and does not stop the others.  The workers come from
 :func:`activecontour.batch.map_unordered`.  This process only reports: each image's summary or error
@@ -11,11 +11,10 @@ estimate of the time left).
 from __future__ import annotations
 
 import functools
-import time
 
-from .status_line import StatusLine, duration
+from .progress import BatchProgress
 
-__all__ = ["BatchProgress", "run"]
+__all__ = ["run"]
 
 
 def run(segment_one, plans, *, jobs, expected, report_line, report_failure, show_progress=False,
@@ -77,54 +76,3 @@ def run(segment_one, plans, *, jobs, expected, report_line, report_failure, show
 def _run_plan(plan, *, segment_one):
     image_path, stem = plan
     return segment_one(image_path, stem)
-
-
-class BatchProgress(StatusLine):
-    """One status line on a terminal: images done of all, elapsed time, estimated time left.
-
-    The time left is the elapsed time per finished image times the images left (``?`` before the
-    first one finishes).
-
-    Parameters
-    ----------
-    total : int
-        Images in the batch.
-    jobs : int
-        Worker processes (shown).
-    stream : file, optional
-        ``sys.stderr`` by default.
-    clock : callable
-        Seconds, monotonic.
-    """
-
-    width = 20
-
-    def __init__(self, total, *, jobs=1, stream=None, clock=time.monotonic):
-        super().__init__(stream)
-        self.total = total
-        self.jobs = jobs
-        self.done = 0
-        self.clock = clock
-        self.started = clock()
-        self.draw()
-
-    def advance(self):
-        """One more image finished: redraw."""
-        self.done += 1
-        self.draw()
-
-    def remaining(self, now):
-        """Seconds left for the whole batch, or None before an image has finished."""
-        if not self.done:
-            return None
-        return (now - self.started) / self.done * (self.total - self.done)
-
-    def draw(self):
-        now = self.clock()
-        filled = self.width * self.done // max(self.total, 1)
-        left = self.remaining(now)
-        self.write(
-            f"[{self.done}/{self.total}] images done, {self.jobs} jobs: "
-            f"[{'#' * filled}{'-' * (self.width - filled)}] elapsed {duration(now - self.started)} "
-            f"left {'?' if left is None else '~' + duration(left)}"
-        )

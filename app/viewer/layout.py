@@ -1,7 +1,7 @@
 """The viewer's window layout: the image with its curves, the readouts, the controls.
 
 :func:`build_layout` places every artist and widget in figure coordinates and returns them in a
-:class:`Layout`; it connects nothing (:class:`viewer.Viewer` wires the behaviour).  The window::
+:class:`Layout`; it connects nothing (:class:`.window.Viewer` wires the behaviour).  The window::
 
     +------------------------------+  iteration, energy / c_in / c_out / contours
     |                              |  [energy history plot]
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .viewer_tools import INIT_MODES, TextField
+from .tools import INIT_MODES, TextField
 
 __all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS",
            "Layout", "build_layout", "contour_color", "fit_text", "refit_texts", "set_slider_value",
