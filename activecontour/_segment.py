@@ -29,7 +29,7 @@ from activecontour.imaging.roi import (
     pointed_label,
     resolve_roi,
 )
-from activecontour.initial import Start, threshold_mask
+from activecontour.initial import DEFAULT_INIT_MIN_AREA, Start, threshold_mask
 from activecontour.objects.measure import default_min_size, find_objects
 from activecontour.problem import prepare
 from activecontour.result import SegmentationResult, build_result, scalar_if_gray
@@ -267,7 +267,7 @@ def _result(problem, solution, seeds=None):
     # objects are the connected pieces of each non-background region (N regions: of each class,
     # its sub-pixel curves)
     by_class = solution.contours if result.class_contours is None else result.class_contours[1:]
-    min_size = _min_size(problem.settings.min_size, part.mu, constants)
+    min_size = _min_size(problem.settings.min_size, part.mu, constants, result.success)
     object_contours, labels, objects = find_objects(by_class, shape, pixels,
                                                     separate=bool(problem.settings.separate),
                                                     min_size=min_size, seeds=seeds)
@@ -396,15 +396,21 @@ def _pointed_in(solution, drawn):
                                           _pixels(part.image, drawn.shape)[r0:r1, c0:c1],
                                           separate=bool(part.settings.separate))
     # the least size is the same in the working frame: mu and the squared contrast scale alike
-    least = _min_size(part.settings.min_size, part.working.mu, [result.c_out, result.c_in])
+    least = _min_size(part.settings.min_size, part.working.mu, [result.c_out, result.c_in], result.success)
     eligible = np.concatenate([[False], table["area"] >= least])
     return box, objects, labels, pointed_label(np.where(eligible[labels], labels, 0), drawn[r0:r1, c0:c1])
 
 
-def _min_size(setting, mu, constants):
+def _min_size(setting, mu, constants, stationary):
     """The least area of an object: ``min_size``, or for ``"auto"``
-    :func:`~activecontour.objects.measure.default_min_size` of ``mu`` and the regions' constants."""
-    return float(default_min_size(mu, constants) if is_auto(setting) else setting)
+    :func:`~activecontour.objects.measure.default_min_size` of ``mu`` and the regions' constants
+    when the run converged (``stationary``).  The length term removes a smaller disk only at a
+    stationary point of (6.38); a run stopped before one (``max_num_iter=0`` returns the start
+    itself, whose constants may be nearly equal) keeps every piece of at least
+    ``DEFAULT_INIT_MIN_AREA`` px^2."""
+    if not is_auto(setting):
+        return float(setting)
+    return float(default_min_size(mu, constants) if stationary else DEFAULT_INIT_MIN_AREA)
 
 
 def _near_edge(neighbourhood, box):

@@ -1,17 +1,23 @@
 """The pointed-at object: a curve drawn around one object gives that object alone (``roi="init"``).
 
-Run ``python benchmarks/bench_pointed.py [--quick]``.  For every object of an image's default
-full-image run (``ac.segment(image)``; objects that touch the image border or are smaller than
-``MIN_AREA`` left out), a circle of f times the object's equivalent radius around its centroid,
-and a square of the same half-side (a drawn box), is passed as ``init`` with ``roi="init"``.
-Columns, per image family and f: the objects tried, the worst Dice against that object of the
-full run, how many runs gave any pixel of another object of the full run (and the most such
-pixels), and the largest CPU time of one run.
+Run ``python benchmarks/bench_pointed.py [--quick]``.  Around each object of an image, a circle of
+f times the object's equivalent radius about its centroid, and a square of the same half-side (a
+drawn box), is passed as ``init`` with ``roi="init"``.  The objects: those of the image's default
+full-image run (``ac.segment(image)``), or where the image has a ground truth, those of the truth;
+objects that touch the image border or are smaller than ``MIN_AREA`` are left out.
 
-Families: ``coins`` (scikit-image's, 303 x 384), ``field`` (:func:`blob_field`: ~28 disks and
-ellipses of radius 14-40 px a few pixels apart at 512^2, SNR 3, blurred; three seeds), ``blobs``
-(``skimage.data.binary_blobs`` at 512^2 with noise: irregular shapes), ``dsb`` (the DSB 2018 nuclei
-image of the stardist wheel, 512^2: :func:`bench_objects.stardist_images`).
+Columns, per image family, drawn shape and f: the objects tried; the worst Dice against the
+object's counterpart in the full run (the full-run object holding most of it) and, with a truth,
+against the truth object, next to the full run's own worst Dice against the truth; how many runs
+gave any pixel of another object (of the truth where there is one, else of the full run), and
+how many gave one farther than 2 px from the object (a piece of a neighbour, not a split line
+drawn a pixel off); the largest and the median CPU time of one run.
+
+Families: ``coins`` (scikit-image's, 303 x 384, no truth), ``field`` (:func:`blob_field`: ~28 disks
+and ellipses of radius 14-40 px a few pixels apart at 512^2, SNR 3, blurred, with truth; three
+seeds), ``blobs`` (``skimage.data.binary_blobs`` at 512^2 with noise, no truth: irregular shapes
+that touch), ``dsb`` (the DSB 2018 nuclei image of the stardist wheel and its truth, 512^2:
+:func:`bench_objects.stardist_images`).
 """
 
 from __future__ import annotations
@@ -62,24 +68,27 @@ def binary_blobs(seed):
 
 
 def families(quick):
+    """(family, image, truth labels or None) of every image tried."""
     import skimage.data
 
-    yield "coins", skimage.data.coins()
+    yield "coins", skimage.data.coins(), None
     for seed in range(1 if quick else 3):
-        yield "field", blob_field(seed)[0]
+        yield ("field", *blob_field(seed))
     for seed in range(1 if quick else 2):
-        yield "blobs", binary_blobs(seed)
+        yield "blobs", binary_blobs(seed), None
     from bench_objects import stardist_images
 
     dsb = stardist_images()
     if dsb is not None:
-        yield "dsb", dsb[0]
+        yield "dsb", dsb[0], dsb[1].astype(np.int32)
 
 
-def targets(full):
-    """The ids, centroids and equivalent radii of a full run's objects that may be pointed at."""
-    table = full.objects
-    m, n = full.labels.shape
+def targets(labels):
+    """The ids, centroids and equivalent radii of a label image's objects that may be pointed at."""
+    import skimage.measure
+
+    table = skimage.measure.regionprops_table(labels, properties=("label", "area", "centroid", "bbox"))
+    m, n = labels.shape
     inner = ((table["bbox-0"] > 0) & (table["bbox-1"] > 0) & (table["bbox-2"] < m) & (table["bbox-3"] < n)
              & (table["area"] >= MIN_AREA))
     centres = np.column_stack([table["centroid-0"], table["centroid-1"]])[inner]
@@ -92,15 +101,28 @@ def drawn(shape, centre, half):
     return ac.rectangle(np.asarray(centre) - half, np.asarray(centre) + half)
 
 
-def point(image, full, label, centre, half, shape):
-    """(Dice against the full run's object, foreign pixels, CPU seconds) of one drawn curve."""
+def counterpart(labels, mask):
+    """The object of ``labels`` holding most of ``mask`` (bool; all False when none)."""
+    votes = np.bincount(labels[mask], minlength=2)
+    votes[0] = 0
+    return labels == votes.argmax() if votes.any() else np.zeros_like(mask)
+
+
+def point(image, full, truth, label, centre, half, shape):
+    """(Dice against the full run's counterpart, Dice against the truth object (nan without a
+    truth), foreign pixels, foreign pixels beyond 2 px of the object, CPU seconds) of one curve."""
+    import scipy.ndimage
+
     start = time.process_time()
     res = ac.segment(image, drawn(shape, centre, half), roi="init")
     seconds = time.process_time() - start
-    truth = full.labels == label
-    dice = synthetic.dice(res.mask, truth)
-    foreign = int(np.count_nonzero(res.mask & (full.labels > 0) & ~truth))
-    return dice, foreign, seconds
+    reference = full.labels if truth is None else truth
+    mine = reference == label
+    dice_truth = np.nan if truth is None else synthetic.dice(res.mask, mine)
+    dice_full = synthetic.dice(res.mask, counterpart(full.labels, mine))
+    foreign = res.mask & (reference > 0) & ~mine
+    beyond = foreign & (scipy.ndimage.distance_transform_edt(~mine) > 2)
+    return dice_full, dice_truth, int(foreign.sum()), int(beyond.sum()), seconds
 
 
 def main():
@@ -109,31 +131,39 @@ def main():
     parser.add_argument("--shapes", default="circle,box")
     args = parser.parse_args()
     factors = (1.1, 1.4, 1.8) if args.quick else FACTORS
-    print(f"{'family':8s}{'drawn':8s}{'f':>5s}{'tried':>7s}{'worst Dice':>12s}{'< 0.95':>8s}"
-          f"{'foreign runs':>14s}{'max foreign':>13s}{'max s':>8s}{'median s':>10s}", flush=True)
-    rows, last = {}, None
-    for family, image in families(args.quick):
+    print(f"{'family':8s}{'drawn':7s}{'f':>4s}{'tried':>6s}{'Dice full':>10s}{'Dice truth':>11s}"
+          f"{'full/truth':>11s}{'< 0.95':>7s}{'foreign':>8s}{'> 2 px':>7s}{'max px':>7s}{'max s':>7s}"
+          f"{'median s':>9s}", flush=True)
+    rows, last, baseline = {}, None, {}
+    for family, image, truth in families(args.quick):
         if last is not None and family != last:
-            report(rows, last)
+            report(rows, last, baseline)
         last = family
         full = ac.segment(image)
-        for label, centre, radius in zip(*targets(full), strict=True):
+        for label, centre, radius in zip(*targets(full.labels if truth is None else truth), strict=True):
+            if truth is not None:  # what the full run gives this object
+                mine = truth == label
+                baseline.setdefault(family, []).append(synthetic.dice(counterpart(full.labels, mine), mine))
             for shape in args.shapes.split(","):
                 for f in factors:
-                    dice, foreign, seconds = point(image, full, label, centre, f * radius, shape)
-                    rows.setdefault((family, shape, f), []).append((dice, foreign, seconds))
-    report(rows, last)
+                    rows.setdefault((family, shape, f), []).append(
+                        point(image, full, truth, label, centre, f * radius, shape))
+    report(rows, last, baseline)
 
 
-def report(rows, family):
+def report(rows, family, baseline):
     """Print the rows of one family (all its images pooled)."""
+    full_truth = f"{min(baseline[family]):11.3f}" if family in baseline else f"{'-':>11s}"
     for (name, shape, f), entries in rows.items():
         if name != family:
             continue
-        dice, foreign, seconds = (np.array(column) for column in zip(*entries, strict=True))
-        print(f"{family:8s}{shape:8s}{f:5.1f}{len(entries):7d}{dice.min():12.3f}{np.sum(dice < 0.95):8d}"
-              f"{np.count_nonzero(foreign):14d}{foreign.max():13d}{seconds.max():8.2f}{np.median(seconds):10.2f}",
-              flush=True)
+        dice_full, dice_truth, foreign, beyond, seconds = (np.array(c) for c in zip(*entries, strict=True))
+        scored = dice_full if np.isnan(dice_truth).all() else dice_truth
+        truth_text = f"{'-':>11s}" if np.isnan(dice_truth).all() else f"{np.nanmin(dice_truth):11.3f}"
+        print(f"{family:8s}{shape:7s}{f:4.1f}{len(entries):6d}{dice_full.min():10.3f}{truth_text}{full_truth}"
+              f"{np.sum(scored < 0.95):7d}{np.count_nonzero(foreign):8d}{np.count_nonzero(beyond):7d}"
+              f"{foreign.max():7d}{seconds.max():7.2f}{np.median(seconds):9.2f}", flush=True)
+
 
 if __name__ == "__main__":
     main()

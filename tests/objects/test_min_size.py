@@ -83,3 +83,13 @@ def test_more_regions_take_the_weakest_contrast():
 def test_a_bad_min_size_is_named(value, error, match):
     with pytest.raises(error, match=match):
         ac.segment(np.eye(8), min_size=value)
+
+
+def test_a_run_stopped_before_a_stationary_point_keeps_its_pieces(dotted):
+    """With no iteration the constants of a start straddling the disk are nearly equal, so the
+    break-even area of (6.38) would exceed the image; the rule holds only at a stationary point."""
+    image, _ = dotted
+    start = ac.circle((30, 48), 20.0)  # half on the disk, half off it
+    res = ac.segment(image, start, max_num_iter=0)
+    assert not res.success and res.min_size == DEFAULT_INIT_MIN_AREA
+    assert res.labels.max() == 1 and np.count_nonzero(res.labels) == np.count_nonzero(res.mask)
