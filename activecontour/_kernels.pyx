@@ -14,7 +14,7 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport ceil, floor, sqrt
-from libc.stdlib cimport free, malloc
+from libc.stdlib cimport calloc, free, malloc
 
 #: rows between two stored rows of the antiderivative tables (see :func:`build_tables`)
 ANCHOR_ROWS = 8
@@ -510,4 +510,338 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
             break
         begin = end
         PyErr_CheckSignals()
+    return count
+
+
+cdef inline void _compensated(double *total, double *carry, double term) noexcept nogil:
+    """``total + carry += term`` by Neumaier's compensated summation (the rounding of each
+    addition collected in ``carry``)."""
+    cdef double summed = total[0] + term
+    if abs(total[0]) >= abs(term):
+        carry[0] += (total[0] - summed) + term
+    else:
+        carry[0] += (term - summed) + total[0]
+    total[0] = summed
+
+
+def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
+                      const Py_ssize_t[::1] outer, const double[:, :, ::1] values,
+                      const double[:, :, :, ::1] table, double[:, ::1] moments, double[:, :, ::1] parts):
+    """The exact edge integrals of a partition's boundary segments (the N-region network of
+    :mod:`activecontour.backends.network`), in one pass: what :func:`edge_integrals` gives for one
+    closed curve, kept apart per region and per segment.
+
+    ``moments[k] += (area, closed integral of G_1 dc, of G_2 dc)`` (per channel, Green's theorem:
+    the region integrals of 1, I and I^2; the area by the shoelace formula) over the segments with
+    region k on their inner side, and minus those with k on their outer side (``outer < 0``: the
+    image's edge, no region).  With ``parts`` of shape (S, 2, 2C) (a (0, 2, 0) array for none),
+    for every segment and each of its ends (phi = 1 - s at the start, s at the end, s the
+    segment's parameter) the integrals in s:
+
+        parts[e, 0 or 1, ch]     = int_0^1 phi I_ch ds,
+        parts[e, 0 or 1, C + ch] = int_0^1 phi I_ch^2 ds,
+
+    from which a quadratic form's load (6.41) on the segment's ends is the form's combination
+    times the segment's normal ``nu |e| = (dv, -du)``.  The pieces between grid lines and their
+    quadrature are those of :func:`edge_integrals`; a cell's data is read once for consecutive
+    pieces in it (along a segment, and from one segment to the next along a chain).  The sums over
+    the segments are compensated (Neumaier): Green's integrals add terms of the size of the
+    row-antiderivatives that cancel around a closed curve, and the compensation keeps the result
+    independent of the segments' order to about one rounding.
+
+    Returns the length of the segments that count in the functional's length term: the
+    interfaces, and the image's edge where a region other than 0 lies on it.
+    """
+    cdef Py_ssize_t channels = values.shape[2], rows = values.shape[0], cols = values.shape[1]
+    cdef Py_ssize_t e, ch, g, a, j, i, o, count = starts.shape[0], last_a = -1, last_j = -1
+    cdef bint with_parts = parts.shape[0] > 0
+    cdef double nodes[3]
+    cdef double weights[3]
+    cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, area, length = 0.0
+    cdef double t_edge, t, w, w0, half, third, g1, g2, b_pp, b_qq, b_pq, weight, intensity
+    cdef double *acc
+    cdef double *carry
+    cdef double length_carry = 0.0
+    cdef Cell *cells
+    cdef Cell *cell
+    if moments.shape[1] != 1 + 2 * channels or (with_parts and (
+            parts.shape[0] != count or parts.shape[1] != 2 or parts.shape[2] != 2 * channels)):
+        raise ValueError("moments must be (K, 1 + 2C) and parts (S, 2, 2C) or empty")
+    acc = <double *> malloc((2 * channels + 1) * sizeof(double))
+    cells = <Cell *> malloc(channels * sizeof(Cell))
+    carry = <double *> calloc(moments.shape[0] * moments.shape[1], sizeof(double))
+    if acc == NULL or cells == NULL or carry == NULL:
+        free(acc)
+        free(cells)
+        free(carry)
+        raise MemoryError()
+    nodes[0], nodes[1], nodes[2] = 0.5 - 0.5 * sqrt(0.6), 0.5, 0.5 + 0.5 * sqrt(0.6)
+    weights[0], weights[1], weights[2] = 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0
+    with nogil:
+        for e in range(count):
+            u0, v0 = starts[e, 0] + 1.0, starts[e, 1] + 1.0
+            du, dv = ends[e, 0] + 1.0 - u0, ends[e, 1] + 1.0 - v0
+            for ch in range(2 * channels):
+                acc[ch] = 0.0
+                if with_parts:
+                    parts[e, 0, ch] = 0.0
+                    parts[e, 1, ch] = 0.0
+            # next grid lines in the direction of travel
+            k_u = floor(u0) + 1.0 if du > 0 else ceil(u0) - 1.0
+            k_v = floor(v0) + 1.0 if dv > 0 else ceil(v0) - 1.0
+            t_prev = 0.0
+            while True:
+                t_u = (k_u - u0) / du if du != 0.0 else 2.0
+                t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
+                t_next = min(t_u, t_v, 1.0)
+                span = t_next - t_prev
+                if span > 0.0:
+                    t_mid = t_prev + 0.5 * span
+                    a = <Py_ssize_t> min(max(floor(u0 + t_mid * du), 0.0), <double> rows)
+                    j = <Py_ssize_t> min(max(floor(v0 + t_mid * dv), 0.0), <double> cols)
+                    if a != last_a or j != last_j:
+                        for ch in range(channels):
+                            _cell(values, table, a, j, ch, &cells[ch])
+                        last_a, last_j = a, j
+                    for ch in range(channels):
+                        cell = &cells[ch]
+                        for g in range(3):
+                            t_edge = t_prev + span * nodes[g]
+                            t = u0 + t_edge * du - a
+                            w = v0 + t_edge * dv - j
+                            w0 = 1.0 - w
+                            half, third = 0.5 * t * t, t * t * t / 3.0
+                            g1 = (w0 * (cell.t1 + t * cell.p0 + half * cell.dp)
+                                  + w * (cell.r1 + t * cell.q0 + half * cell.dq))
+                            b_pp = (cell.t2 + cell.p0 * cell.p0 * t + 2.0 * cell.p0 * cell.dp * half
+                                    + cell.dp * cell.dp * third)
+                            b_qq = (cell.r2 + cell.q0 * cell.q0 * t + 2.0 * cell.q0 * cell.dq * half
+                                    + cell.dq * cell.dq * third)
+                            b_pq = (cell.t3 + cell.p0 * cell.q0 * t
+                                    + (cell.p0 * cell.dq + cell.q0 * cell.dp) * half
+                                    + cell.dp * cell.dq * third)
+                            g2 = w0 * w0 * b_pp + 2.0 * w * w0 * b_pq + w * w * b_qq
+                            weight = span * weights[g]
+                            acc[ch] += weight * dv * g1
+                            acc[channels + ch] += weight * dv * g2
+                            if with_parts:
+                                intensity = w0 * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
+                                parts[e, 0, ch] += weight * (1.0 - t_edge) * intensity
+                                parts[e, 1, ch] += weight * t_edge * intensity
+                                parts[e, 0, channels + ch] += weight * (1.0 - t_edge) * intensity * intensity
+                                parts[e, 1, channels + ch] += weight * t_edge * intensity * intensity
+                if t_next >= 1.0:
+                    break
+                if t_u <= t_next:
+                    k_u += 1.0 if du > 0 else -1.0
+                if t_v <= t_next:
+                    k_v += 1.0 if dv > 0 else -1.0
+                t_prev = t_next
+            i, o = inner[e], outer[e]
+            acc[2 * channels] = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])  # the area
+            for ch in range(2 * channels + 1):
+                g = 0 if ch == 2 * channels else 1 + ch  # the column: area first, then I, then I^2
+                _compensated(&moments[i, g], &carry[i * moments.shape[1] + g], acc[ch])
+                if o >= 0:
+                    _compensated(&moments[o, g], &carry[o * moments.shape[1] + g], -acc[ch])
+            if o >= 0 or i > 0:
+                _compensated(&length, &length_carry, sqrt(du * du + dv * dv))
+        for i in range(moments.shape[0] * moments.shape[1]):
+            moments[i // moments.shape[1], i % moments.shape[1]] += carry[i]
+    free(acc)
+    free(cells)
+    free(carry)
+    return length + length_carry
+
+
+def segments_meet(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+                  Py_ssize_t limit, Py_ssize_t[:, ::1] pairs):
+    """The pairs of the segments ``nodes[start[s]] -> nodes[end[s]]`` that meet anywhere but at a
+    node they share: a crossing, a touch (an end on another segment), or an overlap (collinear,
+    also of two segments with a common node).  The segments of a planar network
+    (:meth:`activecontour.backends.network.Network.simple`) meet only at their common nodes.
+
+    Returns the number of pairs found, stopping at ``limit``; the first ``len(pairs)`` of them
+    go into ``pairs`` (P, 2).
+
+    A uniform grid of cells about the mean segment extent (at least what makes about one cell per
+    segment): each segment is filed, by a counting sort, under every cell its bounding box meets,
+    and only segments filed in the same cell are tested, each pair once, in the cell of the low
+    corner of the intersection of their boxes.  O(S) for segments of even length.
+    """
+    cdef Py_ssize_t n = start.shape[0], s, k, i, f, e, cell, cells, rows, cols, r, c, r0, r1, c0, c1
+    cdef Py_ssize_t row, col, position, shared, found = 0, capacity = pairs.shape[0]
+    cdef double low_r, low_c, high_r, high_c, size, extent = 0.0
+    cdef double ar, ac, br, bc, cr, cc, dr, dc, o1, o2, o3, o4, corner_r, corner_c
+    cdef Py_ssize_t *first
+    cdef Py_ssize_t *items
+    cdef bint met
+    if n < 2 or limit <= 0:
+        return 0
+    low_r, low_c = nodes[start[0], 0], nodes[start[0], 1]
+    high_r, high_c = low_r, low_c
+    for s in range(n):
+        for k in range(2):
+            i = start[s] if k == 0 else end[s]
+            low_r, high_r = min(low_r, nodes[i, 0]), max(high_r, nodes[i, 0])
+            low_c, high_c = min(low_c, nodes[i, 1]), max(high_c, nodes[i, 1])
+        extent += max(abs(nodes[end[s], 0] - nodes[start[s], 0]), abs(nodes[end[s], 1] - nodes[start[s], 1]))
+    size = max(extent / n, sqrt((high_r - low_r) * (high_c - low_c) / n), ((high_r - low_r) + (high_c - low_c)) / n)
+    size = max(size, 1e-12 * max(1.0, max(abs(low_r), abs(high_r), abs(low_c), abs(high_c))))
+    rows = <Py_ssize_t> ((high_r - low_r) / size) + 1
+    cols = <Py_ssize_t> ((high_c - low_c) / size) + 1
+    cells = rows * cols
+    first = <Py_ssize_t *> calloc(cells + 1, sizeof(Py_ssize_t))
+    if first == NULL:
+        raise MemoryError()
+    items = NULL
+    with nogil:
+        for k in range(2):  # count the entries of every cell (shifted by one), then file them
+            if k == 1:
+                for cell in range(cells):
+                    first[cell + 1] += first[cell]
+                items = <Py_ssize_t *> malloc(max(first[cells], 1) * sizeof(Py_ssize_t))
+                if items == NULL:
+                    break
+            for s in range(n):
+                ar, ac, br, bc = nodes[start[s], 0], nodes[start[s], 1], nodes[end[s], 0], nodes[end[s], 1]
+                r0 = min(<Py_ssize_t> ((min(ar, br) - low_r) / size), rows - 1)
+                r1 = min(<Py_ssize_t> ((max(ar, br) - low_r) / size), rows - 1)
+                c0 = min(<Py_ssize_t> ((min(ac, bc) - low_c) / size), cols - 1)
+                c1 = min(<Py_ssize_t> ((max(ac, bc) - low_c) / size), cols - 1)
+                for r in range(r0, r1 + 1):
+                    for c in range(c0, c1 + 1):
+                        if k == 0:
+                            first[r * cols + c + 1] += 1
+                        else:
+                            position = first[r * cols + c]
+                            items[position] = s
+                            first[r * cols + c] = position + 1
+        if items != NULL:
+            for cell in range(cells, 0, -1):  # first[c] ended as the next cell's start
+                first[cell] = first[cell - 1]
+            first[0] = 0
+            for cell in range(cells):
+                if found >= limit:
+                    break
+                row, col = cell // cols, cell % cols
+                for i in range(first[cell], first[cell + 1]):
+                    if found >= limit:
+                        break
+                    e = items[i]
+                    ar, ac, br, bc = nodes[start[e], 0], nodes[start[e], 1], nodes[end[e], 0], nodes[end[e], 1]
+                    for k in range(i + 1, first[cell + 1]):
+                        f = items[k]
+                        cr, cc, dr, dc = nodes[start[f], 0], nodes[start[f], 1], nodes[end[f], 0], nodes[end[f], 1]
+                        # the boxes meet, and this is the cell of the low corner of their intersection
+                        corner_r = max(min(ar, br), min(cr, dr))
+                        corner_c = max(min(ac, bc), min(cc, dc))
+                        if (corner_r > min(max(ar, br), max(cr, dr)) or corner_c > min(max(ac, bc), max(cc, dc))
+                                or min(<Py_ssize_t> ((corner_r - low_r) / size), rows - 1) != row
+                                or min(<Py_ssize_t> ((corner_c - low_c) / size), cols - 1) != col):
+                            continue
+                        met = False
+                        shared = ((start[e] == start[f]) + (start[e] == end[f]) + (end[e] == start[f])
+                                  + (end[e] == end[f]))
+                        o1 = (br - ar) * (cc - ac) - (bc - ac) * (cr - ar)  # c, d against a -> b
+                        o2 = (br - ar) * (dc - ac) - (bc - ac) * (dr - ar)
+                        o3 = (dr - cr) * (ac - cc) - (dc - cc) * (ar - cr)  # a, b against c -> d
+                        o4 = (dr - cr) * (bc - cc) - (dc - cc) * (br - cr)
+                        if shared >= 2:  # the same two nodes: they coincide
+                            met = True
+                        elif shared == 1:
+                            # meeting only at the common node unless collinear and on the same side
+                            if o1 == 0.0 and o2 == 0.0 and (
+                                    (start[e] == start[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) > 0)
+                                    or (end[e] == end[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) > 0)
+                                    or (start[e] == end[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) < 0)
+                                    or (end[e] == start[f] and (br - ar) * (dr - cr) + (bc - ac) * (dc - cc) < 0)):
+                                met = True
+                        elif ((o1 > 0.0 and o2 > 0.0) or (o1 < 0.0 and o2 < 0.0)
+                              or (o3 > 0.0 and o4 > 0.0) or (o3 < 0.0 and o4 < 0.0)):
+                            pass  # one lies wholly on one side of the other's line
+                        elif o1 != 0.0 or o2 != 0.0 or o3 != 0.0 or o4 != 0.0:
+                            met = True  # a crossing, or an end on the other segment (boxes meet)
+                        else:  # collinear, boxes meet: they overlap or touch end to end
+                            met = True
+                        if met:
+                            if found < capacity:
+                                pairs[found, 0], pairs[found, 1] = e, f
+                            found += 1
+                            if found >= limit:
+                                break
+    free(first)
+    if items == NULL:
+        raise MemoryError()
+    free(items)
+    return found
+
+
+def band_cholesky(double[:, ::1] band):
+    """Cholesky factorisation ``A = U^T U`` of a symmetric positive definite band matrix, in place.
+
+    ``band[j, w + i - j] = A[i, j]`` for ``j - w <= i <= j`` (column j's entries on and above the
+    diagonal, w the half bandwidth) becomes U in the same layout.  O(n w^2), no fill outside the
+    band.  Returns 0, or ``j + 1`` where the leading minor of order ``j + 1`` is not positive.
+    """
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, first, failed = 0
+    cdef double total
+    with nogil:
+        for j in range(n):
+            first = j - w if j > w else 0
+            for i in range(first, j + 1):
+                total = band[j, w + i - j]
+                for k in range(max(first, i - w), i):
+                    total -= band[i, w + k - i] * band[j, w + k - j]
+                if i < j:
+                    band[j, w + i - j] = total / band[i, w]
+                elif total > 0.0:
+                    band[j, w] = sqrt(total)
+                else:
+                    failed = j + 1
+                    break
+            if failed:
+                break
+    return failed
+
+
+def band_solve(const double[:, ::1] factor, double[::1] rhs):
+    """Solve ``U^T U x = rhs`` in place with the factor of :func:`band_cholesky`."""
+    cdef Py_ssize_t n = factor.shape[0], w = factor.shape[1] - 1, i, j, k
+    cdef double total
+    with nogil:
+        for j in range(n):  # U^T y = rhs
+            total = rhs[j]
+            for k in range(j - w if j > w else 0, j):
+                total -= factor[j, w + k - j] * rhs[k]
+            rhs[j] = total / factor[j, w]
+        for i in range(n - 1, -1, -1):  # U x = y
+            total = rhs[i]
+            for j in range(i + 1, min(n, i + w + 1)):
+                total -= factor[j, w + i - j] * rhs[j]
+            rhs[i] = total / factor[i, w]
+
+
+def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::1] offsets):
+    """The cycles of the map ``i -> following[i]`` (a permutation), each from its smallest
+    element: ``order[offsets[c]:offsets[c + 1]]`` is cycle c in order (``offsets`` holds n + 1).
+    Returns the number of cycles."""
+    cdef Py_ssize_t n = following.shape[0], first, current, count = 0, position = 0
+    cdef unsigned char *seen = <unsigned char *> calloc(max(n, 1), sizeof(unsigned char))
+    if seen == NULL:
+        raise MemoryError()
+    with nogil:
+        for first in range(n):
+            if seen[first]:
+                continue
+            offsets[count] = position
+            count += 1
+            current = first
+            while not seen[current]:
+                seen[current] = 1
+                order[position] = current
+                position += 1
+                current = following[current]
+        offsets[count] = position
+    free(seen)
     return count

@@ -199,7 +199,9 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
         solution = _pointed(problem, run, init, callback)
     else:
         solution = _solve(problem, run, init, settings.roi, callback)
-    return _result(problem, solution, getattr(init, "seeds", None))
+    fields, objects_of = _result_fields(problem, solution, getattr(init, "seeds", None))
+    del problem, solution  # the normalised image goes before the objects' pass, the peak of memory
+    return _with_objects(fields, *objects_of)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -242,10 +244,11 @@ def _solve(problem, run, init, roi, callback):
     return _Solution(problem, result, light, *_in_whole_image(result, problem.box, problem.domain, shape))
 
 
-def _result(problem, solution, seeds=None):
-    """The result, built once: in the whole image's frame and the caller's units, with the region
-    of every pixel and the objects (:func:`activecontour.objects.measure.find_objects`; ``seeds``:
-    a :class:`~activecontour.initial.Start`'s, the objects of the frame before)."""
+def _result_fields(problem, solution, seeds=None):
+    """The result's fields, in the whole image's frame and the caller's units, but the objects;
+    and what the objects are found from (:func:`_with_objects`; ``seeds``: a
+    :class:`~activecontour.initial.Start`'s, the objects of the frame before).  They hold neither
+    the problem nor the backend's result."""
     part, result = solution.problem, solution.result
     energy, energies, c_in, c_out, constants = (result.energy, result.energies, result.c_in, result.c_out,
                                                 result.constants)
@@ -257,9 +260,7 @@ def _result(problem, solution, seeds=None):
         c_out = scalar_if_gray(offset + scale * np.asarray(c_out))
         if constants is not None:
             constants = offset + scale * np.asarray(constants)
-    classes = result.classes
-    if classes is None:  # two regions: the inside is region 1
-        classes = solution.mask.astype(np.int32)
+    if result.classes is None:  # two regions: the inside is region 1 (the classes made after the objects)
         constants = np.array([np.atleast_1d(c_out), np.atleast_1d(c_in)])
     offset, scale = part.units
     shape = problem.shape
@@ -268,17 +269,25 @@ def _result(problem, solution, seeds=None):
     # its sub-pixel curves)
     by_class = solution.contours if result.class_contours is None else result.class_contours[1:]
     min_size = _min_size(problem.settings.min_size, part.mu, constants, result.success)
-    object_contours, labels, objects = find_objects(by_class, shape, pixels,
-                                                    separate=bool(problem.settings.separate),
-                                                    min_size=min_size, seeds=seeds)
-    return SegmentationResult(
+    fields = dict(
         mask=solution.mask, contours=solution.contours, c_in=c_in, c_out=c_out, energy=energy,
         energies=energies, n_iter=result.n_iter, status=result.status, backend=result.backend,
         phi=solution.phi, mu=part.mu, c_in_image=scalar_if_gray(offset + scale * np.asarray(c_in)),
-        c_out_image=scalar_if_gray(offset + scale * np.asarray(c_out)), labels=labels, objects=objects,
-        object_contours=object_contours, classes=classes, constants=constants, light=solution.light,
-        roi=solution.roi, n_regions=problem.n_regions, class_contours=result.class_contours,
-        min_size=min_size)
+        c_out_image=scalar_if_gray(offset + scale * np.asarray(c_out)), classes=result.classes,
+        constants=constants, light=solution.light, roi=solution.roi, n_regions=problem.n_regions,
+        class_contours=result.class_contours, min_size=min_size)
+    return fields, (by_class, shape, pixels, bool(problem.settings.separate), min_size, seeds)
+
+
+def _with_objects(fields, by_class, shape, pixels, separate, min_size, seeds):
+    """The result: its fields with the objects (:func:`activecontour.objects.measure.find_objects`,
+    of ``min_size`` at least, split by ``seeds`` where given) and, for two regions, the classes of
+    its mask."""
+    object_contours, labels, objects = find_objects(by_class, shape, pixels, separate=separate,
+                                                    min_size=min_size, seeds=seeds)
+    if fields["classes"] is None:
+        fields["classes"] = fields["mask"].astype(np.int32)
+    return SegmentationResult(**fields, labels=labels, objects=objects, object_contours=object_contours)
 
 
 def _pointed(problem, run, init, callback):

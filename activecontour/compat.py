@@ -20,6 +20,9 @@ TOL_SCALE = Settings().tol / 1e-3
 
 #: ``init_level_set`` presets of scikit-image, and what each becomes here (see :func:`chan_vese`)
 INIT_LEVEL_SETS = ("checkerboard", "disk", "small disk")
+#: Blur widths (px) among which the ``"checkerboard"`` start picks the one whose threshold set has
+#: the lowest (6.38) (:func:`_checkerboard_start`)
+CHECKERBOARD_BLURS = (1.0, 2.0, 4.0)
 
 
 def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=500, dt=0.5,
@@ -72,26 +75,29 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
 
         ``"checkerboard"``
             scikit-image's start that reaches objects anywhere in the image.  Here: the package's
-            default start (``init=None``, :func:`activecontour.initial.default_init`), the
-            global two-class split of the smoothed image traced as curves, which also starts at
-            every object at once and is much closer to the minimiser.
+            default start (:func:`activecontour.initial.default_init`), the global two-class
+            split of the smoothed image traced as curves, which also starts at every object at
+            once and is much closer to the minimiser; the image is smoothed by whichever of
+            ``CHECKERBOARD_BLURS`` px gives that split the lowest (6.38) (a strong ``mu`` such
+            as 0.25 prefers the smoother outlines of a wider blur).
         ``"disk"``
             A circle centred at pixel ``((M - 1) // 2, (N - 1) // 2)`` with radius
             ``min((M - 1) // 2, (N - 1) // 2)``: the zero level set of scikit-image's disk.
         ``"small disk"``
             The same circle with half the radius.
         (M, N) ndarray
-            A level-set function: the start is the region ``init_level_set > 0``, as in
-            scikit-image.  An array with no positive value gives no curve to start from;
-            the default start is used then (scikit-image's flow would create the regions
-            anywhere, too).
+            A level-set function: the start is the region ``init_level_set > 0``, every piece of
+            it, as in scikit-image.  An array that is positive everywhere, or nowhere, has no
+            zero level set and so no contour to move: the segmentation is that start, all True
+            or all False (scikit-image's flow leaves it too: its tests assert it).
     extended_output : bool, optional
         Return ``(segmentation, phi, energies)`` instead of the segmentation alone.
 
     Returns
     -------
     segmentation : (M, N) ndarray, bool
-        The inside of the final contours (pixel centres inside, as ``result.mask``).
+        The inside of the final contours (pixel centres inside, as ``result.mask``).  Which of
+        the two regions is True can differ from scikit-image's (see Notes).
     phi : (M, N) ndarray of floats
         Only with ``extended_output``.  The signed Euclidean distance, in pixels, from each pixel
         centre to the boundary of ``segmentation`` (half-way between inside and outside pixel
@@ -102,7 +108,8 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
         Only with ``extended_output``.  (6.38) by the common evaluator
         (:func:`activecontour.chan_vese_energy` with ``mu``, ``lambda_in=lambda1``,
         ``lambda_out=lambda2``) before the first iteration and after every iteration; unlike
-        scikit-image's list it ends with the final energy.
+        scikit-image's list it ends with the final energy.  NumPy floats of ``phi``'s dtype, as
+        scikit-image's.
 
     Raises
     ------
@@ -117,9 +124,28 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
     -----
     The contour is a polygon moved by the H^1 gradient flow (6.30)-(6.31), (6.39)-(6.41) of
     Chan-Vese's functional (6.38) (area weight ``omega = 0``, as scikit-image); region constants by
-    (6.42) at every iteration.  ``benchmarks/bench_compat.py`` compares both functions on
-    scikit-image's sample images: the energy each result reaches, by the common evaluator, and
-    the time each takes.
+    (6.42) at every iteration.
+
+    *Which region is True.*  Both functions return the region that evolved from the start's
+    inside (``phi > 0``), so with a ``"disk"``, a ``"small disk"`` or an array the True region
+    is the one the start put inside, in both.  They can differ in three cases:
+
+    * ``"checkerboard"``: scikit-image's True region is whatever its positive squares grew into,
+      often the background (on ``skimage.data.coins()`` the two masks agree on 0.4 % of the
+      pixels); here the start's inside is the class covering less of the image border (the
+      objects), so True is the objects.  With ``lambda1 == lambda2`` a region and its
+      complement have the same (6.38): the two results are the same minimiser, one inverted.
+      With ``lambda1 != lambda2`` the weights follow the True region in both, so the minimisers
+      differ too.
+    * Away from the contour: scikit-image's regularised delta acts on every pixel, so regions
+      appear anywhere during its flow; here new regions are added only where the topological
+      derivative says (6.38) drops (nucleation, once the flow has settled), so a small region
+      one finds the other may not.
+    * When the two flows end in different local minima (the functional is not convex), a piece
+      of the image can be True in one and False in the other: compare energies, not masks.
+
+    ``benchmarks/bench_compat.py`` compares both functions on 20 of scikit-image's sample images:
+    the energy each result reaches, by the common evaluator, and the time each takes.
     """
     image = np.asarray(image)
     if image.ndim != 2:
@@ -128,13 +154,38 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
         raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
     init, arguments = _segment_arguments(image.shape, mu, lambda1, lambda2, tol, max_num_iter,
                                          init_level_set)
-    result = segment(image, init, **arguments)
-    segmentation = result.mask
+    if isinstance(init, _Flat):  # no zero level set: no contour to move, the start is the answer
+        from activecontour.initial import rectangle
+
+        segmentation = np.full(image.shape, init.inside)
+        domain = rectangle((-0.5, -0.5), (image.shape[0] - 0.5, image.shape[1] - 0.5))
+        energies = [_energy(image, [domain] if init.inside else [], arguments)]
+    else:
+        if isinstance(init_level_set, str) and init_level_set == "checkerboard":
+            init = _checkerboard_start(image, mu, arguments)
+        result = segment(image, init, **arguments)
+        segmentation, energies = result.mask, result.energies
     if not extended_output:
         return segmentation
+    # scikit-image's float type: float32 for float16/float32 images, float64 for the others
     float_dtype = np.float32 if image.dtype in (np.float16, np.float32) else np.float64
     phi = _signed_distance(segmentation).astype(float_dtype, copy=False)
-    return segmentation, phi, [float(e) for e in result.energies]
+    return segmentation, phi, [float_dtype(e) for e in energies]
+
+
+class _Flat:
+    """An ``init_level_set`` array without a zero level set: everything inside or nothing."""
+
+    def __init__(self, inside):
+        self.inside = bool(inside)
+
+
+def _energy(image, curves, arguments):
+    """(6.38) of curves by the common evaluator with :func:`chan_vese`'s mapped weights."""
+    from activecontour.evaluate import chan_vese_energy
+
+    return chan_vese_energy(image, curves, mu=arguments["mu"], lambda_in=arguments["lambda_in"],
+                            lambda_out=arguments["lambda_out"], normalize=arguments["normalize"])
 
 
 def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_level_set):
@@ -152,6 +203,24 @@ def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_leve
     return _initial_region(init_level_set, shape), keywords
 
 
+def _checkerboard_start(image, mu, keywords):
+    """scikit-image's ``"checkerboard"`` here: the default start's threshold set, of the image
+    blurred by whichever of ``CHECKERBOARD_BLURS`` gives it the lowest (6.38)
+    (:func:`activecontour.initial.threshold_starts`), flowed from as the default start is (a 2 px
+    first smoothing, no global move: it is one already).  ``keywords`` gain those options."""
+    from activecontour.backends.polygon import _START_SMOOTHING
+    from activecontour.imaging.normalize import normalize_image
+    from activecontour.initial import threshold_starts
+
+    if not _is_number(mu) or mu < 0:
+        return None  # segment names the parameter
+    values = normalize_image(image, normalize=keywords["normalize"])
+    curves = threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]
+    if curves:
+        keywords["options"] = {"global_start": False, "smoothing": _START_SMOOTHING}
+    return curves or None
+
+
 def _is_number(value):
     return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
             and bool(np.isfinite(value)))
@@ -159,6 +228,7 @@ def _is_number(value):
 
 def _initial_region(init_level_set, shape):
     """The ``init`` of :func:`activecontour.segment` for scikit-image's ``init_level_set``."""
+    from activecontour.geometry.raster import mask_to_curves
     from activecontour.initial import circle
 
     if isinstance(init_level_set, str):
@@ -181,7 +251,11 @@ def _initial_region(init_level_set, shape):
         raise ValueError(f"init_level_set has shape {init_level_set.shape}, but the image has "
                          f"shape {tuple(shape)}")
     inside = init_level_set > 0
-    return inside if inside.any() else None
+    if inside.all() or not inside.any():
+        return _Flat(inside.all())
+    # every piece, however small (a mask given as init drops pieces of a few pixels): the start is
+    # the region ``init_level_set > 0`` exactly, as scikit-image's
+    return mask_to_curves(inside)
 
 
 def _signed_distance(mask):

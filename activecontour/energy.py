@@ -136,35 +136,58 @@ class PartitionEvaluation:
     constants: np.ndarray
     areas: np.ndarray
     length: float
+    parts: np.ndarray | None = None
 
 
-def partition_moments(model, boundary, n_classes):
+def partition_moments(model, boundary, n_classes, *, parts=False):
     """``int 1``, ``int I`` and ``int I^2`` over every region of a partition.
+
+    One pass over the boundary segments (:func:`activecontour._kernels.segment_integrals`): each
+    segment's Green integrals count for the region on its inner side and against the one on its
+    outer side, so an interface between two regions is integrated once.
 
     Parameters
     ----------
     model : ImageModel
     boundary : activecontour.geometry.partition.Boundary
     n_classes : int
+    parts : bool
+        Also return the integrals along every segment that make the load (6.41) of any quadratic
+        form (:func:`partition_load`), from the same pass.
 
     Returns
     -------
     areas : ndarray (K,)
     first, second : ndarray (K, C)
+    parts : ndarray (S, 2, 2C)
+        With ``parts`` only.
     """
-    from activecontour.geometry.partition import class_soup
+    *moments, _, along = _segment_integrals(model, boundary, n_classes, parts)
+    return (*moments, along) if parts else tuple(moments)
 
-    areas = np.zeros(n_classes)
-    first = np.zeros((n_classes, model.n_channels))
-    second = np.zeros((n_classes, model.n_channels))
-    for k in range(1, n_classes):
-        areas[k], first[k], second[k] = soup_moments(model, *class_soup(boundary, k))
-    # the background: the domain's totals minus the others (as the two-region outside)
+
+def _segment_integrals(model, boundary, n_classes, parts):
+    """``(areas, first, second, counted length, parts or None)`` of a partition's boundary in one
+    pass (:func:`activecontour._kernels.segment_integrals`), the background's moments the domain's
+    totals less the others' (as the two-region outside)."""
+    channels = model.n_channels
+    if boundary.inner.size and max(boundary.inner.max(), boundary.outer.max()) >= n_classes:
+        raise ValueError(f"a boundary between more than {n_classes} regions")
+    starts, ends = np.ascontiguousarray(boundary.start), np.ascontiguousarray(boundary.end)
+    moments = np.zeros((n_classes, 1 + 2 * channels))
+    along = np.empty((len(starts) if parts else 0, 2, 2 * channels))
+    length = _kernels.segment_integrals(starts, ends, _indices(boundary.inner), _indices(boundary.outer),
+                                        model.values, model.table, moments, along)
+    areas, first, second = moments[:, 0], moments[:, 1:1 + channels], moments[:, 1 + channels:]
     total_area, total_first, total_second = model.totals
     areas[0] = total_area - areas[1:].sum()
     first[0] = total_first - first[1:].sum(axis=0)
     second[0] = total_second - second[1:].sum(axis=0)
-    return areas, first, second
+    return areas, first, second, length, (along if parts else None)
+
+
+def _indices(labels):
+    return np.ascontiguousarray(labels, dtype=np.intp)
 
 
 def soup_moments(model, starts, ends):
@@ -177,19 +200,21 @@ def soup_moments(model, starts, ends):
     return area, first, second
 
 
-def evaluate_partition(model, boundary, params, n_classes, constants=None):
+def evaluate_partition(model, boundary, params, n_classes, constants=None, *, parts=False):
     """The N-region functional of a partition (:meth:`ChanVeseParameters.class_forms`).
 
     ``J = mu L + sum_k int_{Omega_k} g_k`` with L the length of the interfaces between regions,
     each counted once, plus the domain's edge where a region other than the background (0) lies
     on it: for two regions this is (6.38) of the contours of region 1 (:func:`evaluate`), which
     close along the image border there.  ``constants`` (K, C), by default the region means (6.42);
-    an empty region's term is 0 whatever its constant, which is then the image mean.
+    an empty region's term is 0 whatever its constant, which is then the image mean.  With
+    ``parts`` the evaluation keeps the segments' integrals of :func:`partition_moments` as
+    ``parts``, for :func:`partition_load` at the same boundary.
     """
-    moments = partition_moments(model, boundary, n_classes)
-    lengths = boundary.length
-    counted = (boundary.outer >= 0) | (boundary.inner > 0)  # interfaces; the border outside region 0
-    return energy_of_moments(model, params, *moments, float(lengths[counted].sum()), constants)
+    areas, first, second, length, along = _segment_integrals(model, boundary, n_classes, parts)
+    evaluation = energy_of_moments(model, params, areas, first, second, length, constants)
+    evaluation.parts = along
+    return evaluation
 
 
 def energy_of_moments(model, params, areas, first, second, length, constants=None):
@@ -204,28 +229,35 @@ def energy_of_moments(model, params, areas, first, second, length, constants=Non
     return PartitionEvaluation(float(energy), constants, areas, length)
 
 
-def partition_load(model, boundary, params, constants):
+def partition_load(model, boundary, params, constants, parts=None):
     """The derivative of the N-region functional (:func:`evaluate_partition`, constants fixed) with
     respect to both ends of every boundary segment, shape (S, 2, 2): ``[s, 0]`` the start's.
 
     On a segment between regions i (inner) and o (outer) the integrand of (6.41) is ``g_i - g_o``
     (``g_i`` alone on the image border); the length term is mu's on interfaces and on the border
     of regions other than the background.  A point shared by several segments (a junction) moves
-    with the sum of their loads.
+    with the sum of their loads.  ``parts``: the segments' integrals of :func:`partition_moments`
+    at this boundary, when the caller has them.
     """
+    if parts is None:
+        *_, parts = partition_moments(model, boundary, len(constants), parts=True)
     forms = params.class_forms(constants)
-    zero = forms[0] - forms[0]
-    load = np.zeros((len(boundary.start), 2, 2))
-    for inner, outer, chosen in boundary.sides.pairs:
-        form = forms[inner] - (forms[outer] if outer >= 0 else zero)
-        mu = params.mu if (outer >= 0 or inner > 0) else 0.0
-        points = np.empty((2 * chosen.size, 2))
-        points[0::2], points[1::2] = boundary.start[chosen], boundary.end[chosen]
-        next_index = np.repeat(np.arange(1, len(points), 2), 2)
-        out = np.zeros_like(points)
-        _kernels.edge_integrals(points, next_index, model.values, model.table, 1,
-                                np.ascontiguousarray(form.linear), np.ascontiguousarray(form.square),
-                                form.constant, float(mu), np.zeros(model.n_channels),
-                                np.zeros(model.n_channels), np.zeros(2), out)
-        load[chosen, 0], load[chosen, 1] = out[0::2], out[1::2]
+    # each region's (constant, linear, square), and zeros at index -1 (outside the image)
+    table = np.zeros((len(forms) + 1, 1 + parts.shape[2]))
+    for k, form in enumerate(forms):
+        table[k] = np.concatenate([[form.constant], form.linear, form.square])
+    inner, outer = boundary.inner, boundary.outer
+    coefficients = table[inner] - table[outer]
+    # int phi (g_i - g_o) ds / |e| at each end: the constant's int phi = 1/2, the rest from the parts
+    density = np.einsum("sec,sc->se", parts, coefficients[:, 1:]) + 0.5 * coefficients[:, :1]
+    step = boundary.end - boundary.start
+    length = np.hypot(step[:, 0], step[:, 1])
+    mu = np.where((outer >= 0) | (inner > 0), params.mu, 0.0)
+    tangent = step * (mu / np.where(length > 0, length, 1.0))[:, None]  # mu times the unit tangent
+    load = np.empty((len(step), 2, 2))
+    # times the normal nu |e| = (dv, -du) (section 4.5.2)
+    load[:, :, 0] = density * step[:, 1:2]
+    load[:, :, 1] = density * -step[:, 0:1]
+    load[:, 0] -= tangent
+    load[:, 1] += tangent
     return load

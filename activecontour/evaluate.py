@@ -36,8 +36,12 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu=_DE
     ----------
     image : ndarray (M, N) or (M, N, C)
     contours : list of ndarray (K, 2)
-        Closed curves in (row, col), outer boundaries positive, holes negative.  An empty list is
-        the empty set: J is then the outside term alone.
+        Closed curves in (row, col), each vertex once or the first repeated last, in either
+        orientation: the nesting decides (:func:`activecontour.geometry.regions.orient_by_nesting`,
+        the rule ``init`` follows too), a curve inside an even number of the others bounds an
+        object, inside an odd number a hole.  So ``skimage.measure.find_contours`` output, OpenCV's
+        ``findContours`` (converted to (row, col)) and shapely's rings score as they are.  An
+        empty list is the empty set: J is then the outside term alone.
     classes : int ndarray (M, N), optional
         Instead of ``contours``: a label image, 0 = the background region, 1..K-1 the others.
         Scored as the partition of the domain it stands for (:mod:`activecontour.geometry.partition`:
@@ -75,8 +79,8 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu=_DE
     ValueError
         For a contour that is not a closed curve (see :func:`activecontour.geometry.curve.as_curve`) or has
         a vertex outside the image domain ``[-0.5, M - 0.5] x [-0.5, N - 0.5]``, and for contours
-        that cross themselves or each other, overlap, repeat a curve, or are oriented against
-        their nesting (:func:`activecontour.geometry.topology.region_problem`): they bound no region, and
+        that cross themselves or each other, overlap or repeat a curve
+        (:func:`activecontour.geometry.topology.region_problem`): they bound no region, and
         (6.38) is not defined.  :func:`activecontour.geometry.topology.region_union` turns such curves
         into the boundary of the region they outline.
     """
@@ -96,8 +100,10 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu=_DE
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
     for i, curve in enumerate(curves):
         _check_in_domain(curve, model.bounds, f"contours[{i}]")
+    from activecontour.geometry.regions import orient_by_nesting
     from activecontour.geometry.topology import region_problem
 
+    curves = orient_by_nesting(curves)
     problem = region_problem(curves)
     if problem is not None:
         raise ValueError(f"contours do not bound a region, (6.38) is not defined: {problem}")

@@ -180,9 +180,10 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     * ``energy`` is (6.38) of exactly these contours by the common evaluator
       (:func:`activecontour.evaluate.chan_vese_energy`), and ``energies`` ends with it;
     * when a converged flow ends above the energy of the empty set (a local minimum worse than
-      no object at all), or the backend reports a collapse, the result is the empty set, status
-      3, but only if that does not raise the energy: a collapse with curves left that beat the
-      empty set keeps them (status 1);
+      no object at all; at equal energy, as on a blank image, it keeps its curves), or the
+      backend reports a collapse, the result is the empty set, status 3, but only if that does
+      not raise the energy: a collapse with curves left that beat the empty set keeps them
+      (status 1);
     * ``mask`` is the inside of the contours (:func:`activecontour.geometry.raster.rasterize`);
     * ``c_in``, ``c_out`` are finite: the constant of an empty region is reported equal to the
       other one (its fitting term is 0 whatever it is).
@@ -202,7 +203,9 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
         cleaned = [c for c in map(clean, region_union(cleaned, signed=True)) if c is not None]
     final = _evaluate(model, params, cleaned)
     empty = _evaluate(model, params, [])
-    if cleaned and (status == 3 or status in (0, 4)) and empty.energy <= final.energy:
+    # a collapse the backend reports is taken at equal energy; a converged flow keeps its curves then
+    if cleaned and ((status == 3 and empty.energy <= final.energy)
+                    or (status in (0, 4) and empty.energy < final.energy)):
         cleaned, final = [], empty
     if not cleaned:
         status = 3

@@ -12,7 +12,8 @@ import numpy as np
 import scipy.ndimage
 
 __all__ = ["add_noise", "annulus", "coins", "dice", "disk", "disk_image", "disk_sequence", "ellipse",
-           "equal_gray_colour", "rectangle", "render", "star", "touching_clumps", "union"]
+           "equal_gray_colour", "FAMILIES", "rectangle", "render", "render_instances", "singles", "star",
+           "touching_disks", "touching_ellipses", "union"]
 
 
 def disk(center, radius):
@@ -176,83 +177,331 @@ def ellipse(center, semi_major, semi_minor, angle=0.0):
     return inside
 
 
-def touching_clumps(size=(256, 256), *, n_clumps=10, per_clump=(2, 4), minor=(6.0, 9.0),
-                    max_aspect=2.5, max_overlap=1.0 / 3.0, snr=3.0, seed=0):
-    """Clumps of touching, slightly overlapping ellipses: an instance segmentation test scene.
+# ---- families of scenes for touching objects (issue 23) ----------------------------------------
+#
+# A scene is drawn from a seed in a continuous frame whose unit is the nominal pixel; ``pixel`` is
+# the pixel size in that unit (0.5: twice as many pixels a side, 2: half as many), so the same
+# scene can be rendered at several resolutions.  Pixel (i, j) covers [i p, (i + 1) p) x
+# [j p, (j + 1) p) and its centre is ((i + 1/2) p, (j + 1/2) p).
 
-    Each clump starts with one ellipse; every further ellipse (semi-minor axis b uniform in
-    ``minor``, aspect ratio a / b uniform in [1, ``max_aspect``], random orientation) is placed
-    against a random member of its clump, in a random direction, at the distance where their
-    support functions touch, then pushed in by an overlap uniform in [0, ``max_overlap``] times the
-    smaller minor axis (2 b).  Ellipses of different clumps stay apart.  The image is the
-    anti-aliased union (1 on 0) with Gaussian noise of std ``1 / snr``.
+#: The touching families' object radii (equal-area radius sqrt(a b), nominal pixels): a scene's
+#: radii lie in [r0, 1.5 r0] with r0 log-uniform in ``FAMILY_RADII`` (so 6-40 over the seeds).
+FAMILY_RADII = (6.0, 40.0 / 1.5)
+#: Signal-to-noise ratio (contrast / noise sigma) and Gaussian blur (nominal pixels) of a scene.
+FAMILY_SNR = (2.0, 5.0)
+FAMILY_BLUR = (0.0, 1.5)
+#: Objects per clump, and the largest overlap: the depth by which a new object is pushed into its
+#: anchor, as a fraction of the smaller minor axis (2 b).
+FAMILY_CLUMP = (2, 8)
+FAMILY_OVERLAP = 1.0 / 3.0
+#: Clumps drawn per scene (fewer when there is no room).
+FAMILY_CLUMPS = 4
+
+
+class _Ellipse:
+    """An ellipse in the scene frame: ``depth(r, c)`` is its normalised radius (<= 1 inside)."""
+
+    def __init__(self, center, a, b, angle):
+        self.center, self.a, self.b, self.angle = np.asarray(center, float), a, b, angle
+        half = np.hypot(a * np.cos(angle), b * np.sin(angle)), np.hypot(a * np.sin(angle), b * np.cos(angle))
+        self.box = (self.center[0] - half[0], self.center[1] - half[1],
+                    self.center[0] + half[0], self.center[1] + half[1])
+
+    def depth(self, r, c):
+        cos, sin = np.cos(self.angle), np.sin(self.angle)
+        u = (r - self.center[0]) * cos + (c - self.center[1]) * sin
+        v = -(r - self.center[0]) * sin + (c - self.center[1]) * cos
+        return (u / self.a) ** 2 + (v / self.b) ** 2
+
+    def support(self, direction):
+        """The largest projection of the ellipse on a unit direction, from its centre."""
+        along = direction @ [np.cos(self.angle), np.sin(self.angle)]
+        across = direction @ [-np.sin(self.angle), np.cos(self.angle)]
+        return np.sqrt((self.a * along) ** 2 + (self.b * across) ** 2)
+
+
+class _Shape:
+    """A shape given by a signed function ``level(r, c)`` (> 0 inside) and a bounding box."""
+
+    def __init__(self, level, box):
+        self.level, self.box = level, box
+
+    def depth(self, r, c):
+        return np.where(self.level(r, c) > 0, 0.0, np.inf)
+
+
+def render_instances(shapes, extent, *, pixel=1.0, snr=np.inf, blur=0.0, seed=0, supersample=4):
+    """The anti-aliased image of a union of shapes and its true label image, at a pixel size.
+
+    Parameters
+    ----------
+    shapes : list
+        Objects with ``box = (r0, c0, r1, c1)`` and ``depth(r, c)`` (<= 1 inside; where shapes
+        overlap, a pixel centre belongs to the one it lies deepest in), in the scene frame.
+    extent : (H, W)
+        The scene's size in nominal pixels; the image has ``round(H / pixel) x round(W / pixel)``
+        pixels.
+    pixel : float
+        The pixel size in nominal pixels.
+    snr, blur, seed :
+        The objects are 1 on 0, blurred by a Gaussian of ``blur`` nominal pixels, plus Gaussian
+        noise of sigma ``1 / snr`` (per pixel, at any pixel size).
 
     Returns
     -------
     image : ndarray (M, N) float64
+        Each pixel: the fraction of its square covered (``supersample`` x ``supersample``
+        sub-samples; only each shape's box is sampled), blurred, plus noise.
     labels : int32 ndarray (M, N)
-        The true instances: a pixel centre covered by several ellipses goes to the one it lies
-        deepest in (the smallest normalised radius).
+        Shape k + 1 at the pixel centres inside shape k.
     """
-    rng = np.random.default_rng(seed)
-    m, n = size
-    placed = []  # (center, a, b, angle, clump)
+    m, n = int(round(extent[0] / pixel)), int(round(extent[1] / pixel))
+    s = supersample
+    covered = np.zeros((m * s, n * s), dtype=bool)
+    labels = np.zeros((m, n), dtype=np.int32)
+    deepest = np.full((m, n), np.inf)
+    offsets = (np.arange(s) + 0.5) / s
+    for k, shape in enumerate(shapes):
+        r0, c0, r1, c1 = shape.box
+        i0, j0 = max(int(np.floor(r0 / pixel)) - 1, 0), max(int(np.floor(c0 / pixel)) - 1, 0)
+        i1, j1 = min(int(np.ceil(r1 / pixel)) + 2, m), min(int(np.ceil(c1 / pixel)) + 2, n)
+        if i1 <= i0 or j1 <= j0:
+            continue
+        rows = ((np.arange(i0, i1)[:, None] + offsets).ravel() * pixel)[:, None]
+        cols = ((np.arange(j0, j1)[:, None] + offsets).ravel() * pixel)[None, :]
+        covered[i0 * s:i1 * s, j0 * s:j1 * s] |= shape.depth(rows, cols) <= 1.0
+        depth = shape.depth((np.arange(i0, i1)[:, None] + 0.5) * pixel,
+                            (np.arange(j0, j1)[None, :] + 0.5) * pixel)
+        window = deepest[i0:i1, j0:j1]
+        take = (depth <= 1.0) & (depth < window)
+        labels[i0:i1, j0:j1][take], window[take] = k + 1, depth[take]
+    image = covered.reshape(m, s, n, s).mean(axis=(1, 3))
+    sigma = 0.0 if not np.isfinite(snr) else 1.0 / snr
+    return add_noise(image, sigma, seed, blur=blur / pixel) if sigma > 0 or blur > 0 else image, labels
 
-    def support(a, b, angle, direction):
-        along = direction @ [np.cos(angle), np.sin(angle)]
-        across = direction @ [-np.sin(angle), np.cos(angle)]
-        return np.sqrt((a * along) ** 2 + (b * across) ** 2)
 
-    def fits(center, a, clump):
-        if not (a + 2 <= center[0] <= m - a - 3 and a + 2 <= center[1] <= n - a - 3):
+def _clumps(rng, extent, radius, aspect, count):
+    """Clumps of touching ellipses (equal-area radius uniform in ``radius``, aspect ratio a / b
+    uniform in ``aspect``, any angle): each clump starts with one ellipse anywhere with room, and
+    every further one is placed against a random member, in a random direction, at the distance
+    where their support functions meet, then pushed in by an overlap uniform in
+    [0, ``FAMILY_OVERLAP``] times the smaller minor axis.  It must clear every other member of its
+    clump (support functions) and every ellipse of the other clumps by 6 px."""
+    h, w = extent
+    placed, clump_of = [], []
+
+    def draw():
+        r, ratio = rng.uniform(*radius), rng.uniform(*aspect)
+        return r * np.sqrt(ratio), r / np.sqrt(ratio), rng.uniform(-np.pi / 2, np.pi / 2)
+
+    def room(e, clump):
+        r0, c0, r1, c1 = e.box
+        if r0 < 3 or c0 < 3 or r1 > h - 3 or c1 > w - 3:
             return False
-        return all(np.hypot(*(center - c)) > aa + a + 6 for c, aa, _, _, k in placed if k != clump)
+        return all(np.hypot(*(e.center - o.center)) > e.a + o.a + 6
+                   for o, k in zip(placed, clump_of, strict=True) if k != clump)
 
-    for clump in range(n_clumps):
+    for clump in range(FAMILY_CLUMPS):
         members = []
-        for _ in range(200):  # the first ellipse: anywhere with room
-            b = rng.uniform(*minor)
-            a, angle = b * rng.uniform(1.0, max_aspect), rng.uniform(-np.pi / 2, np.pi / 2)
-            center = rng.uniform([0, 0], [m, n])
-            if fits(center, a, clump) and all(np.hypot(*(center - c)) > aa + a + 30
-                                              for c, aa, *_ in placed):
-                members.append((center, a, b, angle, clump))
-                placed.append(members[-1])
-                break
-        count = rng.integers(per_clump[0], per_clump[1] + 1)
         for _ in range(200):
-            if not members or len(members) >= count:
+            a, b, angle = draw()
+            first = _Ellipse(rng.uniform([0, 0], [h, w]), a, b, angle)
+            if room(first, clump) and all(np.hypot(*(first.center - o.center)) > first.a + o.a + 4 * b
+                                          for o in placed):
+                members.append(first)
+                placed.append(first)
+                clump_of.append(clump)
                 break
-            other = members[rng.integers(len(members))]
-            b = rng.uniform(*minor)
-            a, angle = b * rng.uniform(1.0, max_aspect), rng.uniform(-np.pi / 2, np.pi / 2)
+        size = rng.integers(count[0], count[1] + 1)
+        for _ in range(300):
+            if not members or len(members) >= size:
+                break
+            anchor = members[rng.integers(len(members))]
+            a, b, angle = draw()
             theta = rng.uniform(0, 2 * np.pi)
             direction = np.array([np.cos(theta), np.sin(theta)])
-            gap = support(other[1], other[2], other[3], direction) + support(a, b, angle, direction)
-            gap -= rng.uniform(0, max_overlap) * 2 * min(b, other[2])
-            center = other[0] + gap * direction
-            # touching its anchor only: any other member must be at least as far as support says
+            probe = _Ellipse((0.0, 0.0), a, b, angle)
+            gap = anchor.support(direction) + probe.support(-direction)
+            gap -= rng.uniform(0, FAMILY_OVERLAP) * 2 * min(b, anchor.b)
+            new = _Ellipse(anchor.center + gap * direction, a, b, angle)
             clear = True
-            for c, aa, bb, ang, _ in members:
-                if c is not other[0]:
-                    distance = np.hypot(*(center - c))
-                    unit = (center - c) / distance
-                    clear &= distance >= support(aa, bb, ang, unit) + support(a, b, angle, -unit)
-            if clear and fits(center, a, clump):
-                members.append((center, a, b, angle, clump))
-                placed.append(members[-1])
-    shapes = [ellipse(c, a, b, angle) for c, a, b, angle, _ in placed]
-    image, _ = render(union(*shapes), size)
-    rr, cc = np.meshgrid(np.arange(m, dtype=np.float64), np.arange(n, dtype=np.float64), indexing="ij")
-    depth = np.full((m, n), np.inf)
-    labels = np.zeros((m, n), dtype=np.int32)
-    for k, (c, a, b, angle, _) in enumerate(placed):
-        u = (rr - c[0]) * np.cos(angle) + (cc - c[1]) * np.sin(angle)
-        v = -(rr - c[0]) * np.sin(angle) + (cc - c[1]) * np.cos(angle)
-        radius = (u / a) ** 2 + (v / b) ** 2
-        take = (radius <= 1.0) & (radius < depth)
-        labels[take], depth[take] = k + 1, radius[take]
-    return add_noise(image, 1.0 / snr, seed), labels
+            for other in members:
+                if other is not anchor:
+                    distance = np.hypot(*(new.center - other.center))
+                    unit = (new.center - other.center) / distance
+                    clear &= distance >= other.support(unit) + new.support(unit)
+            if clear and room(new, clump):
+                members.append(new)
+                placed.append(new)
+                clump_of.append(clump)
+    return placed
+
+
+def _scene_settings(rng):
+    """A scene's base radius r0, SNR and blur, and its extent (room for its clumps)."""
+    r0 = float(np.exp(rng.uniform(*np.log(FAMILY_RADII))))
+    side = float(np.clip(18 * r0, 160, 560))
+    return r0, rng.uniform(*FAMILY_SNR), rng.uniform(*FAMILY_BLUR), (side, side)
+
+
+def touching_ellipses(seed, *, pixel=1.0):
+    """A scene of the touching-ellipse family: clumps of 2-8 ellipses of aspect 1-3 at any angle,
+    overlapping by up to a third of the minor axis; radii in [r0, 1.5 r0], r0 in 6-27 px, SNR 2-5,
+    blur 0-1.5 px (module constants ``FAMILY_*``).
+
+    Returns the image and the true labels (:func:`render_instances`; a pixel centre in an overlap
+    belongs to the ellipse it lies deepest in)."""
+    rng = np.random.default_rng([23, 1, seed])
+    r0, snr, blur, extent = _scene_settings(rng)
+    shapes = _clumps(rng, extent, (r0, 1.5 * r0), (1.0, 3.0), FAMILY_CLUMP)
+    return render_instances(shapes, extent, pixel=pixel, snr=snr, blur=blur, seed=seed)
+
+
+def touching_disks(seed, *, pixel=1.0):
+    """A scene of the touching-disk family: as :func:`touching_ellipses` with aspect 1."""
+    rng = np.random.default_rng([23, 2, seed])
+    r0, snr, blur, extent = _scene_settings(rng)
+    shapes = _clumps(rng, extent, (r0, 1.5 * r0), (1.0, 1.0), FAMILY_CLUMP)
+    return render_instances(shapes, extent, pixel=pixel, snr=snr, blur=blur, seed=seed)
+
+
+def _polyline_distance(points, r, c):
+    """The distance from (r, c) (broadcast arrays) to a polyline (P, 2)."""
+    best = np.full(np.broadcast(r, c).shape, np.inf)
+    for (ar, ac_), (br, bc) in zip(points[:-1], points[1:], strict=True):
+        dr, dc = br - ar, bc - ac_
+        t = np.clip(((r - ar) * dr + (c - ac_) * dc) / max(dr * dr + dc * dc, 1e-12), 0.0, 1.0)
+        best = np.minimum(best, np.hypot(r - ar - t * dr, c - ac_ - t * dc))
+    return best
+
+
+def _tube(points, half_width):
+    """The points within ``half_width`` of a polyline: a stroke, a rod with round ends."""
+    low, high = points.min(axis=0) - half_width, points.max(axis=0) + half_width
+    return _Shape(lambda r, c: half_width - _polyline_distance(points, r, c), (*low, *high))
+
+
+def _walk(rng, start, length, turn, step=2.0):
+    """A smooth random path: ``length`` px in steps of ``step``, its heading turning by a random
+    amount (std ``turn`` radians per step, smoothed) at each step."""
+    steps = max(int(length / step), 2)
+    turns = scipy.ndimage.gaussian_filter1d(rng.normal(0.0, turn, steps), 3.0) * 3.0
+    heading = rng.uniform(0, 2 * np.pi) + np.cumsum(turns)
+    moves = step * np.column_stack([np.cos(heading), np.sin(heading)])
+    return np.asarray(start, float) + np.vstack([[0.0, 0.0], np.cumsum(moves, axis=0)])
+
+
+_HORSE = None
+
+
+def _horse_level():
+    """skimage's horse silhouette as a smooth signed distance (px; > 0 inside), and its size."""
+    global _HORSE
+    if _HORSE is None:
+        import skimage.data
+
+        horse = ~skimage.data.horse()
+        level = (scipy.ndimage.distance_transform_edt(horse) - scipy.ndimage.distance_transform_edt(~horse))
+        _HORSE = scipy.ndimage.gaussian_filter(level, 1.0)
+    return _HORSE
+
+
+def _horse(center, height, angle, mirror):
+    """The horse silhouette of ``height`` px (its image's rows), turned by ``angle``."""
+    level = _horse_level()
+    scale = level.shape[0] / height
+    cos, sin = np.cos(angle), np.sin(angle)
+    half = 0.5 * np.hypot(*level.shape) / scale
+
+    def signed(r, c):
+        r, c = np.broadcast_arrays(r - center[0], c - center[1])
+        u = (r * cos + c * sin) * scale + level.shape[0] / 2
+        v = (-r * sin + c * cos) * scale * (-1 if mirror else 1) + level.shape[1] / 2
+        return scipy.ndimage.map_coordinates(level, [u, v], order=1, cval=-1.0)
+
+    return _Shape(signed, (center[0] - half, center[1] - half, center[0] + half, center[1] + half))
+
+
+def _single(kind, rng, r0):
+    """One shape of the singles family around (0, 0): its level function and box."""
+    if kind == "horse":
+        return _horse((0.0, 0.0), float(np.clip(rng.uniform(6, 9) * r0, 60, 220)),
+                      rng.uniform(-np.pi, np.pi), bool(rng.integers(2)))
+    if kind == "ring":
+        outer = rng.uniform(1.2, 2.0) * r0
+        inner = outer - max(rng.uniform(0.25, 0.5) * outer, 4.0)
+        return _Shape(lambda r, c: np.minimum(outer - np.hypot(r, c), np.hypot(r, c) - inner),
+                      (-outer, -outer, outer, outer))
+    if kind == "stroke":
+        return _tube(_walk(rng, (0.0, 0.0), rng.uniform(8, 16) * max(r0, 6.0), 0.15), 1.5)
+    if kind == "bent rod":
+        width = max(rng.uniform(0.8, 1.4) * r0, 6.0)
+        arm = rng.uniform(1.5, 3.0) * width
+        bend = rng.uniform(np.pi / 6, 2 * np.pi / 3)
+        heading = rng.uniform(0, 2 * np.pi)
+        if rng.integers(2):  # a polyline with one bend
+            points = np.array([[0.0, 0.0], [np.cos(heading), np.sin(heading)]]) * arm
+            points = np.vstack([points, points[1] + arm * np.array([np.cos(heading + bend),
+                                                                    np.sin(heading + bend)])])
+        else:  # an arc turning by ``bend``
+            t = np.linspace(0, 1, 24)[:, None]
+            radius = 2 * arm / bend
+            points = radius * np.hstack([np.sin(t * bend), 1 - np.cos(t * bend)])
+            turn = np.array([[np.cos(heading), np.sin(heading)], [-np.sin(heading), np.cos(heading)]])
+            points = points @ turn
+        return _tube(points - points.mean(axis=0), width / 2)
+    if kind == "star":
+        radius, amplitude, arms = rng.uniform(1.2, 2.0) * r0, rng.uniform(0.15, 0.35), int(rng.integers(4, 8))
+        turn = rng.uniform(0, 2 * np.pi)
+        reach = radius * (1 + amplitude)
+        return _Shape(lambda r, c: radius * (1 + amplitude * np.cos(arms * np.arctan2(c, r) + turn))
+                      - np.hypot(r, c), (-reach, -reach, reach, reach))
+    # an ellipse of aspect 3
+    radius = rng.uniform(1.0, 1.5) * r0
+    e = _Ellipse((0.0, 0.0), radius * np.sqrt(3), radius / np.sqrt(3), rng.uniform(-np.pi / 2, np.pi / 2))
+    return _Shape(lambda r, c: 1.0 - e.depth(r, c), e.box)
+
+
+#: The kinds of the singles family, one of each per scene.
+SINGLE_KINDS = ("horse", "ring", "stroke", "bent rod", "star", "ellipse aspect 3")
+
+
+def singles(seed, *, pixel=1.0):
+    """A scene of the singles family: one horse silhouette (skimage's), ring, 3 px stroke, bent
+    rod (one bend or an arc), star (4-7 arms) and ellipse of aspect 3 (``SINGLE_KINDS``), apart
+    from each other, at the touching families' sizes, SNR and blur.  None may be split.
+
+    Returns the image and the true labels (shape k + 1 is ``SINGLE_KINDS[k]``)."""
+    rng = np.random.default_rng([23, 3, seed])
+    r0, snr, blur, _ = _scene_settings(rng)
+    shapes = [_single(kind, rng, r0) for kind in SINGLE_KINDS]
+    sizes = [max(s.box[2] - s.box[0], s.box[3] - s.box[1]) + 8 for s in shapes]
+    # a row of cells, each as large as its shape
+    columns = 3
+    rows = range(0, len(shapes), columns)
+    height = [max(sizes[i:i + columns]) for i in rows]
+    width = max(sum(sizes[i:i + columns]) for i in rows)
+    placed, top = [], 0.0
+    for row, start in enumerate(rows):
+        left = 0.0
+        for k in range(start, min(start + columns, len(shapes))):
+            placed.append(_shifted(shapes[k], (top + height[row] / 2, left + sizes[k] / 2)))
+            left += sizes[k]
+        top += height[row]
+    return render_instances(placed, (np.ceil(top), np.ceil(width)), pixel=pixel, snr=snr, blur=blur,
+                            seed=seed)
+
+
+def _shifted(shape, centre):
+    """The shape moved so that its box is centred on ``centre``."""
+    r0, c0, r1, c1 = shape.box
+    shift = np.asarray(centre) - [(r0 + r1) / 2, (c0 + c1) / 2]
+    return _Shape(lambda r, c: shape.level(r - shift[0], c - shift[1]),
+                  (r0 + shift[0], c0 + shift[1], r1 + shift[0], c1 + shift[1]))
+
+
+#: The families of issue 23 by name: ``FAMILIES[name](seed, pixel=1.0) -> (image, labels)``.
+FAMILIES = {"disks": touching_disks, "ellipses": touching_ellipses, "singles": singles}
 
 
 def disk_sequence(size, frames, *, inside=0.75, outside=0.25, sigma=0.0, seed=0):

@@ -25,7 +25,8 @@ coins, clock, page and text with the models.
 
 usage: PYTHONPATH=. python benchmarks/bench_models.py [--nuclei DIR] [--no-auto] [--no-robust]
        [--no-scenes] [--sheets DIR] [--repeat N] [--only WORD ...]
-       PYTHONPATH=. python benchmarks/bench_models.py --backends [--repeat N]   # N regions, both backends
+       PYTHONPATH=. python benchmarks/bench_models.py --backends [--repeat N] [--only WORD ...]
+                                                                  # N regions, both backends
 """
 
 from __future__ import annotations
@@ -285,9 +286,11 @@ def contact_sheets(folder):
         print("wrote", path)
 
 
-def backends_table(repeat=3):
-    """N regions on both backends, side by side: energy (the common evaluator's, of each one's
-    partition), per-class Dice where the truth is known, and the best of ``repeat`` times."""
+def backends_table(repeat=3, only=None):
+    """N regions on both backends, side by side in one run: the energy by the common evaluator
+    (:func:`activecontour.chan_vese_energy` of each one's sub-pixel partition), per-class Dice
+    where the truth is known, the CPU time (the best of ``repeat``, both backends alternating), and
+    the ratios polygon (the network) / level set (the label field)."""
     import skimage.data
 
     scenes = [("nested 3, SNR 3, 384^2", *nested_scene(), 3, "gray"),
@@ -295,20 +298,26 @@ def backends_table(repeat=3):
               ("colour 3 regions, one gray", *colour_scene(), 3, "vector")]
     scenes += [(f"skimage {name}", getattr(skimage.data, name)(), None, 3, "gray")
                for name in ("coins", "page", "camera", "text")]
-    print(f"\nscene | K | polygon: J, Dice, s (best of {repeat}) | levelset: J, Dice, s | "
-          "J polygon / levelset")
+    print(f"\nscene | K | polygon: J, Dice, CPU s (best of {repeat}) | levelset: J, Dice, CPU s | "
+          "time polygon / levelset | J polygon / levelset")
     for name, image, truth, n_regions, color in scenes:
+        if only and not any(word in name for word in only):
+            continue
+        best, results = {"polygon": np.inf, "levelset": np.inf}, {}
+        for _ in range(repeat):
+            for backend in best:
+                t = time.process_time()
+                results[backend] = ac.segment(image, n_regions=n_regions, backend=backend, color=color,
+                                              separate=False)
+                best[backend] = min(best[backend], time.process_time() - t)
         cells, energies = [], []
-        for backend in ("polygon", "levelset"):
-            best = np.inf
-            for _ in range(repeat):
-                t = time.perf_counter()
-                res = ac.segment(image, n_regions=n_regions, backend=backend, color=color, separate=False)
-                best = min(best, time.perf_counter() - t)
+        for backend, res in results.items():
+            energy = ac.chan_vese_energy(image, regions=res.class_contours, mu=res.mu, color=color)
             dice = "-" if truth is None else f"{class_dice(res.classes, truth, n_regions).mean():.4f}"
-            cells.append(f"{res.energy:.2f}, {dice}, {best:.2f}")
-            energies.append(res.energy)
-        print(f"{name} | {n_regions} | {cells[0]} | {cells[1]} | {energies[0] / energies[1]:.4f}", flush=True)
+            cells.append(f"{energy:.6f}, {dice}, {best[backend]:.2f}")
+            energies.append(energy)
+        print(f"{name} | {n_regions} | {cells[0]} | {cells[1]} | {best['polygon'] / best['levelset']:.2f} | "
+              f"{energies[0] / energies[1]:.4f}", flush=True)
 
 
 def main():
@@ -327,7 +336,7 @@ def main():
     args = parser.parse_args()
     ac.segment(np.random.default_rng(0).random((64, 64)))  # load the compiled kernels
     if args.backends:
-        backends_table(max(args.repeat, 1))
+        backends_table(max(args.repeat, 1), args.only)
         return
     if not args.no_scenes:
         scenes_table(args.nuclei)

@@ -14,8 +14,10 @@ load average is printed with the timings: compare ratios taken in the same run.
 2. Sizes: a disk of radius 0.3 size (contrast 0.4, noise sigma 0.2, 8-bit PNG).  The floor is reading
    the PNG plus one float64 cumulative sum along its rows (in-process time).  Then the command line
    with ``--max-iter`` (wall, peak RSS, iterations, Dice of its mask against the synthetic truth);
-   the library in one process: preparation (normalising and the tables), time per iteration, and
-   the rest after the last iteration (the final mask).
+   the library in one process: preparation (normalising and the tables), the default start
+   (:func:`activecontour.initial.threshold_starts`), time per iteration, the rest after the last
+   iteration (the final mask and the objects), the objects' pass alone
+   (:func:`activecontour.objects.measure.find_objects`) and the whole ``segment`` call (CPU s).
 """
 
 from __future__ import annotations
@@ -48,12 +50,27 @@ print(time.perf_counter() - start, time.process_time() - cpu)
 LIBRARY = """
 import sys, time, numpy as np
 import activecontour as ac
+import activecontour._segment as segment_module
+import activecontour.initial as initial
 from activecontour.imaging.normalize import normalize_image
 from activecontour.imaging.tables import ImageModel
 image = ac.load_image(sys.argv[1])
 start = time.process_time()
 ImageModel(normalize_image(image))
 prepare = time.process_time() - start
+spent = {"start": 0.0, "objects": 0.0}
+
+def timed(function, key):
+    def run(*args, **kwargs):
+        begin = time.process_time()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            spent[key] += time.process_time() - begin
+    return run
+
+initial.threshold_starts = timed(initial.threshold_starts, "start")  # the default start
+segment_module.find_objects = timed(segment_module.find_objects, "objects")
 stamps = []
 start = time.process_time()
 result = ac.segment(image, max_num_iter=int(sys.argv[2]),
@@ -61,7 +78,7 @@ result = ac.segment(image, max_num_iter=int(sys.argv[2]),
 end = time.process_time()
 steps = np.diff([start] + stamps)
 per_iteration = float(np.median(steps[1:])) if len(steps) > 1 else float("nan")
-print(prepare, per_iteration, end - stamps[-1], result.n_iter)
+print(prepare, per_iteration, end - stamps[-1], result.n_iter, spent["start"], spent["objects"], end - start)
 """
 
 
@@ -103,6 +120,7 @@ def load():
 
 
 def cold_start(cache, repeat):
+    """Print and return (ours wall, ours CPU, scikit-image's wall, its CPU), seconds, min of ``repeat``."""
     image, _ = noisy_disk(256, cache)
     out = cache / "cold-out"
     ours = [sys.executable, "-m", "app", "segment", str(image), "-o", str(out), "-q"]
@@ -117,6 +135,7 @@ def cold_start(cache, repeat):
     print(f"  activecontour segment: {ours_wall:.3f} s wall, {ours_cpu:.3f} s CPU   skimage chan_vese: "
           f"{theirs_wall:.3f} s wall, {theirs_cpu:.3f} s CPU   ratio {ours_wall / theirs_wall:.2f} wall, "
           f"{ours_cpu / theirs_cpu:.2f} CPU")
+    return ours_wall, ours_cpu, theirs_wall, theirs_cpu
 
 
 def import_profile(cache, top=12):
@@ -142,7 +161,8 @@ def sizes(cache, sizes, max_iter):
     print("floor: read + one float64 cumulative sum (in-process wall / CPU); CLI: whole process; library")
     print("x floor compares CPU seconds with the floor's CPU")
     header = (f"{'size':>6s} | {'floor s':>9s} | {'CLI s':>11s} {'x floor':>7s} {'RSS MB':>6s} {'iters':>5s} "
-              f"{'Dice':>6s} | {'prepare':>7s} {'ms/iter':>7s} {'final':>5s}")
+              f"{'Dice':>6s} | {'prepare':>7s} {'start':>5s} {'ms/iter':>7s} {'final':>5s} {'objects':>7s} "
+              f"{'segment':>7s}")
     print(header)
     print("-" * len(header))
     for size in sizes:
@@ -154,11 +174,11 @@ def sizes(cache, sizes, max_iter):
         iterations = int(stdout.split("iterations=")[1].split()[0])
         mask = load_image(out / f"disk{size}_mask.png") != 0
         dice = synthetic.dice(mask, np.load(truth))
-        prepare, per_iter, final, _ = map(float, run_measured([sys.executable, "-c", LIBRARY, str(image),
-                                                              str(max_iter)])[3].split())
+        prepare, per_iter, final, _, start, objects, whole = map(
+            float, run_measured([sys.executable, "-c", LIBRARY, str(image), str(max_iter)])[3].split())
         print(f"{size:6d} | {floor_wall:4.2f}/{floor:4.2f} | {wall:5.2f}/{cpu:5.2f} {cpu / floor:7.1f} "
-              f"{rss:6.0f} {iterations:5d} {dice:6.4f} | {prepare:7.2f} {per_iter * 1e3:7.1f} "
-              f"{final:5.2f}", flush=True)
+              f"{rss:6.0f} {iterations:5d} {dice:6.4f} | {prepare:7.2f} {start:5.2f} {per_iter * 1e3:7.1f} "
+              f"{final:5.2f} {objects:7.2f} {whole:7.2f}", flush=True)
     print(f"({load()})")
 
 
@@ -169,6 +189,8 @@ def main():
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--skip-cold", action="store_true")
     parser.add_argument("--skip-sizes", action="store_true")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096],
+                        help="the image sizes (default 1024 2048 4096; --huge adds 8192)")
     parser.add_argument("--importtime", action="store_true")
     parser.add_argument("--cache", type=Path,
                         default=Path(tempfile.gettempdir()) / "activecontour-bench-scale")
@@ -179,7 +201,7 @@ def main():
     if not args.skip_cold:
         cold_start(args.cache, args.repeat)
     if not args.skip_sizes:
-        sizes(args.cache, [1024, 2048, 4096] + ([8192] if args.huge else []), args.max_iter)
+        sizes(args.cache, args.sizes + ([8192] if args.huge else []), args.max_iter)
 
 
 if __name__ == "__main__":

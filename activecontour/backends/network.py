@@ -38,18 +38,24 @@ centres: :mod:`activecontour.geometry.partition`) is the network's start; the fl
 interface and junction to sub-pixel position, lowering J from the label field's value.  So the
 polygon backend's N-region result is the label field's topology with the polygon's geometry.
 
-The step is the polygon backend's: dt by Armijo backtracking on J, the first trial twice the last
-accepted dt and at most the dt that moves the vertices ``max_step`` px root-mean-square; a trial
-that reverses an interface segment or leaves the image is halved.  The flow has converged when the
-interfaces' mean normal displacement (the area they sweep over their length) between the start
-and the end of a block of five iterations falls below ``tol`` px per iteration in two consecutive
-blocks.
+The step: dt by Armijo backtracking on J, at most the dt that moves the vertices ``max_step`` px
+root-mean-square, the first trial where the parabola through the last step's J(0), slope and
+J(dt) has its minimum (within half and twice that dt; that dt again after a step held back by a
+crossing); a trial that reverses an interface segment, turns a face inside out, leaves the image
+or makes two interfaces meet is halved (those tests cost a fraction of J's, and come first: every
+iteration costs about one evaluation of J, whose boundary integrals also give the next force).
+The H^1 system is solved by a banded Cholesky factorisation in the graph's reverse Cuthill-McKee
+order, and crossings are found on a uniform grid: an iteration costs O(boundary).  The flow has
+converged when the interfaces' mean normal displacement (the area they sweep over their length)
+between the start and the end of a block of five iterations falls below ``tol`` px per iteration
+in two consecutive blocks.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.energy import (
     energy_of_moments,
     evaluate_partition,
@@ -80,6 +86,12 @@ _ISLAND_AREA = 1.0
 _REMESH_COOLDOWN = 4
 #: Halvings of dt before the line search gives up (stationary to working precision).
 _BACKTRACKS = 30
+#: Half bandwidth above which :meth:`Network.factors` uses a sparse LU factorisation.
+_BAND_LIMIT = 64
+#: Pairs of meeting segments :meth:`Network.meeting_nodes` makes room for at first.
+_MEETINGS = 64
+#: Segments along the interfaces, either way from where two meet, that stop moving (:meth:`_Flow.run`).
+_HELD_REACH = 2
 
 
 class Network:
@@ -101,7 +113,7 @@ class Network:
         self.inner, self.outer, self.shape = inner, outer, tuple(shape)
         self.interface = outer >= 0
         self.sides = Sides(inner, outer)
-        self._faces = None
+        self._faces = self._face_counts = self._moving = self._pieces = None
         m, n = self.shape
         moving = np.zeros(len(nodes), dtype=bool)
         moving[start[self.interface]] = moving[end[self.interface]] = True
@@ -109,6 +121,12 @@ class Network:
         on_cols = (nodes[:, 1] == -0.5) | (nodes[:, 1] == n - 0.5)
         # a node on the border slides along it: its component across the border is held
         self.free = (moving & ~on_rows, moving & ~on_cols)
+        chosen = np.flatnonzero(self.interface)
+        self._interface_ends = (np.ascontiguousarray(start[chosen], dtype=np.intp),
+                                np.ascontiguousarray(end[chosen], dtype=np.intp))
+        self._bands = {}
+        degree = np.bincount(np.concatenate(self._interface_ends), minlength=len(nodes))
+        self._plain = np.flatnonzero((degree == 2) & self.free[0] & self.free[1])
 
     @classmethod
     def of_classes(cls, classes):
@@ -124,6 +142,19 @@ class Network:
         """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
         nodes = self.nodes if nodes is None else nodes
         return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
+
+    def moving_boundary(self, nodes):
+        """:meth:`boundary` without the segments that neither count in J nor move: the image's
+        edge along the background between nodes held there.  The background's moments are the
+        domain's less the other regions' (:func:`activecontour.energy.partition_moments`), so J
+        is the same, at the cost of the interfaces and what slides along the edge."""
+        if self._moving is None:
+            held = ~(self.free[0] | self.free[1])
+            kept = np.flatnonzero(~((self.outer < 0) & (self.inner == 0) & held[self.start] & held[self.end]))
+            inner, outer = self.inner[kept], self.outer[kept]
+            self._moving = (self.start[kept], self.end[kept], inner, outer, Sides(inner, outer))
+        start, end, inner, outer, sides = self._moving
+        return Boundary(nodes[start], nodes[end], inner, outer, sides)
 
     def relabelled(self, mapping):
         """The same network with region k renamed ``mapping[k]``."""
@@ -153,12 +184,26 @@ class Network:
                            np.concatenate(sign))
         return self._faces
 
-    def face_areas(self, nodes):
-        """The signed area of every face (:meth:`faces`)."""
+    @property
+    def face_counts(self):
+        """The number of segments of every face (:meth:`faces`)."""
+        if self._face_counts is None:
+            face = self.faces()[0]
+            self._face_counts = np.bincount(face, minlength=int(face.max()) + 1 if face.size else 0)
+        return self._face_counts
+
+    def face_areas(self, nodes, which=None):
+        """The signed area of every face (:meth:`faces`), or of the faces ``which`` (indices)."""
         face, segment, sign = self.faces()
+        if which is not None:
+            chosen = np.isin(face, which)
+            face, segment, sign = np.searchsorted(which, face[chosen]), segment[chosen], sign[chosen]
+            count = len(which)
+        else:
+            count = int(face.max()) + 1 if face.size else 0
         a, b = nodes[self.start[segment]], nodes[self.end[segment]]
-        return 0.5 * np.bincount(face, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
-                                 minlength=int(face.max()) + 1 if face.size else 0)
+        twice = sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1])
+        return 0.5 * np.bincount(face, weights=twice, minlength=count)
 
     def region_curves(self, region):
         """Closed curves of a set of regions (bool per region): outer boundaries positive."""
@@ -171,88 +216,134 @@ class Network:
 
     def polylines(self):
         """The interfaces as polylines of nodes between branch nodes (junctions and nodes on the
-        border) or closed loops: a list of ``(node indices, inner, outer, closed)``, the regions
-        on either side of the walking direction (the same all along: a region changes only at a
-        junction)."""
+        border) or closed loops, all in one array: ``(path, offsets, inner, outer, closed)``,
+        line k the nodes ``path[offsets[k]:offsets[k + 1]]`` (a closed loop without its first node
+        repeated), the regions on either side of its walking direction (the same all along: a
+        region changes only at a junction).  A line is walked from its end at the smaller branch
+        node (then along the smaller segment), a loop from the start of its smallest segment,
+        along it; lines come in that order, loops after them.
+
+        Each interface segment is two half-edges (forward, backward); at a node of degree two a
+        half-edge continues with the other segment, at a branch node it turns back on itself.  The
+        cycles of that permutation are the lines there and back, and the loops once each way.
+        """
         chosen = np.flatnonzero(self.interface)
-        degree = np.bincount(np.concatenate([self.start[chosen], self.end[chosen]]),
-                             minlength=len(self.nodes))
+        start, end = self._interface_ends
+        count = len(chosen)
+        degree = np.bincount(np.concatenate([start, end]), minlength=len(self.nodes))
         branch = (degree != 2) | ~(self.free[0] & self.free[1])
-        incident = [[] for _ in self.nodes]
-        for segment in chosen:
-            incident[self.start[segment]].append(segment)
-            incident[self.end[segment]].append(segment)
-        used = np.zeros(len(self.start), dtype=bool)
-        lines = []
-
-        def walk(node, segment):
-            forward = self.start[segment] == node
-            sides = (self.inner[segment], self.outer[segment])
-            if not forward:
-                sides = sides[::-1]
-            path = [node]
-            while True:
-                used[segment] = True
-                node = self.end[segment] if self.start[segment] == node else self.start[segment]
-                path.append(node)
-                if branch[node]:
-                    return path, *sides, False
-                segment = next((s for s in incident[node] if not used[s]), None)
-                if segment is None:  # back at the loop's first node
-                    return path[:-1], *sides, True
-
-        for node in np.flatnonzero(branch):
-            for segment in incident[node]:
-                if not used[segment]:
-                    lines.append(walk(node, segment))
-        for segment in chosen:
-            if not used[segment]:
-                lines.append(walk(self.start[segment], segment))
-        return lines
+        tail, head = np.empty(2 * count, dtype=np.intp), np.empty(2 * count, dtype=np.intp)
+        tail[0::2], tail[1::2] = start, end  # half-edge 2 i + d: segment i forward (d = 0) or back
+        head[0::2], head[1::2] = end, start
+        following = np.arange(2 * count) ^ 1  # turn back at a branch node
+        leaving = np.argsort(tail, kind="stable")
+        leaving = leaving[~branch[tail[leaving]]].reshape(-1, 2)  # the two half-edges leaving a node
+        following[leaving[:, 0] ^ 1], following[leaving[:, 1] ^ 1] = leaving[:, 1], leaving[:, 0]
+        order, offsets = np.empty(2 * count, dtype=np.intp), np.empty(2 * count + 1, dtype=np.intp)
+        cycles = _kernels.cycles(following, order, offsets)
+        offsets = offsets[:cycles + 1]
+        cycle = np.repeat(np.arange(cycles), np.diff(offsets))
+        # a line's cycle turns twice (positions p < q): its runs start after each turn
+        turns = np.flatnonzero(branch[head[order]]).reshape(-1, 2)
+        p, q = turns[:, 0], turns[:, 1]
+        lines = cycle[p]
+        low, span = offsets[lines], offsets[lines + 1] - offsets[lines]
+        runs = np.stack([p + 1, np.where(q + 1 < low + span, q + 1, low)])
+        run_lengths = np.stack([q - p, span - (q - p)])
+        first_half = order[runs]
+        pick = np.lexsort((first_half // 2, tail[first_half]), axis=0)[0]  # smaller (node, segment)
+        line_first = runs[pick, np.arange(len(lines))]
+        line_size = run_lengths[pick, np.arange(len(lines))]
+        by_start = np.lexsort((order[line_first] // 2, tail[order[line_first]]))
+        line_first, line_size, lines = line_first[by_start], line_size[by_start], lines[by_start]
+        # a loop: the cycle of the forward half-edge of its smallest segment, from it (the cycle's
+        # smallest element); the other way round is the cycle from that segment's backward one
+        has_turn = np.zeros(cycles, dtype=bool)
+        has_turn[lines] = True
+        loops = np.flatnonzero(~has_turn & (order[offsets[:-1]] % 2 == 0))
+        firsts = np.concatenate([line_first, offsets[loops]])
+        sizes = np.concatenate([line_size, np.diff(offsets)[loops]])
+        owners = np.concatenate([lines, loops])
+        closed = np.arange(len(firsts)) >= len(lines)
+        line_offsets = np.concatenate([[0], np.cumsum(sizes)])
+        within = np.arange(line_offsets[-1]) - np.repeat(line_offsets[:-1], sizes)
+        low, span = np.repeat(offsets[owners], sizes), np.repeat(np.diff(offsets)[owners], sizes)
+        halves = order[low + (np.repeat(firsts, sizes) - low + within) % span]
+        # the nodes: a line's tails and its last head, a loop's tails
+        path_offsets = np.concatenate([[0], np.cumsum(sizes + ~closed)])
+        path = np.empty(path_offsets[-1], dtype=np.intp)
+        path[np.repeat(path_offsets[:-1], sizes) + within] = tail[halves]
+        path[path_offsets[1:][~closed] - 1] = head[halves[line_offsets[1:][~closed] - 1]]
+        first_half = halves[line_offsets[:-1]]
+        segment = chosen[first_half // 2]
+        forward = first_half % 2 == 0
+        inner = np.where(forward, self.inner[segment], self.outer[segment])
+        outer = np.where(forward, self.outer[segment], self.inner[segment])
+        return path, path_offsets, inner, outer, closed
 
     def resampled(self, nodes, spacing):
         """The network with every interface resampled at equal arc-length steps of about
         ``spacing`` px, its branch nodes kept (mesh health, as the two-region flow's
         :func:`activecontour.geometry.curve.resample`).  Returns ``(network, nodes)``."""
-        lines = self.polylines()
+        path, offsets, left, right, closed = self.polylines()
+        lines = len(closed)
         interior = np.zeros(len(nodes), dtype=bool)
-        for path, _, _, closed in lines:
-            interior[path if closed else path[1:-1]] = True
+        sizes = np.diff(offsets)
+        inside = np.ones(len(path), dtype=bool)  # a line's nodes but its two ends, every node of a loop
+        inside[offsets[:-1][~closed]] = inside[offsets[1:][~closed] - 1] = False
+        interior[path[inside]] = True
         kept = np.flatnonzero(~interior)
         index = np.full(len(nodes), -1)
         index[kept] = np.arange(kept.size)
-        points = [nodes[kept]]
+        # each polyline's vertices, a loop's first one again at its end
+        ring = np.insert(path, offsets[1:][closed], path[offsets[:-1][closed]])
+        ring_sizes = sizes + closed
+        ring_offsets = np.concatenate([[0], np.cumsum(ring_sizes)])
+        points = nodes[ring]
+        step = np.hypot(*(points[1:] - points[:-1]).T)
+        step[ring_offsets[1:-1] - 1] = 0.0  # no step from one line to the next
+        arc = np.concatenate([[0.0], np.cumsum(step)])[:len(points)]
+        arc -= np.repeat(arc[ring_offsets[:-1]], ring_sizes)  # from each line's start
+        total = arc[ring_offsets[1:] - 1]
+        # a line keeps a vertex between its ends: a region between two single segments (two
+        # interfaces joining the same junctions, or one and the border) would be a 2-gon
+        fewest = np.where(closed | (path[offsets[:-1]] == path[offsets[1:] - 1]), 3, 2)
+        pieces = np.maximum(fewest, np.rint(total / spacing).astype(np.intp))
+        new_count = pieces - ~closed  # a line's inner samples, a loop's all
+        owner = np.repeat(np.arange(lines), new_count)
+        k = (np.arange(new_count.sum()) - np.repeat(np.cumsum(new_count) - new_count, new_count)
+             + ~closed[owner])
+        at = k * (total / pieces)[owner]
+        # the polyline segment of every sample, from its line's own arc (searched line by line
+        # through a shift that keeps the lines apart)
+        shift = np.concatenate([[0.0], np.cumsum(total + 1.0)])[:-1]
+        piece = np.searchsorted(arc + np.repeat(shift, ring_sizes), at + shift[owner], side="right") - 1
+        piece = np.clip(piece, ring_offsets[:-1][owner], ring_offsets[1:][owner] - 2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            fraction = np.where(step[piece] > 0, (at - arc[piece]) / step[piece], 0.0)
+        new = points[piece] + np.clip(fraction, 0.0, 1.0)[:, None] * (points[piece + 1] - points[piece])
+        # the segments: the border's, then each line's chain of nodes: a line's [start, samples,
+        # end] (its ends the kept branch nodes), a loop's [samples, its first sample]
+        chain_sizes = new_count + 1 + ~closed
+        chain_offsets = np.concatenate([[0], np.cumsum(chain_sizes)])
+        chain = np.empty(chain_offsets[-1], dtype=np.intp)
+        ends = chain_offsets[1:] - 1
+        samples = np.repeat(chain_offsets[:-1] + ~closed, new_count) + (k - ~closed[owner])
+        chain[samples] = kept.size + np.arange(len(new))
+        chain[chain_offsets[:-1][~closed]] = index[path[offsets[:-1][~closed]]]
+        chain[ends[~closed]] = index[path[offsets[1:][~closed] - 1]]
+        chain[ends[closed]] = chain[chain_offsets[:-1][closed]]
+        link = np.ones(len(chain), dtype=bool)
+        link[ends] = False  # no segment from one chain's end to the next chain
+        chain_start, chain_end = chain[:-1][link[:-1]], chain[1:][link[:-1]]
+        line_of = np.repeat(np.arange(lines), chain_sizes - 1)
         border = ~self.interface
-        start, end = [index[self.start[border]]], [index[self.end[border]]]
-        inner, outer = [self.inner[border]], [self.outer[border]]
-        count = kept.size
-        for path, left, right, closed in lines:
-            polyline = nodes[np.append(path, path[0]) if closed else path]
-            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
-            # an interface keeps a vertex between its ends: a region between two single segments
-            # (two interfaces joining the same junctions, or one and the border) would be a 2-gon
-            fewest = 3 if closed or path[0] == path[-1] else 2
-            pieces = max(fewest, int(round(arc[-1] / spacing)))
-            steps = np.arange(0 if closed else 1, pieces) * (arc[-1] / pieces)
-            new = np.column_stack([np.interp(steps, arc, polyline[:, 0]),
-                                   np.interp(steps, arc, polyline[:, 1])])
-            ids = count + np.arange(len(new))
-            count += len(new)
-            points.append(new)
-            if closed:
-                ring = np.append(ids, ids[0])
-                start.append(ring[:-1])
-                end.append(ring[1:])
-            else:
-                chain_ids = np.concatenate([[index[path[0]]], ids, [index[path[-1]]]])
-                start.append(chain_ids[:-1])
-                end.append(chain_ids[1:])
-            inner.append(np.full(len(start[-1]), left))
-            outer.append(np.full(len(start[-1]), right))
-        nodes = np.vstack(points)
-        parts = (np.concatenate(part).astype(np.intp) for part in (start, end, inner, outer))
-        network = Network(nodes, *parts, self.shape)
-        return network, nodes
+        start = np.concatenate([index[self.start[border]], chain_start]).astype(np.intp)
+        end = np.concatenate([index[self.end[border]], chain_end]).astype(np.intp)
+        inner = np.concatenate([self.inner[border], left[line_of]]).astype(np.intp)
+        outer = np.concatenate([self.outer[border], right[line_of]]).astype(np.intp)
+        nodes = np.vstack([nodes[kept], new])
+        return Network(nodes, start, end, inner, outer, self.shape), nodes
 
     def crossing_nodes(self, nodes):
         """The nodes of interface segments that cross another one (for the islands to drop)."""
@@ -269,15 +360,29 @@ class Network:
         """The interfaces that are closed loops (no junction, off the border), each as
         ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
         the interface segments, joined at the nodes of degree two."""
+        if self._pieces is None:
+            self._pieces = self._interface_pieces()
+        chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
+        if chosen.size == 0:
+            return []
+        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
+                                 minlength=count)
+        return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k])) for k in closed]
+
+    def _interface_pieces(self):
+        """The graph part of :meth:`closed_loops`: the interface segments, the piece of each, the
+        number of pieces, the closed ones, each segment's orientation against its piece's first,
+        the segments in order of their piece and where each piece's begin."""
         import scipy.sparse
         from scipy.sparse.csgraph import connected_components
 
         chosen = np.flatnonzero(self.interface)
         if chosen.size == 0:
-            return []
+            return chosen, chosen, 0, chosen, chosen, chosen, chosen
         ends = np.concatenate([self.start[chosen], self.end[chosen]])
         owner = np.tile(np.arange(chosen.size), 2)
-        degree = np.bincount(ends, minlength=len(nodes))
+        degree = np.bincount(ends, minlength=len(self.nodes))
         branch = (degree != 2) | ~(self.free[0] & self.free[1])
         order = np.argsort(ends, kind="stable")
         pairs = order[~branch[ends[order]]].reshape(-1, 2)  # the two segments at a degree-two node
@@ -286,34 +391,49 @@ class Network:
         count, piece = connected_components(graph, directed=False)
         open_piece = np.zeros(count, dtype=bool)
         open_piece[piece[branch[self.start[chosen]] | branch[self.end[chosen]]]] = True
-        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
         # a loop's segments are oriented either way, their sides named accordingly: orient them
         # all as the piece's first one
         first = np.full(count, -1)
         first[piece[::-1]] = np.arange(chosen.size)[::-1]
         sign = np.where(self.inner[chosen] == self.inner[chosen][first[piece]], 1.0, -1.0)
-        twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
-                                 minlength=count)
-        return [(chosen[piece == k], 0.5 * abs(twice_area[k])) for k in np.flatnonzero(~open_piece)]
+        by_piece = np.argsort(piece, kind="stable")
+        bounds = np.searchsorted(piece[by_piece], np.arange(count + 1))
+        return chosen, piece, count, np.flatnonzero(~open_piece), sign, by_piece, bounds
 
     def without_island(self, nodes, loop):
         """The network without the closed interface loop of segments ``loop``, the region inside
         it merged into the one around it; None when another part of the network lies inside the
         loop (its regions would need renaming)."""
-        a, b = nodes[self.start[loop]], nodes[self.end[loop]]
-        low, high = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
         keep = np.ones(len(self.start), dtype=bool)
         keep[loop] = False
-        used = np.zeros(len(nodes), dtype=bool)
-        used[self.start[keep]] = used[self.end[keep]] = True
-        near = nodes[used & np.all((nodes > low) & (nodes < high), axis=1)]
-        if near.size:  # even-odd rule: crossings of the ray towards +c
-            straddle = (a[None, :, 0] > near[:, None, 0]) != (b[None, :, 0] > near[:, None, 0])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                at = a[None, :, 1] + (near[:, None, 0] - a[None, :, 0]) * (b[None, :, 1] - a[None, :, 1]) / (
-                    b[None, :, 0] - a[None, :, 0])
-            if np.any(np.count_nonzero(straddle & (at > near[:, None, 1]), axis=1) % 2):
-                return None
+        uses = np.bincount(np.concatenate([self.start[keep], self.end[keep]]), minlength=len(nodes))
+        return None if self.encloses(nodes, loop, uses) else self.subset(keep, nodes)
+
+    def encloses(self, nodes, loop, uses, by_row=None):
+        """Whether a node in use (``uses > 0``: an end of a segment kept) lies inside the closed
+        loop of segments ``loop``, strictly within its bounding box.  ``by_row``: the node
+        indices sorted by row, to find the box's nodes by bisection."""
+        a, b = nodes[self.start[loop]], nodes[self.end[loop]]
+        low, high = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
+        if by_row is None:
+            near = np.flatnonzero(np.all((nodes > low) & (nodes < high), axis=1))
+        else:
+            rows = nodes[by_row, 0]
+            near = by_row[np.searchsorted(rows, low[0], side="right"):
+                          np.searchsorted(rows, high[0], side="left")]
+            near = near[(nodes[near, 1] > low[1]) & (nodes[near, 1] < high[1])]
+        near = nodes[near[uses[near] > 0]]
+        if near.size == 0:
+            return False
+        # even-odd rule: crossings of the ray towards +c
+        straddle = (a[None, :, 0] > near[:, None, 0]) != (b[None, :, 0] > near[:, None, 0])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            at = a[None, :, 1] + (near[:, None, 0] - a[None, :, 0]) * (b[None, :, 1] - a[None, :, 1]) / (
+                b[None, :, 0] - a[None, :, 0])
+        return bool(np.any(np.count_nonzero(straddle & (at > near[:, None, 1]), axis=1) % 2))
+
+    def subset(self, keep, nodes):
+        """The network of the segments ``keep`` (bool), its nodes at ``nodes``."""
         return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
                        self.shape)
 
@@ -332,16 +452,67 @@ class Network:
                                        shape=(size, size))
 
     def factors(self, nodes):
-        """The sparse LU factors of ``M + K`` (6.39) restricted to each component's free nodes,
-        for :meth:`velocity`."""
+        """Cholesky factors of ``M + K`` (6.39) restricted to each component's free nodes, for
+        :meth:`velocity`.
+
+        The matrix is symmetric positive definite and its graph is the network's: chains of nodes
+        joined at junctions.  In the reverse Cuthill-McKee order of that graph (found once per
+        network) it is a narrow band (about ten on scikit-image's pictures), so a banded Cholesky
+        factorisation costs O(P bandwidth^2), without fill outside the band; a wider band falls
+        back to a sparse LU factorisation.
+        """
         from scipy.sparse.linalg import splu
 
-        matrix = self.stiffness(nodes)
+        start, end = self._interface_ends
+        h = np.hypot(*(nodes[end] - nodes[start]).T)
+        diagonal, off = h / 3.0 + 1.0 / h, h / 6.0 - 1.0 / h
         factors = []
-        for free in self.free:
-            index = np.flatnonzero(free)
-            factors.append((index, splu(matrix[index][:, index].tocsc()) if index.size else None))
+        for component in range(2):
+            order, position, width = self._band(component)
+            size = len(order)
+            if size == 0:
+                factors.append((order, None))
+                continue
+            i, j = position[start], position[end]
+            inside = (i >= 0) & (j >= 0)
+            if width > _BAND_LIMIT:
+                matrix = self.stiffness(nodes)
+                factors.append((order, splu(matrix[order][:, order].tocsc())))
+                continue
+            band = np.zeros((size, width + 1))  # band[j, width + i - j] = A[i, j] for i <= j
+            band[:, width] = (np.bincount(i[i >= 0], weights=diagonal[i >= 0], minlength=size)
+                              + np.bincount(j[j >= 0], weights=diagonal[j >= 0], minlength=size))
+            low, high = np.minimum(i[inside], j[inside]), np.maximum(i[inside], j[inside])
+            band[high, width + low - high] = off[inside]  # one segment per pair of nodes
+            if _kernels.band_cholesky(band) != 0:
+                raise np.linalg.LinAlgError("the H^1 form is not positive definite")
+            factors.append((order, band))
         return factors
+
+    def _band(self, component):
+        """The free nodes of a component in reverse Cuthill-McKee order, each node's position in
+        that order (-1: not free), and the half bandwidth of the matrix in it."""
+        if component not in self._bands:
+            import scipy.sparse
+            from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+            free = self.free[component]
+            index = np.flatnonzero(free)
+            position = np.full(len(self.nodes), -1)
+            position[index] = np.arange(index.size)
+            start, end = self._interface_ends
+            i, j = position[start], position[end]
+            inside = (i >= 0) & (j >= 0)
+            pairs = (np.concatenate([i[inside], j[inside]]), np.concatenate([j[inside], i[inside]]))
+            graph = scipy.sparse.csr_matrix((np.ones(len(pairs[0])), pairs), shape=(index.size,) * 2)
+            permutation = reverse_cuthill_mckee(graph, symmetric_mode=True) if index.size else index
+            order = index[permutation]
+            position[order] = np.arange(order.size)
+            i, j = position[start], position[end]
+            inside = (i >= 0) & (j >= 0)
+            width = int(np.abs(i[inside] - j[inside]).max()) if inside.any() else 0
+            self._bands[component] = (order, position, width)
+        return self._bands[component]
 
     def velocity(self, nodes, force, factors=None):
         """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component.
@@ -352,37 +523,47 @@ class Network:
         """
         factors = self.factors(nodes) if factors is None else factors
         velocity = np.zeros_like(nodes)
-        for component, (index, factor) in enumerate(factors):
-            if factor is not None:
-                velocity[index, component] = factor.solve(-force[index, component])
+        for component, (order, factor) in enumerate(factors):
+            if factor is None:
+                continue
+            rhs = -force[order, component]
+            if isinstance(factor, np.ndarray):
+                _kernels.band_solve(factor, rhs)
+            else:
+                rhs = factor.solve(rhs)
+            velocity[order, component] = rhs
         return velocity
 
     def normal_part(self, nodes, velocity):
         """The velocity without its tangential part at the nodes inside an interface (degree two,
         off the border): moving along the curve changes the region only through the polygon's
         discretisation, and lets vertices bunch up."""
-        chosen = np.flatnonzero(self.interface)
-        a, b = self.start[chosen], self.end[chosen]
+        a, b = self._interface_ends
         tangent = nodes[b] - nodes[a]
-        normal_sum = np.zeros_like(nodes)
-        np.add.at(normal_sum, a, np.column_stack([tangent[:, 1], -tangent[:, 0]]))
-        np.add.at(normal_sum, b, np.column_stack([tangent[:, 1], -tangent[:, 0]]))
-        degree = np.bincount(np.concatenate([a, b]), minlength=len(nodes))
-        plain = (degree == 2) & self.free[0] & self.free[1]
-        size = np.linalg.norm(normal_sum, axis=1)
-        plain &= size > 0
+        count = len(nodes)
+        plain = self._plain
+        # the sum of the normals (t_c, -t_r) of the two segments at each plain node
+        normal = np.column_stack([(np.bincount(a, tangent[:, d], count)
+                                   + np.bincount(b, tangent[:, d], count))[plain] for d in (1, 0)])
+        normal[:, 1] *= -1
+        squared = np.einsum("ij,ij->i", normal, normal)
+        some = squared > 0
+        plain, normal = plain[some], normal[some] / np.sqrt(squared[some])[:, None]
         out = velocity.copy()
-        unit = normal_sum[plain] / size[plain, None]
-        out[plain] = np.sum(velocity[plain] * unit, axis=1)[:, None] * unit
+        out[plain] = np.einsum("ij,ij->i", velocity[plain], normal)[:, None] * normal
         return out
 
-    def force(self, nodes, model, params, constants):
-        """``delta J`` with respect to every node (6.41): the segments' loads summed at their ends."""
-        load = partition_load(model, self.boundary(nodes), params, constants)
-        force = np.zeros_like(nodes)
-        np.add.at(force, self.start, load[:, 0])
-        np.add.at(force, self.end, load[:, 1])
-        return force
+    def force(self, nodes, model, params, constants, parts=None):
+        """``delta J`` with respect to every node (6.41): the segments' loads summed at their ends
+        (``parts``: the integrals along :meth:`moving_boundary` at these nodes, of
+        :func:`activecontour.energy.partition_moments`); at the nodes held on the image's edge (which
+        do not move) without the edge's segments there."""
+        load = partition_load(model, self.moving_boundary(nodes), params, constants, parts)
+        start, end = self._moving[:2]
+        count = len(nodes)
+        return np.column_stack([np.bincount(start, weights=load[:, 0, d], minlength=count)
+                                + np.bincount(end, weights=load[:, 1, d], minlength=count)
+                                for d in range(2)])
 
     def swept(self, before, after):
         """The interfaces' mean normal displacement from ``before`` to ``after`` (px)."""
@@ -394,36 +575,109 @@ class Network:
         return float(normal.sum() / max(length.sum(), 1e-12))
 
     def simple(self, nodes):
-        """No two interfaces cross: the interface segments meet only at their ends (GEOS's
-        ``is_simple`` of them as one multi-line string, a sweep in O(S log S)).  A crossing would
-        make an overlap of two regions, whose energy the functional would count with a negative
-        area."""
-        import shapely
+        """No two interfaces cross: the interface segments meet only at their common nodes (no
+        crossing, touch or overlap; compiled, on a uniform grid:
+        :func:`activecontour._kernels.segments_meet`, O(S)).  A crossing would make an overlap of
+        two regions, whose energy the functional would count with a negative area."""
+        start, end = self._interface_ends
+        return _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, 1,
+                                      np.empty((0, 2), dtype=np.intp)) == 0
 
-        chosen = self.interface
-        count = int(np.count_nonzero(chosen))
-        if count == 0:
-            return True
-        coordinates = np.empty((2 * count, 2))
-        coordinates[0::2], coordinates[1::2] = nodes[self.start[chosen]], nodes[self.end[chosen]]
-        lines = shapely.from_ragged_array(shapely.GeometryType.MULTILINESTRING, coordinates,
-                                          (np.arange(0, 2 * count + 1, 2), np.array([0, count])))[0]
-        return bool(shapely.is_simple(lines))
+    def around(self, seeds, reach):
+        """The nodes at most ``reach`` interface segments away from the nodes ``seeds``."""
+        start, end = self._interface_ends
+        near = np.zeros(len(self.nodes), dtype=bool)
+        near[seeds] = True
+        for _ in range(reach):
+            touched = near[start] | near[end]
+            near[start[touched]] = near[end[touched]] = True
+        return np.flatnonzero(near)
 
-    def admissible(self, before, after, orientation=None):
-        """No segment reversed or collapsed, every vertex in the image domain (cheap tests before
-        the energy; :meth:`simple` is the exact one).  ``orientation``: the signs of the faces'
-        areas at ``before``, when the caller has them."""
-        a, b = self.start, self.end
-        old, new = before[b] - before[a], after[b] - after[a]
-        kept = np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old)
-        m, n = self.shape
-        inside = ((after[:, 0] >= -0.5) & (after[:, 0] <= m - 0.5)
-                  & (after[:, 1] >= -0.5) & (after[:, 1] <= n - 0.5))
-        if not (kept.all() and inside.all()):
+    def meeting_nodes(self, nodes):
+        """The nodes of the interface segments that meet another one elsewhere than at a common
+        node (:meth:`simple`)."""
+        start, end = self._interface_ends
+        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
+        capacity = _MEETINGS
+        while True:
+            pairs = np.empty((capacity, 2), dtype=np.intp)
+            found = _kernels.segments_meet(nodes, start, end, len(start) ** 2, pairs)
+            if found <= capacity:
+                break
+            capacity = found
+        segments = pairs[:found].ravel()
+        return np.unique(np.concatenate([start[segments], end[segments]]))
+
+    def steps(self, nodes, velocity):
+        """The admissibility of the steps ``nodes + dt velocity`` of one iteration, for any dt
+        (:class:`_Steps`)."""
+        return _Steps(self, nodes, velocity)
+
+
+class _Steps:
+    """Which steps ``X + dt V`` keep a network a partition of the image (cheap tests before the
+    energy; :meth:`Network.simple` is the exact one): no segment reversed or collapsed (its new
+    direction keeps a quarter of its length along the old one), every vertex in the image
+    domain, and no face turned inside out (each face's signed area keeps its sign, :meth:`Network.faces`).
+
+    The first two are bounds on dt, found once for the iteration (a segment's projection on its
+    old direction and a vertex's coordinates are linear in dt).  A face's area can change sign
+    only where it is small: with every vertex moved by at most ``delta``, a polygon's area changes
+    by at most ``delta L + n delta^2 / 2`` (L its perimeter, n its vertex count: expand the
+    shoelace sum), so only the faces under that bound are measured at a trial.
+    """
+
+    #: relative margin within which a bound is checked on the trial itself (rounding)
+    _MARGIN = 1e-6
+
+    def __init__(self, network, nodes, velocity):
+        start, end = network.start, network.end
+        first, last = nodes[start], nodes[end]
+        old, turn = last - first, velocity[end] - velocity[start]
+        along = np.einsum("ij,ij->i", old, turn)
+        size = np.einsum("ij,ij->i", old, old)
+        shrinking = along < 0
+        # (old + dt turn) . old > old . old / 4  <=>  dt along > -3/4 |old|^2
+        self.reverse = (float(np.min(0.75 * size[shrinking] / -along[shrinking])) if shrinking.any()
+                        else np.inf)
+        m, n = network.shape
+        high = np.array([m - 0.5, n - 0.5])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(velocity > 0, (high - nodes) / velocity,
+                            np.where(velocity < 0, (-0.5 - nodes) / velocity, np.inf))
+        self.inside = float(room.min()) if room.size else np.inf
+        face, segment, sign = network.faces()
+        self.network, self.nodes = network, nodes
+        # per face: the signed area (as face_areas), the perimeter, the fastest vertex's speed
+        twice = first[:, 0] * last[:, 1] - last[:, 0] * first[:, 1]
+        count = len(network.face_counts)
+        self.areas = 0.5 * np.bincount(face, weights=sign * twice[segment], minlength=count)
+        self.orientation = np.sign(self.areas)
+        speed = np.hypot(velocity[:, 0], velocity[:, 1])
+        firsts = np.cumsum(network.face_counts) - network.face_counts  # entries are grouped by face
+        fastest = np.maximum(speed[start], speed[end])[segment]
+        self.speed = np.maximum.reduceat(fastest, firsts) if count else fastest
+        self.perimeter = np.bincount(face, weights=np.sqrt(size)[segment], minlength=count)
+        self.count = network.face_counts
+
+    def admissible(self, dt, trial):
+        """Whether the step of ``dt`` to ``trial`` keeps the network a partition (the class's
+        docstring)."""
+        if not (dt < self.reverse and dt <= self.inside):
             return False
-        orientation = np.sign(self.face_areas(before)) if orientation is None else orientation
-        return bool(np.all(np.sign(self.face_areas(after)) == orientation))
+        if dt >= (1 - self._MARGIN) * min(self.reverse, self.inside):  # at a bound: the trial itself
+            network, start, end = self.network, self.network.start, self.network.end
+            old, new = self.nodes[end] - self.nodes[start], trial[end] - trial[start]
+            m, n = network.shape
+            if not (np.all(np.einsum("ij,ij->i", old, new) > 0.25 * np.einsum("ij,ij->i", old, old))
+                    and np.all((trial >= -0.5) & (trial <= np.array([m - 0.5, n - 0.5])))):
+                return False
+        delta = dt * self.speed
+        bound = delta * self.perimeter + 0.5 * self.count * delta**2
+        risky = np.flatnonzero(np.abs(self.areas) <= (1 + self._MARGIN) * bound)
+        if risky.size == 0:
+            return True
+        return bool(np.all(np.sign(self.network.face_areas(trial, risky)) == self.orientation[risky]))
 
 
 def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callback):
@@ -473,7 +727,9 @@ class _Flow:
         self.remesh()
 
     def evaluate(self, network, nodes):
-        return evaluate_partition(self.model, network.boundary(nodes), self.params, self.n_regions)
+        """J at the nodes, with the segments' integrals that make the force there."""
+        return evaluate_partition(self.model, network.moving_boundary(nodes), self.params, self.n_regions,
+                                  parts=True)
 
     def remesh(self):
         """Resample the interfaces at ``_SPACING`` px; kept only if J does not rise (else not
@@ -492,19 +748,26 @@ class _Flow:
         does not rise: the network cannot change its topology by moving, so a region the flow
         shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
         network, nodes = self.network, self.nodes
-        candidates = [network.start[loop] for loop, area in network.closed_loops(nodes)
+        if nodes_of_interest is not None:
+            interest = np.zeros(len(nodes), dtype=bool)
+            interest[nodes_of_interest] = True
+        candidates = [loop for loop, area in network.closed_loops(nodes)
                       if (area < _ISLAND_AREA if nodes_of_interest is None
-                          else np.isin(network.start[loop], nodes_of_interest).any())]
+                          else interest[network.start[loop]].any())]
         if not candidates:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
         # move from the region inside to the one around it, and its loop leaves the length
         areas, first, second = partition_moments(self.model, network.boundary(nodes), self.n_regions)
-        length, energy, removed = self.current.length, self.current.energy, False
-        for loop_nodes in candidates:  # its nodes are its own: find its segments after a removal
-            loop = np.flatnonzero(np.isin(network.start, loop_nodes) & network.interface)
-            reduced = network.without_island(nodes, loop)
-            if reduced is None:
+        length, energy = self.current.length, self.current.energy
+        keep = np.ones(len(network.start), dtype=bool)
+        uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
+        by_row = np.argsort(nodes[:, 0], kind="stable")
+        for loop in candidates:  # one at a time: a loop may hold another part until that is gone
+            loop_nodes = np.concatenate([network.start[loop], network.end[loop]])
+            uses_without = uses.copy()
+            np.subtract.at(uses_without, loop_nodes, 1)
+            if network.encloses(nodes, loop, uses_without, by_row):
                 continue
             flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
             starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
@@ -520,8 +783,10 @@ class _Flow:
             loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
             candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
             if candidate.energy <= energy:
-                network, (areas, first, second) = reduced, trial
-                length, energy, removed = length - loop_length, candidate.energy, True
+                keep[loop], uses, (areas, first, second) = False, uses_without, trial
+                length, energy = length - loop_length, candidate.energy
+        removed = not keep.all()
+        network = network.subset(keep, nodes) if removed else network
         if not removed:
             return False
         current = self.evaluate(network, nodes)  # the same J, integrated afresh
@@ -541,11 +806,11 @@ class _Flow:
     def run(self, max_num_iter, tol, callback, n_iter):
         """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step)
         and the iteration count."""
-        dt_last, block_start, block_network, still = None, self.nodes, self.network, 0
+        dt_next, block_start, block_network, still = None, self.nodes, self.network, 0
         factors = None
         for iteration in range(1, max_num_iter + 1):
             network, nodes, current = self.network, self.nodes, self.current
-            force = network.force(nodes, self.model, self.params, current.constants)
+            force = network.force(nodes, self.model, self.params, current.constants, current.parts)
             if factors is None:  # the metric of the block's first mesh, for the whole block
                 factors = network.factors(nodes)
             velocity = network.velocity(nodes, force, factors)
@@ -559,24 +824,29 @@ class _Flow:
             spread = np.sqrt(np.mean(np.sum(velocity[moving] ** 2, axis=1)))
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
-            dt = _MAX_STEP / spread if dt_last is None else min(2.0 * dt_last, _MAX_STEP / spread)
-            crossed, orientation = None, np.sign(network.face_areas(nodes))
+            dt = _MAX_STEP / spread if dt_next is None else min(dt_next, _MAX_STEP / spread)
+            crossed, steps = None, network.steps(nodes, velocity)
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
-                if network.admissible(nodes, trial, orientation):
-                    candidate = self.evaluate(network, trial)
-                    if candidate.energy <= current.energy + _ARMIJO * dt * slope:
-                        if network.simple(trial):
+                if steps.admissible(dt, trial):
+                    # the crossing test first: it costs a fraction of the energy's
+                    if network.simple(trial):
+                        candidate = self.evaluate(network, trial)
+                        if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                             break
-                        crossed = trial if crossed is None else crossed
+                    elif crossed is None and (self.evaluate(network, trial).energy
+                                              <= current.energy + _ARMIJO * dt * slope):
+                        crossed = trial
                 dt *= 0.5
             else:
                 # a region folding over itself as the flow shrinks it: drop it and go on
                 if crossed is not None and self.drop_islands(network.crossing_nodes(crossed)):
-                    factors, dt_last = None, None
+                    factors, dt_next = None, None
                     continue
                 return 4, n_iter
-            self.nodes, self.current, dt_last = trial, candidate, dt
+            dt_next = dt if crossed is not None else dt * _step_factor(
+                (candidate.energy - current.energy) / (dt * slope))
+            self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
@@ -592,6 +862,14 @@ class _Flow:
                     self.remesh()
                 block_start, block_network, factors = self.nodes, self.network, None
         return 1, n_iter
+
+
+def _step_factor(ratio):
+    """The next iteration's first dt over this one's accepted dt, from the decrease of J there
+    against the linear one, ``ratio = (J(dt) - J(0)) / (dt delta J(V))``: along the parabola
+    through J(0), its slope and J(dt), the minimum lies at ``dt / (2 (1 - ratio))``; kept within
+    [1/2, 2] (the direction changes from one iteration to the next)."""
+    return min(2.0, max(0.5, 0.5 / max(1.0 - ratio, 1e-3)))
 
 
 def _state(network, nodes, evaluation, n_iter, max_num_iter):

@@ -18,14 +18,18 @@ Per iteration k, on the polygon(s) Gamma^k:
    depend on the image contrast) and a 300 px travel takes tens of iterations.
 4. Mesh health: when an edge is shorter than half or longer than twice ``spacing``, the curve
    is resampled at equal arc length; the resampled curve is kept only if its energy is not above
-   the previous iterate's, so the recorded energy sequence never increases.
+   the previous iterate's, so the recorded energy sequence never increases.  The start is taken
+   as given: only its edges longer than twice ``spacing`` are split (the same polygon), so a
+   previous result restarts at its own energy and mask.
 
 The flow stalls when the contour stops getting anywhere: its mean normal displacement (the area it
 sweeps over its length, in pixels) between the start and the end of a block of five iterations,
 per iteration, falls below ``tol`` (see :class:`_Movement`).  No energy scale enters, so the test
 means the same on every image: a relative energy decrease would stop earlier the larger or noisier
-the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next at 10 tol; a
-stall at the finest l is convergence; the run also stops at ``max_num_iter``.
+the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next after one
+block below 10 tol; convergence at the finest l takes two blocks in a row below tol (one slow
+block can be a pause: on scikit-image's cat a lobe still retracting moved 0.5 % of the mask after
+such a stop); the run also stops at ``max_num_iter``.
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ import numpy as np
 from activecontour.backends.options import PolygonOptions
 from activecontour.energy import evaluate
 from activecontour.geometry import fem, topology
-from activecontour.geometry.curve import edge_lengths, resample, signed_area, stack_curves
+from activecontour.geometry.curve import resample, signed_area, stack_curves, subdivide
 from activecontour.geometry.raster import rasterize
 from activecontour.initial import circle, initial_curves
 from activecontour.result import FlowState, build_result
@@ -47,6 +51,7 @@ __all__ = ["PolygonOptions", "segment_polygon"]
 _ARMIJO = 1e-4
 _MAX_HALVINGS = 40
 _WINDOW = 5  # iterations over which the movement is averaged for the stopping test
+_STILL_BLOCKS = 2  # consecutive slow blocks that make convergence: one can be a pause (see _Movement)
 _MEMORY = 8  # step pairs of the L-BFGS acceleration
 _SMOOTHING = 30.0  # first smoothing length (px) from given curves ...
 _START_SMOOTHING = 2.0  # ... and from the default start or a result, on the boundaries already
@@ -90,9 +95,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
     nucleate, accelerate, global_start = chosen.nucleate, chosen.accelerate, chosen.global_start
     from_result = hasattr(init, "contours") and hasattr(init, "mask")
     shape = model.shape
-    # a curve whose vertices are already about ``spacing`` apart (a previous result) is kept
-    # exactly: resampling it would cut its corners and move it off its minimum
-    geometry = _resampled(initial_curves(init, shape, model.image, params.mu), spacing)
+    # a given start is kept exactly (a previous result's energy and mask): long edges are split,
+    # nothing is cut, and the remesh takes short edges when that lowers the energy; the starts we
+    # draw ourselves (the default start, the global move's threshold set) are at the spacing
+    start = initial_curves(init, shape, model.image, params.mu)
+    geometry = _resampled(start, spacing) if init is None else _subdivided(start, spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
     # length, but no constant (6.42) for the empty region: the global move can still leave it
@@ -100,10 +107,11 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
     n_iter = 0
     jumped = global_start and init is not None and not from_result and max_num_iter > 0 and (
         moved := _global_move(model, params, geometry, energies[0], spacing)) is not None
-    if not (jumped or np.isfinite(current.energy) or max_num_iter == 0):
-        side, constant = ("inside", "c_in") if current.area < 0.5 * model.totals[0] else ("outside", "c_out")
-        raise ValueError(f"init leaves the {side} empty ({current.area:.6g} of {model.totals[0]:.0f} px^2 "
-                         f"inside): its constant {constant} (6.42) is undefined")
+    if not (jumped or np.isfinite(current.energy)):
+        # a start around the whole image: the empty region's constant is the other's (so the fit
+        # terms' force is zero and the length term shrinks the curve); once the region is not
+        # empty its constant (6.42) is defined, and the fit drives the curve onto the objects
+        current = evaluate(model, *geometry[:2], params, gradient=True, empty_ok=True)
     if jumped:
         (geometry, current), n_iter = moved, 1
         energies.append(current.energy)
@@ -129,7 +137,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
             break
         if _unhealthy(new_geometry, spacing) and k - last_remesh >= _REMESH_COOLDOWN:
             last_remesh = k
-            remeshed = _resampled(_split(*new_geometry[::2]), spacing, every=True)
+            remeshed = _resampled(_split(*new_geometry[::2]), spacing)
             candidate = evaluate(model, *remeshed[:2], params, gradient=True)
             if candidate.energy <= current.energy:
                 new_geometry, new = remeshed, candidate
@@ -143,7 +151,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
                 status = 2
                 break
         finest = flow.smoothing <= min_smoothing or not flow.h1
-        if movement.last < (tol if finest else _STAGE_TOL * tol):
+        # a coarse stage gives way after one slow block; convergence takes _STILL_BLOCKS in a row
+        if movement.still(tol if finest else _STAGE_TOL * tol) >= (_STILL_BLOCKS if finest else 1):
             if not finest:
                 flow.refine(min_smoothing)
             elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
@@ -362,7 +371,7 @@ class _Movement:
     length.  It means the same on every image (no energy scale enters), and a contour that only
     jitters about a fixed place (steps at the edge of stability on noise) gets nowhere and counts
     as still.  A remesh, a topology repair or a removed curve changes the vertices: the block
-    restarts there.
+    restarts there.  ``blocks`` holds every block's measure since the stage began.
     """
 
     def __init__(self):
@@ -384,11 +393,20 @@ class _Movement:
         edge_normal = np.column_stack([d[:, 1], -d[:, 0]])  # nu |e|
         vertex_normal = 0.5 * (edge_normal + edge_normal[previous])  # nu times the vertex's share
         swept = np.abs(np.einsum("ij,ij->i", points - start, vertex_normal)).sum()
-        self.last = swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count
+        self.blocks.append(swept / max(np.hypot(d[:, 0], d[:, 1]).sum(), 1e-300) / self.count)
         self.start, self.count = points.copy(), 0
 
+    def still(self, threshold):
+        """How many of the last blocks, in a row, moved less than ``threshold`` px per iteration."""
+        count = 0
+        for moved in reversed(self.blocks):
+            if moved >= threshold:
+                break
+            count += 1
+        return count
+
     def clear(self):
-        self.start, self.offsets, self.count, self.last = None, None, 0, np.inf
+        self.start, self.offsets, self.count, self.blocks = None, None, 0, []
 
 
 def _size_limit(geometry, v):
@@ -459,13 +477,34 @@ def _dot(a, b):
     return float(np.einsum("i,i->", a, b))
 
 
-def _resampled(curves, spacing, every=False):
-    """Curves resampled at equal arc length ``spacing`` (with ``every``, else those whose vertices
-    are not about that far apart already), stacked.  A chord of the resampling can cut across a
-    narrow neck or a notch and cross the curve: the result is then the boundary of {w > 0}
-    (:func:`activecontour.geometry.topology.repair`), so that its energy is that of a region."""
-    geometry = stack_curves([c if not every and _healthy(c, spacing) else resample(c, spacing)
-                             for c in curves])
+def _subdivided(curves, spacing):
+    """The curves stacked, split where the flow needs vertices and nowhere else: the same polygons.
+
+    An edge longer than twice ``spacing`` becomes pieces of at most ``spacing``, and a curve of
+    fewer than 8 vertices gets at least 8 (:func:`activecontour.geometry.curve.subdivide`): the
+    new vertices lie on the old edges, so the region, its energy and its mask are the given ones
+    exactly (a previous result restarts where it ended).  Short edges stay: the remesh
+    (:func:`_resampled`) takes them when that does not raise the energy.
+    """
+    if not curves:
+        return stack_curves(curves)
+    points, next_index, offsets = stack_curves(curves)
+    counts = np.diff(offsets)
+    d = points[next_index] - points
+    totals = np.add.reduceat(np.hypot(d[:, 0], d[:, 1]), offsets[:-1])
+    few = counts < 8  # every edge split, into pieces of at most a curve's length / 8
+    piece = np.repeat(np.where(few, np.minimum(spacing, totals / 8.0), spacing), counts)
+    longest = np.repeat(np.where(few, 0.0, 2.0 * spacing), counts)
+    dense, counts = subdivide(points, counts, piece, longest)
+    return stack_curves(np.split(dense, np.cumsum(counts)[:-1]))
+
+
+def _resampled(curves, spacing):
+    """Curves resampled at equal arc length ``spacing``, stacked.  A chord of the resampling can
+    cut across a narrow neck or a notch and cross the curve: the result is then the boundary of
+    {w > 0} (:func:`activecontour.geometry.topology.repair`), so that its energy is that of a
+    region."""
+    geometry = stack_curves([resample(c, spacing) for c in curves])
     repaired = topology.repair(*geometry, before=[signed_area(c) for c in curves])
     return geometry if repaired is None else stack_curves(repaired)
 
@@ -474,10 +513,6 @@ def _unhealthy(geometry, spacing):
     points, next_index, _ = geometry
     d = points[next_index] - points
     return not _spacing_ok(np.hypot(d[:, 0], d[:, 1]), spacing)
-
-
-def _healthy(curve, spacing):
-    return len(curve) >= 8 and _spacing_ok(edge_lengths(curve), spacing)
 
 
 def _spacing_ok(h, spacing):

@@ -5,11 +5,13 @@ from __future__ import annotations
 import glob
 import os
 
+from activecontour.io.images import IMAGE_SUFFIXES
+
 __all__ = ["INPUT_SUFFIXES", "find_images"]
 
-#: File name suffixes taken as images when a folder is listed (compared in lower case).
-INPUT_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp", ".gif", ".webp", ".pgm", ".ppm",
-                  ".pnm")
+#: File name suffixes taken as images when a folder is listed (compared in lower case): the ones
+#: :func:`activecontour.io.load_image` reads.
+INPUT_SUFFIXES = IMAGE_SUFFIXES
 
 
 _GLOB_CHARACTERS = frozenset("*?[")
@@ -24,10 +26,11 @@ def find_images(*sources, left_out=None):
         A file is taken as it is.  A folder gives the files in it (not in its sub-folders) whose
         suffix is one of :data:`INPUT_SUFFIXES`, sorted by name.  A pattern with ``*``, ``?`` or
         ``[`` that is not an existing file is expanded by :func:`glob.glob` (``**`` spans folders),
-        sorted, files only.  From folders and patterns, the outputs of ``activecontour segment``
-        (``<name>_mask.png`` and ``<name>_overlay.png`` next to an image ``<name>.*``) are left out,
-        so that a second run over the same folder does not take them for inputs.  A file named
-        on its own is always taken.
+        sorted, files only.  From folders and patterns, the image outputs of ``activecontour
+        segment`` next to an image ``<name>.*`` (``<name>_mask.png``, ``<name>_overlay.png`` and
+        the object images ``<name>_labels.png``, ``<name>_labels.tif``, ``<name>_classes.png``)
+        are left out, so that a second run over the same folder, with any ``--objects``, does not
+        take them for inputs.  A file named on its own is always taken.
     left_out : list, optional
         If given, the paths left out as outputs are appended to it (so that a caller can say so).
 
@@ -65,11 +68,13 @@ def find_images(*sources, left_out=None):
 
 
 def _without_outputs(paths, left_out=None):
-    """Leave out ``<name>_mask.png`` / ``<name>_overlay.png`` that sit next to an image ``<name>.*``
+    """Leave out the image files :func:`activecontour.io.save_result` writes (every output whose
+    suffix is an input's: mask, overlay, object images) that sit next to an image ``<name>.*``
     (appended to ``left_out`` when it is a list)."""
-    from activecontour.io import output_paths
+    from activecontour.io import OBJECT_FORMATS, output_paths
 
-    endings = [os.fspath(path) for path in output_paths("", ())]  # "_mask.png", "_overlay.png"
+    endings = [os.fspath(path) for path in output_paths("", (), tuple(OBJECT_FORMATS))
+               if os.fspath(path).lower().endswith(INPUT_SUFFIXES)]
     stems = {os.path.splitext(p)[0] for p in paths}
     kept = []
     for path in paths:

@@ -28,6 +28,7 @@ __all__ = [
     "orient",
     "resample",
     "signed_area",
+    "subdivide",
     "tangential_gradient",
     "to_xy",
     "from_xy",
@@ -277,3 +278,39 @@ def stack_curves(curves):
     next_index[offsets[1:] - 1] = offsets[:-1]
     return points, next_index, offsets
 
+
+
+def subdivide(points, lengths, spacing, longest=None):
+    """The same closed polygons with their long edges split into equal pieces: nothing moves.
+
+    Every edge longer than ``longest`` (``spacing`` by default) becomes ``ceil(h / spacing)``
+    pieces; the other edges stay.  The polygons, and so their region and every integral over it,
+    are unchanged (the new vertices lie on the old edges), unlike :func:`resample`, whose chords
+    cut the corners.
+
+    Parameters
+    ----------
+    points : ndarray (sum K_i, 2)
+        The curves stacked one after the other, each vertex once (as :func:`stack_curves`).
+    lengths : ndarray (n,) of int
+        K_i, the number of vertices of each curve.
+    spacing, longest : float or ndarray (sum K_i,)
+        Per edge, when arrays (the edge from each vertex).
+
+    Returns
+    -------
+    points : ndarray (sum L_i, 2)
+    lengths : ndarray (n,) of int
+        L_i, the new number of vertices of each curve.
+    """
+    lengths = np.asarray(lengths, dtype=np.intp)
+    longest = spacing if longest is None else longest
+    curve_first = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    index = np.arange(len(points))
+    end = points[curve_first + (index - curve_first + 1) % np.repeat(lengths, lengths)]
+    h = np.hypot(*(end - points).T)
+    count = np.where(h > longest, np.ceil(h / spacing), 1).astype(np.intp)
+    edge = np.repeat(index, count)
+    t = (np.arange(edge.size) - np.repeat(np.cumsum(count) - count, count)) / count[edge]
+    dense = points[edge] + t[:, None] * (end - points)[edge]
+    return dense, np.add.reduceat(count, np.cumsum(lengths) - lengths) if len(lengths) else lengths

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from activecontour import _kernels
+
 __all__ = ["Boundary", "Sides", "chain", "chain_loops", "class_boundary", "class_soup", "lattice_keys"]
 
 
@@ -216,17 +218,21 @@ def chain_loops(start_keys, end_keys):
     position = np.searchsorted(sorted_keys, end_keys[end_order])
     rank = np.arange(len(end_order)) - np.searchsorted(end_keys[end_order], end_keys[end_order])
     following[end_order] = order[position + rank]
-    seen = np.zeros(len(start_keys), dtype=bool)
+    order, offsets = np.empty(len(start_keys), dtype=np.intp), np.empty(len(start_keys) + 1, dtype=np.intp)
+    count = _kernels.cycles(following, order, offsets)
+    if count == 0:
+        return []
+    offsets = offsets[:count + 1]
+    # the loops that pass a point twice: equal keys side by side once sorted within each loop
+    loop_of = np.repeat(np.arange(count), np.diff(offsets))
+    keys = start_keys[order]
+    by_key = np.lexsort((keys, loop_of))
+    twice = np.zeros(count, dtype=bool)
+    same = (keys[by_key[1:]] == keys[by_key[:-1]]) & (loop_of[by_key[1:]] == loop_of[by_key[:-1]])
+    twice[loop_of[by_key[1:]][same]] = True
     loops = []
-    for first in range(len(start_keys)):
-        if seen[first]:
-            continue
-        loop, current = [], first
-        while not seen[current]:
-            seen[current] = True
-            loop.append(current)
-            current = following[current]
-        loops += _untwisted(np.array(loop, dtype=np.intp), start_keys)
+    for index, loop in enumerate(np.split(order, offsets[1:-1])):
+        loops += _untwisted(loop, start_keys) if twice[index] else [loop]
     return loops
 
 

@@ -82,10 +82,15 @@ def mask_to_curves(mask, *, min_area=0.0):
     centres and :func:`rasterize` of the result gives the mask back.  With
     ``positive_orientation="high"`` the mask lies on the same side of every curve, which makes
     outer boundaries positive and holes negative in our convention.  Curves with
-    ``|area| <= min_area`` are dropped.
+    ``|area| <= min_area`` are dropped.  Only the mask's bounding box is traced (the same curves:
+    a small object in a large image costs its box, not the image).
     """
-    padded = np.pad(np.asarray(mask, dtype=bool), 1).astype(np.float64)
-    return level_curves(padded, 0.5, min_area=min_area)
+    mask = np.asarray(mask, dtype=bool)
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if rows.size == 0:
+        return []
+    padded = np.pad(mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1], 1).astype(np.float64)
+    return [curve + (rows[0], cols[0]) for curve in level_curves(padded, 0.5, min_area=min_area)]
 
 
 def level_curves(padded, level, *, min_area=0.0):

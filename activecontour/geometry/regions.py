@@ -1,16 +1,22 @@
 """Regions of the plane bounded by oriented curves: hole grouping and shapely region operations.
 
-:func:`group_curves` gives each outer boundary the holes directly inside it (the one rule of
-nesting); :func:`complement_region` and :func:`clip_region` are exact polygon operations (shapely).
+:func:`nesting` is the one rule of nesting (which closed curve lies inside which, whatever their
+orientation): :func:`orient_by_nesting` makes curves inside an even number of others outer
+boundaries and the rest holes, :func:`group_curves` gives each outer boundary the holes directly
+inside it, and :func:`activecontour.geometry.topology.region_problem`, ``region_union``,
+:func:`activecontour.initial.initial_curves`, :func:`activecontour.chan_vese_energy` and the vector
+writers read the same rule.  :func:`complement_region` and :func:`clip_region` are exact polygon
+operations (shapely).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from activecontour.geometry.curve import clean, signed_area, stack_curves
+from activecontour.geometry.curve import clean, orient, signed_area
 
-__all__ = ["clip_region", "complement_region"]
+__all__ = ["clip_region", "complement_region", "group_curves", "group_indices", "nesting",
+           "orient_by_nesting", "polygons"]
 
 def _to_shapely(curves):
     """A (Multi)Polygon from oriented curves in (row, col) (x = row, y = col)."""
@@ -60,6 +66,90 @@ def clip_region(contours, domain):
             and polygon.area > 0 for curve in _from_shapely(polygon)]
 
 
+def polygons(curves):
+    """The shapely polygons of closed curves (x = row, y = col), made valid where they are not:
+    a self-crossing curve is the union of its loops."""
+    import shapely
+
+    out = np.array([shapely.Polygon(np.asarray(c, dtype=np.float64)) for c in curves], dtype=object)
+    invalid = ~shapely.is_valid(out) if len(out) else np.zeros(0, dtype=bool)
+    out[invalid] = shapely.make_valid(out[invalid])
+    return out
+
+
+def nesting(shapes):
+    """The one rule of nesting: which closed curve lies inside which, whatever their orientation.
+
+    Curve i lies inside curve j when i's polygon lies within j's (shapely's ``within``: no point
+    of i outside j, so a hole may touch its outer boundary) and the two are not one polygon.
+
+    Parameters
+    ----------
+    shapes : sequence of shapely geometries
+        The curves' polygons (:func:`polygons`).
+
+    Returns
+    -------
+    depth : int ndarray (n,)
+        How many of the other curves each curve lies inside: an even depth is an outer boundary
+        (positive signed area), an odd one a hole (negative).
+    parent : int ndarray (n,)
+        The innermost curve each curve lies inside (the deepest of them), -1 for none.
+    same : list of (int, int)
+        Pairs i < j of curves that are one polygon (a curve given twice): neither counts as
+        inside the other.
+    """
+    import shapely
+
+    n = len(shapes)
+    if n == 0:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp), []
+    inner, outer = shapely.STRtree(shapes).query(shapes, predicate="within")
+    distinct = inner != outer
+    inner, outer = inner[distinct], outer[distinct]
+    pairs = set(zip(inner.tolist(), outer.tolist(), strict=True))
+    mutual = np.array([(j, i) in pairs for i, j in zip(inner.tolist(), outer.tolist(), strict=True)],
+                      dtype=bool)
+    same = sorted({(min(i, j), max(i, j)) for i, j in zip(inner[mutual].tolist(), outer[mutual].tolist(),
+                                                           strict=True)})
+    inner, outer = inner[~mutual], outer[~mutual]
+    depth = np.bincount(inner, minlength=n)
+    parent = np.full(n, -1, dtype=np.intp)
+    order = np.lexsort((depth[outer], inner))  # by curve, then by its enclosers' depth
+    inner, outer = inner[order], outer[order]
+    deepest = np.append(inner[1:] != inner[:-1], True)[:len(inner)]
+    parent[inner[deepest]] = outer[deepest]
+    return depth, parent, same
+
+
+def orient_by_nesting(curves):
+    """The curves oriented by :func:`nesting`: a curve inside an even number of the others made an
+    outer boundary (positive), inside an odd number a hole (negative), whatever orientation it was
+    given in (``skimage.measure.find_contours`` walks outlines clockwise, OpenCV's
+    ``findContours`` counterclockwise in (x, y), shapely either way)."""
+    depth = nesting(polygons(curves))[0]
+    return [orient(np.asarray(c, dtype=np.float64), hole=d % 2 == 1)
+            for c, d in zip(curves, depth, strict=True)]
+
+
+def group_indices(contours):
+    """Indices of oriented contours grouped as ``[outer, hole, hole, ...]``, one list per outer
+    boundary in the order given: each hole goes to the innermost outer boundary around it
+    (:func:`nesting`).  Holes inside no outer boundary are left out."""
+    positive = [signed_area(c) > 0 for c in contours]
+    parent = nesting(polygons(contours))[1]
+    groups = {i: [i] for i, p in enumerate(positive) if p}
+    for i, p in enumerate(positive):
+        if p:
+            continue
+        owner = parent[i]
+        while owner >= 0 and not positive[owner]:  # a hole directly inside a hole: look further out
+            owner = parent[owner]
+        if owner >= 0:
+            groups[owner].append(i)
+    return list(groups.values())
+
+
 def group_curves(contours):
     """Group oriented contours into objects: each outer boundary with the holes directly in it.
 
@@ -71,27 +161,11 @@ def group_curves(contours):
     Returns
     -------
     list of list of ndarray
-        One list per object: its outer boundary first, then its holes.  Objects are ordered by
-        the (row, col) of their topmost-leftmost vertex, so ids read like text.
+        One list per object: its outer boundary first, then its holes (:func:`group_indices`).
+        Objects are ordered by the (row, col) of their topmost-leftmost vertex, so ids read like
+        text.
     """
-    from activecontour.geometry.topology import winding_number
-
-    outers = [c for c in contours if signed_area(c) > 0]
-    holes = [c for c in contours if signed_area(c) < 0]
-    objects = [[c] for c in outers]
-    if holes and outers:
-        points, next_index, offsets = stack_curves(outers)
-        areas = np.array([signed_area(c) for c in outers])
-        for hole in holes:
-            # the smallest outer boundary around the hole is the one it belongs to; every point of
-            # the hole is inside it, its first vertex will do
-            inside = [i for i in np.argsort(areas)
-                      if winding_number(points[offsets[i]:offsets[i + 1]],
-                                        next_index[offsets[i]:offsets[i + 1]] - offsets[i],
-                                        hole[:1])[0] != 0]
-            if inside:
-                objects[inside[0]].append(hole)
-    return _reading_order(objects)
+    return _reading_order([[contours[i] for i in group] for group in group_indices(contours)])
 
 
 def _reading_order(objects):

@@ -23,6 +23,8 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import signed_area
+from activecontour.geometry.regions import nesting
+from activecontour.geometry.regions import polygons as valid_polygons
 
 __all__ = ["border_overlap", "crossings", "curve_areas", "nucleation_sites", "region_problem",
            "region_union", "repair", "winding_number"]
@@ -209,17 +211,13 @@ def region_problem(curves):
     if not curves:
         return None
     polygons = np.array([shapely.Polygon(np.asarray(c, dtype=np.float64)) for c in curves], dtype=object)
-    for i, polygon in enumerate(polygons):
-        if not shapely.is_valid(polygon):
-            return f"contours[{i}] crosses or touches itself ({shapely.is_valid_reason(polygon)})"
-    inner, outer = shapely.STRtree(polygons).query(polygons, predicate="within")
-    distinct = inner != outer
-    inner, outer = inner[distinct], outer[distinct]
-    pairs = set(zip(inner.tolist(), outer.tolist(), strict=True))
-    for i, j in pairs:
-        if (j, i) in pairs:
-            return f"contours[{min(i, j)}] and contours[{max(i, j)}] are the same curve"
-    depth = np.bincount(inner, minlength=len(curves))
+    invalid = np.flatnonzero(~shapely.is_valid(polygons))
+    if invalid.size:
+        i = int(invalid[0])
+        return f"contours[{i}] crosses or touches itself ({shapely.is_valid_reason(polygons[i])})"
+    depth, parent, same = nesting(polygons)
+    if same:
+        return f"contours[{same[0][0]}] and contours[{same[0][1]}] are the same curve"
     areas = np.array([signed_area(np.asarray(c, dtype=np.float64)) for c in curves])
     wrong = np.flatnonzero((areas > 0) != (depth % 2 == 0))
     if wrong.size:
@@ -228,9 +226,9 @@ def region_problem(curves):
                 f"{depth[i]} other contours: outer boundaries must be positive and holes negative, "
                 "and no contour may cross another")
     holes = {i: [] for i in np.flatnonzero(depth % 2 == 0).tolist()}
-    for i, j in pairs:
-        if depth[i] % 2 == 1 and depth[j] == depth[i] - 1:
-            holes[j].append(shapely.get_exterior_ring(polygons[i]))
+    for i in np.flatnonzero(depth % 2 == 1).tolist():
+        if parent[i] in holes:
+            holes[parent[i]].append(shapely.get_exterior_ring(polygons[i]))
     shells = [shapely.Polygon(shapely.get_exterior_ring(polygons[i]), holes[i]) for i in holes]
     region = shapely.MultiPolygon(shells)
     if not shapely.is_valid(region):
@@ -257,14 +255,12 @@ def region_union(curves, *, signed=False):
     import shapely
     from shapely.geometry.polygon import orient
 
-    polygons = [shapely.make_valid(shapely.Polygon(np.asarray(c, dtype=np.float64))) for c in curves]
+    polygons = valid_polygons(curves)
     if signed:
         areas = np.array([signed_area(np.asarray(c, dtype=np.float64)) for c in curves])
         order, adds = np.argsort(-np.abs(areas), kind="stable"), areas > 0
     else:
-        inner, outer = shapely.STRtree(polygons).query(polygons, predicate="within")
-        strictly = (inner != outer) & ~shapely.equals(np.take(polygons, inner), np.take(polygons, outer))
-        depth = np.bincount(inner[strictly], minlength=len(polygons))
+        depth = nesting(polygons)[0]
         order, adds = np.argsort(depth, kind="stable"), depth % 2 == 0
     region = shapely.Polygon()
     for i in order:

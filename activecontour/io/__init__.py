@@ -125,6 +125,10 @@ def save_result(result, image, output_stem, formats=("json",), *, metadata=None,
             raise ValueError(f"formats must be chosen from {CONTOUR_FORMATS}, got {fmt!r}")
     mask = np.asarray(result.mask)
     image = channels_last(image)
+    if image.ndim == 3 and image.shape[:2] != mask.shape and image.shape[1:] == mask.shape:
+        # channel-first as segment(..., channel_axis=0) read it (2 channels, or a side <= 4 px, which
+        # channels_last leaves as they are): the mask's shape says which axis the channels are on
+        image = np.moveaxis(image, 0, -1)
     if image.shape[:2] != mask.shape:
         raise ValueError(
             f"image has shape {image.shape}, but the result's mask has shape {mask.shape}"

@@ -2,7 +2,7 @@
 
 Both use image coordinates ``x = col, y = row`` with pixel centres at integers (converted by
 :func:`activecontour.geometry.curve.to_xy`, the one place).  Each polygon is an outer boundary followed by the
-holes it contains, each hole grouped with the smallest outer boundary around it.
+holes it contains, each hole grouped with the innermost outer boundary around it.
 
 GeoJSON rings are closed (first position repeated last) and follow the right-hand rule of RFC 7946
 in the (x, y) plane: outer rings counterclockwise, holes clockwise, which is the reverse of the
@@ -19,6 +19,7 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 
 from activecontour.geometry.curve import from_xy, signed_area, to_xy
+from activecontour.geometry.regions import group_indices
 
 __all__ = ["geojson_bytes", "read_geojson", "read_svg", "svg_bytes"]
 
@@ -37,31 +38,15 @@ def _reverse_keep_first(curve):
 
 
 def _group_polygons(curves):
-    """Indices grouped as [outer, hole, hole, ...] per polygon: each hole goes to the smallest
-    outer boundary containing it."""
-    areas = [signed_area(curve) for curve in curves]
-    outers = [i for i, a in enumerate(areas) if a > 0]
-    groups = {i: [i] for i in outers}
-    for i, area in enumerate(areas):
-        if area > 0:
-            continue
-        containing = [j for j in outers if areas[j] > -area and _contains(curves[j], curves[i])]
-        if not containing:
+    """Indices grouped as [outer, hole, hole, ...] per polygon: each hole goes to the innermost
+    outer boundary around it (:func:`activecontour.geometry.regions.group_indices`)."""
+    groups = group_indices(curves)
+    grouped = {i for group in groups for i in group}
+    for i in range(len(curves)):
+        if i not in grouped:
             raise ValueError(
-                f"contour {i} is a hole (negative signed area) but lies inside no outer boundary"
-            )
-        groups[min(containing, key=lambda j: areas[j])].append(i)
-    return [groups[i] for i in outers]
-
-
-def _contains(outer, inner):
-    """Whether most of ``inner``'s vertices (up to 16 of them) lie inside ``outer``."""
-    from activecontour.geometry.topology import winding_number
-
-    points = inner[:: max(1, len(inner) // 16)]
-    next_index = np.roll(np.arange(len(outer)), -1)
-    inside = winding_number(outer, next_index, points) != 0
-    return np.count_nonzero(inside) * 2 > len(points)
+                f"contour {i} is a hole (negative signed area) but lies inside no outer boundary")
+    return groups
 
 
 def geojson_bytes(curves, meta):

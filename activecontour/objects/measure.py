@@ -176,19 +176,29 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, se
         :func:`measure`, with a ``class`` column.
     """
     by_class = [contours] if not contours or isinstance(contours[0], np.ndarray) else list(contours)
-    objects, classes = [], []
+    objects, classes, labels = [], [], None
     for k, curves in enumerate(by_class):
         found = group_curves(curves)
         if separate and found:
-            found = (split_touching(found, label_image(found, shape), image) if seeds is None else
-                     split_by_seeds(found, label_image(found, shape), seeds, image))
+            drawn = label_image(found, shape)
+            split = (split_touching(found, drawn, image) if seeds is None else
+                     split_by_seeds(found, drawn, seeds, image))
+            if len(by_class) == 1 and seeds is None and len(split) == len(found):
+                # nothing was cut: these are the objects in reading order (group_curves), and
+                # their label image is the one just drawn
+                labels = drawn
+            found = split
         if min_size > 0:
-            found = [curves for curves in found if sum(map(signed_area, curves)) >= min_size]
+            kept = [curves for curves in found if sum(map(signed_area, curves)) >= min_size]
+            if len(kept) < len(found):  # the label image drawn holds them: draw it again
+                labels = None
+            found = kept
         objects += found
         classes += [k + 1] * len(found)
     order = sorted(range(len(objects)), key=lambda i: top_left(objects[i]))
     objects, classes = [objects[i] for i in order], np.array([classes[i] for i in order], dtype=np.int32)
-    labels = label_image(objects, shape)
+    if labels is None:
+        labels = label_image(objects, shape)
     present = np.bincount(labels.ravel(), minlength=len(objects) + 1)[1:] > 0
     if not present.all():
         objects, classes = [o for o, keep in zip(objects, present, strict=True) if keep], classes[present]

@@ -12,13 +12,16 @@ from .errors import UsageError
 __all__ = ["Directories", "check_can_create", "plan_outputs", "sweep_temporaries"]
 
 
-def plan_outputs(images, output, formats, objects=()):
+def plan_outputs(images, output, formats, objects=(), stacks=()):
     """[(image path, output stem)], after checking no output overwrites an input or another one.
 
     The stems come from :func:`activecontour.io.output_stem`: inside the output directory,
-    whatever the images are called; the files of a stem from :func:`activecontour.io.output_paths`.
+    whatever the images are called; the files of a stem from :func:`activecontour.io.output_paths`,
+    or for the inputs in ``stacks`` (segmented as sequences) from
+    :func:`activecontour.io.sequence_paths`: two stacks with one stem (``disk.mp4``, ``disk.avi``)
+    are refused as two images are.
     """
-    from activecontour.io import output_paths, output_stem
+    from activecontour.io import output_paths, output_stem, sequence_paths
 
     if output is not None and os.path.exists(output) and not os.path.isdir(output):
         raise UsageError(f"output path {os.fspath(output)!r} exists and is not a directory")
@@ -31,7 +34,8 @@ def plan_outputs(images, output, formats, objects=()):
         if directory.is_dir() and not os.access(directory, os.W_OK | os.X_OK):
             raise UsageError(f"the output directory {os.fspath(directory)!r} is not writable")
         stem = output_stem(directory, image_path)
-        for path in output_paths(stem, formats, objects):
+        written = sequence_paths(stem) if image_path in stacks else output_paths(stem, formats, objects)
+        for path in written:
             key = os.path.realpath(path)
             if key in inputs:
                 raise UsageError(

@@ -59,15 +59,14 @@ class ImageProgress(StatusLine):
     """One status line on stderr, redrawn in place at most ten times a second.
 
     It shows the file (k/N) and its name, ``loading`` while the file is read, ``setting up`` until
-    the first iteration (the image's tables and its default start), then the iteration,
-    the energy, the time since the run started and an estimate of the time left: ``~`` the mean
-    time of the images finished so far times the images left; for a single image, ``<=`` the time
-    its remaining iterations up to ``max_num_iter`` take at the rate so far (it usually converges
-    sooner); ``?`` when neither is known yet.  Used as the ``callback`` of
-    :func:`activecontour.segment`.
+    the first iteration (the image's tables and its default start), then the iteration, the
+    energy, the time since the run started and an estimate of the time left: ``~`` the mean time
+    of the images finished so far times the images left, ``?`` before one has finished.  A single
+    image shows no time left and no bar: a run stops when its contour moves less than ``tol``
+    pixels per iteration, usually long before ``max_num_iter``, and nothing seen so far says when
+    (a bar and a bound scaled to ``max_num_iter`` said "left 8:43" at iteration 2 of a run that
+    ended after 8 s).  Used as the ``callback`` of :func:`activecontour.segment`.
     """
-
-    width = 20
 
     def __init__(self, total, stream=None, clock=time.monotonic):
         super().__init__(stream)
@@ -78,7 +77,6 @@ class ImageProgress(StatusLine):
         self.number = 0
         self.name = ""
         self.image_started = self.started
-        self._rate = None  # (time, iteration) of this image's first callback, and its latest state
         self._last = -math.inf
 
     def start(self, number, path):
@@ -87,7 +85,6 @@ class ImageProgress(StatusLine):
         if self.number:
             self.finished += 1
         self.number, self.name, self.image_started = number, shown(Path(path).name), now
-        self._rate = None
         try:
             size = f" ({os.path.getsize(path) / 1e6:.1f} MB)"
         except OSError:
@@ -100,32 +97,24 @@ class ImageProgress(StatusLine):
 
     def __call__(self, state):
         now = self.clock()
-        first = (now, state.iteration) if self._rate is None else self._rate[0]
-        self._rate = (first, (now, state.iteration, state.max_num_iter))
         if now - self._last < 0.1 and state.iteration < state.max_num_iter:
             return None
-        total = max(int(state.max_num_iter), 1)
-        filled = min(self.width, int(self.width * state.iteration / total))
-        bar = "#" * filled + "-" * (self.width - filled)
-        self._draw(f"[{bar}] {state.iteration}/{state.max_num_iter} energy {state.energy:<11.6g}", now)
+        self._draw(f"iteration {state.iteration} energy {state.energy:<11.6g}", now)
         return None
 
     def remaining(self, now):
-        """``"~M:SS"`` (an estimate), ``"<=M:SS"`` (a bound) or ``"?"``: the time left."""
+        """``"~M:SS"`` (an estimate from the images finished), ``"?"`` before one has finished,
+        or None for a single image (no estimate is shown)."""
         if self.finished:
             per_image = (self.image_started - self.started) / self.finished
             left = per_image * (self.total - self.number) + max(0.0, per_image - (now - self.image_started))
             return "~" + duration(left)
-        if self.total == 1 and self._rate is not None:
-            (start, first), (latest, iteration, max_num_iter) = self._rate
-            if iteration > first:
-                per_iteration = (latest - start) / (iteration - first)
-                return "<=" + duration(per_iteration * (max_num_iter - iteration))
-        return "?"
+        return None if self.total == 1 else "?"
 
     def _draw(self, text, now):
-        self.write(f"[{self.number}/{self.total}] {self.name}: {text} "
-                   f"elapsed {duration(now - self.started)} left {self.remaining(now)}")
+        left = self.remaining(now)
+        self.write(f"[{self.number}/{self.total}] {self.name}: {text} elapsed {duration(now - self.started)}"
+                   + ("" if left is None else f" left {left}"))
         self._last = now
 
 

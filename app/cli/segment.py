@@ -46,13 +46,16 @@ def run(args, settings):
     objects = args.objects
     if settings.n_regions != 2 and "classes" not in objects:  # K regions: their image too
         objects = [*objects, "classes"]
-    plans = plan_outputs(images, args.output, args.formats, objects)
+    # images and stacks planned together: no two inputs may write the same file
+    plans = plan_outputs(images + stack_paths, args.output, args.formats, objects, stacks=stack_paths)
+    stack_plans = [plan for plan in plans if plan[0] in stack_paths]
+    plans = [plan for plan in plans if plan[0] not in stack_paths]
     overlay = {"color": args.line_color, "thickness": args.line_width}
     check_can_create(args.output)
     directories = Directories()
     try:
-        stack_failures = (stacks.run(stack_paths, args, settings.keywords(), overlay, print_line,
-                                     starts.fresh(init), directories) if stack_paths else 0)
+        stack_failures = (stacks.run(stack_plans, args, settings.keywords(), overlay, print_line,
+                                     starts.fresh(init), directories) if stack_plans else 0)
         if not plans:
             return EXIT_USAGE if stack_failures else 0
         if left_out and not args.quiet:

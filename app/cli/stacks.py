@@ -87,25 +87,23 @@ def segment_stack(path, stem, settings, *, frames=None, axis=0, overlay=None, in
             f"{elapsed:.1f}s -> {written[0].name} and {len(written) - 1} more")
 
 
-def run(stacks, args, settings, overlay, report, init=None, directories=None):
+def run(plans, args, settings, overlay, report, init=None, directories=None):
     """Segment the stacks named on the command line, one after another; return the failures.
 
-    ``report(line, failed)`` prints a summary or an error line (the command line's own printer);
-    ``init`` (the ``--init-*`` options) is the first frame's start.
+    ``plans`` are (stack path, output stem) pairs, checked for colliding outputs with the images
+    (:func:`.outputs.plan_outputs`); ``report(line, failed)`` prints a summary or an error line
+    (the command line's own printer); ``init`` (the ``--init-*`` options) is the first frame's
+    start.
     """
     import sys
 
-    from activecontour.io import output_stem
-
     from ..messages import one_line
     from .errors import REPORTED_ERRORS
-    from .outputs import output_directory
     from .progress import StatusLine, is_terminal
 
     status = StatusLine() if not args.quiet and is_terminal(sys.stderr) else None
     failures = 0
-    for path in stacks:
-        stem = output_stem(output_directory(args.output, path), path)
+    for path, stem in plans:
         try:
             line = segment_stack(path, stem, settings, frames=args.frames, axis=args.axis, overlay=overlay,
                                  init=init, status=status, directories=directories)

@@ -7,8 +7,10 @@ import pytest
 import skimage.segmentation
 
 import activecontour as ac
+from activecontour import compat
 from activecontour.compat import chan_vese
 from activecontour.geometry.raster import mask_to_curves
+from activecontour.initial import DEFAULT_INIT_BLUR, _blurred, threshold_split, threshold_starts
 from activecontour.synthetic import add_noise, dice, disk_image
 
 
@@ -39,7 +41,7 @@ def test_return_types(noisy_disk):
     np.testing.assert_array_equal(seg, segmentation)
     assert phi.shape == image.shape and phi.dtype == np.float64
     np.testing.assert_array_equal(phi > 0, seg)
-    assert isinstance(energies, list) and all(type(e) is float for e in energies)
+    assert isinstance(energies, list) and all(type(e) is np.float64 for e in energies)
     assert np.all(np.diff(energies) <= 1e-9 * abs(energies[0]))  # a descent method
 
 
@@ -55,11 +57,6 @@ def test_phi_is_the_signed_distance_to_the_mask_boundary():
     assert phi[15, 5] == pytest.approx(-(9.5 - 5))  # outside: distance to the left edge
 
 
-@pytest.mark.parametrize("dtype", [np.float16, np.float32])
-def test_phi_dtype_follows_scikit_image(dtype, noisy_disk):
-    image = noisy_disk[0].astype(dtype)
-    _, phi, _ = chan_vese(image, extended_output=True)
-    assert phi.dtype == np.float32
 
 
 def test_energy_not_above_scikit_images_on_a_small_image(noisy_disk):
@@ -76,13 +73,37 @@ def test_energy_not_above_scikit_images_on_a_small_image(noisy_disk):
 
 def test_arguments_map_onto_segment(noisy_disk):
     """mu, lambda1/2 pass unchanged, tol scaled so that the defaults correspond, and
-    init_level_set="checkerboard" is the default start: the same result as segment's."""
+    init_level_set="checkerboard" is the default start's threshold set: with one blur width it is
+    the default start, and the same result as segment's."""
     image, _ = noisy_disk
-    seg, _, energies = chan_vese(image, mu=0.1, lambda1=1.0, lambda2=2.0, extended_output=True)
+    blurs = compat.CHECKERBOARD_BLURS
+    try:
+        compat.CHECKERBOARD_BLURS = (DEFAULT_INIT_BLUR,)
+        seg, _, energies = chan_vese(image, mu=0.1, lambda1=1.0, lambda2=2.0, extended_output=True)
+    finally:
+        compat.CHECKERBOARD_BLURS = blurs
     result = ac.segment(image, None, mu=0.1, lambda_in=1.0, lambda_out=2.0, tol=5e-4)
     np.testing.assert_array_equal(seg, result.mask)
     assert energies[-1] == pytest.approx(
         ac.chan_vese_energy(image, result.contours, mu=0.1, lambda_out=2.0), rel=1e-12)
+
+
+def test_checkerboard_takes_the_blur_whose_threshold_set_is_lowest():
+    """A band of contrast 0.3 under +-0.3 speckle at mu = 0.25: blurred by 1 px its threshold set is
+    ragged (long), wider blurs give a smoother band; the start is the one of lowest (6.38)."""
+    image = np.zeros((64, 64))
+    image[20:44, :] = 0.3
+    image += 0.3 * np.where(np.random.default_rng(5).random(image.shape) > 0.5, 1.0, -1.0)
+    values = image[..., None] - image.min()
+    values /= values.max()
+    costs = [threshold_split(_blurred(values, b), values, 0.25)[2] for b in compat.CHECKERBOARD_BLURS]
+    start = compat._checkerboard_start(image, 0.25, {"normalize": "range"})
+    chosen = compat.CHECKERBOARD_BLURS[int(np.argmin(costs))]
+    assert costs[0] > min(costs)  # the test means something: 1 px is not the best here
+    expected = threshold_starts(values, 0.25, blurs=(chosen,))[0]
+    assert len(start) == len(expected)
+    for ours, theirs in zip(start, expected, strict=True):
+        np.testing.assert_array_equal(ours, theirs)
 
 
 @pytest.mark.parametrize("init_level_set", ["disk", "small disk"])
@@ -99,8 +120,6 @@ def test_array_start_is_its_positive_region(noisy_disk):
     # phi of a previous run restarts from its own result
     seg, phi_out, _ = chan_vese(image, extended_output=True)
     assert dice(chan_vese(image, init_level_set=phi_out), seg) >= 0.99
-    # no positive value: no region to start from, the default start instead
-    np.testing.assert_array_equal(chan_vese(image, init_level_set=-np.ones((64, 64))), seg)
 
 
 def test_integer_and_float_images_give_one_segmentation(noisy_disk):
@@ -143,3 +162,90 @@ def test_readme_example_runs():
     segmentation, phi = namespace["segmentation"], namespace["phi"]
     assert segmentation.dtype == bool and segmentation.shape == namespace["image"].shape
     np.testing.assert_array_equal(phi > 0, segmentation)
+
+
+# scikit-image 0.26's tests/skimage/segmentation/test_chan_vese.py, intent by intent, against the
+# drop-in (the same images, arguments and expectations)
+
+def _square(size=10):
+    image = np.zeros((size, size))
+    image[3:6, 3:6] = 1
+    return image
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_skimage_flat_level_set_keeps_its_start(dtype):
+    """A level set without a zero level set: everything inside stays inside, nothing stays nothing
+    (no contour to move; scikit-image's flow leaves it too)."""
+    image = _square().astype(dtype)
+    level_set = np.full((10, 10), 1000, dtype=dtype)
+    np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=1e-3, init_level_set=level_set),
+                                  np.ones((10, 10), dtype=bool))
+    np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=1e-3, init_level_set=-level_set),
+                                  np.zeros((10, 10), dtype=bool))
+
+
+def test_skimage_small_disk_level_set_finds_the_square():
+    image = _square()
+    np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=1e-3, init_level_set="small disk"), image > 0)
+
+
+def test_skimage_simple_shape_from_the_checkerboard():
+    image = _square()
+    np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=1e-8), image > 0)
+
+
+@pytest.mark.parametrize("dtype, float_dtype", [(np.uint8, np.float64), (np.float16, np.float32),
+                                                (np.float32, np.float32), (np.float64, np.float64)])
+def test_skimage_extended_output_floats(dtype, float_dtype):
+    """phi and every energy in scikit-image's float type: float32 for float16/float32 images."""
+    result = chan_vese(_square().astype(dtype), mu=0.0, tol=1e-8, extended_output=True)
+    assert len(result) == 3
+    assert result[1].dtype == float_dtype
+    assert result[2] and all(energy.dtype == float_dtype for energy in result[2])
+
+
+def test_skimage_remove_noise():
+    """A one-pixel speck outside the rounded square is noise at mu = 0.3: not in the result."""
+    reference = np.zeros((10, 10))
+    reference[1:6, 1:6] = np.array([[0, 1, 1, 1, 0],
+                                     [1, 1, 1, 1, 1],
+                                     [1, 1, 1, 1, 1],
+                                     [1, 1, 1, 1, 1],
+                                     [0, 1, 1, 1, 0]])
+    image = reference.copy()
+    image[8, 3] = 1
+    result = chan_vese(image, mu=0.3, tol=1e-3, max_num_iter=100, dt=10, init_level_set="disk")
+    np.testing.assert_array_equal(result, reference > 0)
+
+
+def test_skimage_incorrect_image_type():
+    with pytest.raises(ValueError):
+        chan_vese(np.zeros((10, 10, 3)), mu=0.0, init_level_set=np.zeros((10, 9)))
+
+
+def test_skimage_gap_closing():
+    """A one-pixel gap across a band is closed at mu = 0.7."""
+    reference = np.zeros((20, 20))
+    reference[8:15, :] = 1
+    image = reference.copy()
+    image[:, 6] = 0
+    result = chan_vese(image, mu=0.7, tol=1e-3, max_num_iter=1000, dt=1000, init_level_set="disk")
+    np.testing.assert_array_equal(result, reference > 0)
+
+
+def test_skimage_incorrect_level_set():
+    with pytest.raises(ValueError):
+        chan_vese(np.zeros((10, 10)), mu=0.0, init_level_set=np.zeros((10, 9)))
+    with pytest.raises(ValueError):
+        chan_vese(np.zeros((10, 10)), mu=0.0, init_level_set="a")
+
+
+def test_skimage_blank_image_keeps_its_start():
+    """On a blank image at mu = 0 every region has the same (6.38): the start stays.  scikit-image's
+    case (a positive level set) and one with a zero level set through a random pattern."""
+    image = np.zeros((10, 10))
+    level_set = np.random.RandomState(1651833154).rand(10, 10)
+    np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=0.0, init_level_set=level_set), level_set > 0)
+    level_set = np.random.default_rng(0).random((10, 10)) - 0.5
+    np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=0.0, init_level_set=level_set), level_set > 0)

@@ -71,6 +71,20 @@ def test_a_glob_is_expanded_sorted_and_a_second_run_skips_the_outputs(folder, ca
     assert sorted(p.name for p in path.glob("*_mask.png")) == [f"disk{k}_mask.png" for k in range(4)]
 
 
+def test_a_second_run_with_object_images_skips_them_too(folder, capsys):
+    """--objects writes images (<name>_labels.png, _labels.tif, _classes.png) next to the inputs: a
+    second run over the folder segments the four images again, not those (issue 22)."""
+    path, _ = folder
+    for _ in range(2):
+        status, stdout, stderr = run(capsys, "segment", path, "--objects", "labels,labels-tif,classes",
+                                     "--jobs", 1)
+        assert status == 0, stderr
+        names = sorted(line.split(":")[0] for line in stdout.splitlines())
+        assert names == [f"disk{k}.png" for k in range(4)]
+    assert sorted(p.name for p in path.glob("*_labels*")) == sorted(
+        f"disk{k}_labels.{suffix}" for k in range(4) for suffix in ("png", "tif"))
+
+
 def test_one_progress_display_for_a_batch(folder, tmp_path, capsys, monkeypatch):
     path, _ = folder
     monkeypatch.setattr("app.cli.segment.is_terminal", lambda stream: True)

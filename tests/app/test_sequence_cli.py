@@ -90,6 +90,22 @@ def test_a_video_is_a_sequence(movie, tmp_path, capsys):
     assert out.startswith("clip.avi: 4 frames, 2 tracks")
 
 
+def test_two_stacks_with_one_stem_are_refused_before_any_work(movie, tmp_path, capsys):
+    """disk.tif and disk.avi would both write disk_labels.tif, ...: refused as two images with one
+    stem are (one line, exit 2, nothing written), not segmented one over the other (issue 22)."""
+    _, pixels, _ = movie
+    tifffile.imwrite(tmp_path / "disk.tif", pixels, photometric="minisblack")
+    writer = cv2.VideoWriter(str(tmp_path / "disk.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 5, (SIZE, SIZE),
+                             False)
+    for frame in pixels:
+        writer.write((frame >> 8).astype(np.uint8))
+    writer.release()
+    status, _, err = run(capsys, "segment", tmp_path / "disk.tif", tmp_path / "disk.avi",
+                         "-o", tmp_path / "out")
+    assert_one_line_error(status, err, "disk.tif", "disk.avi", "would both write")
+    assert not (tmp_path / "out").exists()
+
+
 def test_bad_frame_selection_writes_nothing(movie, tmp_path, capsys):
     path, _, _ = movie
     status, _, err = run(capsys, "segment", path, "-o", tmp_path / "out", "--frames", "9")

@@ -268,6 +268,17 @@ def test_checkerboard_on_a_ramp_scores_its_start_as_its_contours(shape):
     assert np.all(np.diff(result.energies) <= 0.0)
 
 
+@pytest.mark.parametrize("shape, mu", [((6, 2), "auto"), ((2, 3), 0.0), ((2, 3), 0.003)])
+def test_a_flipped_checkerboard_result_is_the_phase_that_was_scored(shape, mu):
+    # the checkerboard's symmetric functional takes the phase of lower energy at the end; the
+    # result was -phi while the energy appended was that of -phi redistanced, whose zero set can
+    # lie a fraction of a pixel away: the history then ended with a rise (issue 22)
+    image = np.random.default_rng(0).random(shape)
+    result = ac.segment(image, "checkerboard", backend="levelset", mu=mu)
+    assert np.all(np.diff(result.energies) <= 0.0), result.energies
+    assert result.energies[-1] == result.energy
+
+
 @pytest.mark.parametrize("start", ["mask", "rectangle"])
 def test_a_start_covering_the_whole_image_finds_the_square(start):
     # The whole image inside: Gamma is the domain's edge, and the flow must move it inwards to

@@ -99,6 +99,129 @@ def test_network_force_is_the_gradient_of_the_energy_at_every_kind_of_node():
             assert numeric == pytest.approx(force[node, axis], abs=1e-6 * max(1.0, abs(force[node, axis])))
 
 
+def _moved_networks(count, seed):
+    """Random networks of 3 regions, resampled, their free nodes moved by noise of several sizes
+    (some nodes put exactly on another segment's midpoint): many crossing, many not."""
+    import scipy.ndimage
+
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        classes = (rng.random((24, 30)) < rng.uniform(0.2, 0.6)).astype(int) + (rng.random((24, 30)) < 0.3)
+        network = Network.of_classes(scipy.ndimage.median_filter(classes, 3))
+        if not network.interface.any():
+            continue
+        network, nodes = network.resampled(network.nodes, rng.uniform(0.5, 2.0))
+        free = (network.free[0] | network.free[1])[:, None]
+        moved = nodes + rng.choice([0.0, 0.02, 0.1, 0.3]) * rng.normal(size=nodes.shape) * free
+        if rng.random() < 0.3:
+            node = rng.choice(np.flatnonzero(network.free[0] & network.free[1]))
+            segment = rng.integers(len(network.start))
+            moved[node] = 0.5 * (moved[network.start[segment]] + moved[network.end[segment]])
+        yield network, nodes, moved
+
+
+def test_simple_network_is_geos_simple_interfaces():
+    # the compiled test against GEOS's is_simple of the interface segments as one multi-line string
+    import shapely
+
+    verdicts = set()
+    for network, _, moved in _moved_networks(120, 7):
+        chosen = np.flatnonzero(network.interface)
+        lines = shapely.multilinestrings(
+            [shapely.linestrings(moved[[a, b]]) for a, b in zip(network.start[chosen], network.end[chosen],
+                                                                 strict=True)])
+        expected = bool(shapely.is_simple(lines))
+        assert network.simple(moved) == expected
+        verdicts.add(expected)
+    assert verdicts == {True, False}
+
+
+def test_one_pass_moments_are_each_regions_green_integrals():
+    # every region's moments from its own closed soup of segments (two passes over an interface),
+    # on partitions (the background's are the domain's less the others')
+    from activecontour.energy import partition_moments, soup_moments
+
+    image = np.random.default_rng(8).random((24, 30))
+    model, _ = _setup(image, 0.1)
+    checked = 0
+    for network, nodes, moved in _moved_networks(12, 9):
+        steps, dt = network.steps(nodes, moved - nodes), 1.0
+        while not (steps.admissible(dt, nodes + dt * (moved - nodes))
+                   and network.simple(nodes + dt * (moved - nodes))):
+            dt *= 0.5
+        checked += bool(np.any(moved != nodes))
+        boundary = network.boundary(nodes + dt * (moved - nodes))
+        areas, first, second = partition_moments(model, boundary, 3)
+        for k in range(3):
+            expected = soup_moments(model, *class_soup(boundary, k))
+            np.testing.assert_allclose([areas[k], first[k, 0], second[k, 0]],
+                                       [expected[0], expected[1][0], expected[2][0]], rtol=1e-10, atol=1e-9)
+    assert checked >= 3
+
+
+def test_steps_admit_what_the_direct_tests_admit():
+    # the bounds of an iteration's steps against the tests on every trial: no segment reversed
+    # (its new direction keeps a quarter of its length along the old one), every node in the
+    # image, every face's signed area of the same sign
+    rng = np.random.default_rng(10)
+    verdicts = set()
+    for network, nodes, _ in _moved_networks(40, 11):
+        velocity = rng.normal(size=nodes.shape) * np.column_stack(network.free)
+        steps = network.steps(nodes, velocity)
+        sign = np.sign(network.face_areas(nodes))
+        m, n = network.shape
+        old = nodes[network.end] - nodes[network.start]
+        for dt in 2.0 ** -np.arange(8):
+            trial = nodes + dt * velocity
+            new = trial[network.end] - trial[network.start]
+            expected = bool(np.all(np.sum(old * new, axis=1) > 0.25 * np.sum(old * old, axis=1))
+                            and np.all((trial >= -0.5) & (trial <= np.array([m - 0.5, n - 0.5])))
+                            and np.all(np.sign(network.face_areas(trial)) == sign))
+            assert steps.admissible(dt, trial) == expected
+            verdicts.add(expected)
+    assert verdicts == {True, False}
+
+
+def test_resampling_keeps_branch_nodes_and_puts_equal_steps_on_the_lines():
+    rng = np.random.default_rng(12)
+    for network, _, nodes in _moved_networks(30, 13):  # off the lattice
+        spacing = rng.uniform(0.5, 2.0)
+        resampled, new_nodes = network.resampled(nodes, spacing)
+        path, offsets, inner, outer, closed = network.polylines()
+        new_path, new_offsets, new_inner, new_outer, new_closed = resampled.polylines()
+        assert np.array_equal(closed, new_closed)
+        for k in range(len(closed)):
+            old_line = nodes[path[offsets[k]:offsets[k + 1]]]
+            new_line = new_nodes[new_path[new_offsets[k]:new_offsets[k + 1]]]
+            if closed[k]:
+                old_line, new_line = np.vstack([old_line, old_line[:1]]), np.vstack([new_line, new_line[:1]])
+            else:  # the branch nodes stay, and the regions on either side
+                np.testing.assert_array_equal(new_line[[0, -1]], old_line[[0, -1]])
+            assert (new_inner[k], new_outer[k]) == (inner[k], outer[k])
+            arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(old_line, axis=0).T))])
+            pieces = max(3 if closed[k] or np.array_equal(old_line[0], old_line[-1]) else 2,
+                         int(np.rint(arc[-1] / spacing)))
+            assert len(new_line) - 1 == pieces
+            # every sample at its arc length along the old line
+            at = np.arange(pieces + 1) * arc[-1] / pieces
+            expected = np.column_stack([np.interp(at, arc, old_line[:, d]) for d in range(2)])
+            np.testing.assert_allclose(new_line, expected, atol=1e-9)
+
+
+def test_velocity_solves_the_h1_system_on_the_free_nodes():
+    # the banded factorisation in the graph's reverse Cuthill-McKee order against the sparse matrix
+    rng = np.random.default_rng(14)
+    for network, _, nodes in _moved_networks(10, 15):
+        force = rng.normal(size=nodes.shape)
+        velocity = network.velocity(nodes, force)
+        matrix = network.stiffness(nodes)
+        for component, free in enumerate(network.free):
+            index = np.flatnonzero(free)
+            assert np.all(velocity[~free, component] == 0)
+            np.testing.assert_allclose(matrix[index][:, index] @ velocity[index, component],
+                                       -force[index, component], atol=1e-9 * max(1.0, np.abs(force).max()))
+
+
 def test_h1_form_integrates_linear_functions_and_kills_constants():
     _, classes = _antialiased((30, 30), _rings((14.2, 15.1), [11.0, 5.0]), [0, 1, 2])
     network = Network.of_classes(classes)

@@ -14,6 +14,10 @@ from tests.batch.test_batch import assert_same_result, disk_images
 distributed = pytest.importorskip("distributed")
 da = pytest.importorskip("dask.array")
 
+# under pytest-xdist, on one worker: the module's cluster starts once, and never beside README's
+# (tests/app/test_readme.py), whose dashboard would take the same port
+pytestmark = pytest.mark.xdist_group("dask")
+
 
 @pytest.fixture(scope="module")
 def client():

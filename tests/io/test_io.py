@@ -212,6 +212,20 @@ def test_save_result_rejects_an_image_of_another_shape(tmp_path, result):
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.parametrize("channels, shape", [(2, (40, 50)), (3, (40, 50)), (4, (40, 50)), (3, (40, 3))])
+def test_save_result_takes_the_channel_first_image_segment_took(tmp_path, channels, shape):
+    """segment(image, channel_axis=0) reads a (C, M, N) image; save_result writes it (the overlay
+    from the same pixels as the channel-last image's), where it refused 2 channels or a side of 3."""
+    image = np.zeros((channels, *shape))
+    image[:, 10:30, 1:2] = 1.0
+    result = ac.segment(image, channel_axis=0)
+    first = io.save_result(result, image, tmp_path / "first")
+    last = io.save_result(result, np.moveaxis(image, 0, -1), tmp_path / "last")
+    assert [p.name for p in first] == [p.name.replace("last", "first") for p in last]
+    for a, b in zip(first, last, strict=True):
+        assert a.read_bytes() == b.read_bytes(), a.name
+
+
 @pytest.mark.parametrize(
     "contours, name, match",
     [

@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from activecontour.backends.levelset.initial import checkerboard_level_set, initial_level_set
+from activecontour.backends.levelset.initial import checkerboard_level_set, has_phi, initial_level_set
 from activecontour.backends.levelset.scheme import _Problem, _swept_area
 from activecontour.backends.levelset.zeroset import level_set_contours
 from activecontour.backends.options import LevelSetOptions
@@ -39,7 +39,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
     init : None, ndarray (K, 2), list of them, bool ndarray (M, N), SegmentationResult, or str
         None: the default start (:func:`activecontour.initial.initial_curves`).  Curves, masks
         and ``"grid"`` as for the polygon backend (pixel centres with nonzero winding are
-        inside).  A result of either backend: its ``phi`` when it has one, else its contours.
+        inside).  A result of either backend: its ``phi`` when it has one (its zero set kept
+        exactly: the same energy and mask), else its contours.
         ``"checkerboard"``: squares of ``checkerboard_period`` x ``checkerboard_period`` pixels,
         at most a quarter of the image's smaller side (:func:`checkerboard_level_set`); it has no
         preferred phase, so when the functional is symmetric (omega = 0, lambda_in = lambda_out,
@@ -96,7 +97,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
                                 dtype=np.float32, mu=params.mu)
     # after the start: its temporaries (the default start's) are gone before the work arrays come
     problem = _Problem(model, params, settings)
-    state = problem.redistance(phi)
+    state = problem.redistance(phi, keep_front=has_phi(init))  # a result restarts where it ended
     del phi  # the start's array: the state holds its own
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
@@ -190,9 +191,12 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
         # The checkerboard has no preferred phase and the symmetric functional prefers one only
         # through the length along the image border, which the inside pays: take the phase of
         # lower energy (-phi is stationary too, but for that border term).
-        flipped = problem.evaluate(problem.redistance(-phi))
+        # the result is the redistanced -phi that was scored, not -phi itself: its zero set can
+        # differ by a fraction of a pixel, and the history would then end with a rise
+        flipped_state = problem.redistance(-phi)
+        flipped = problem.evaluate(flipped_state)
         if flipped.energy < current.energy:
-            phi = -phi
+            phi = flipped_state.phi
             energies.append(flipped.energy)
     result = build_result(model, params, level_set_contours(phi), energies=energies, n_iter=n_iter,
                           status=status, backend="levelset", phi=phi)

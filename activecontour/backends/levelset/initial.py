@@ -26,6 +26,11 @@ def checkerboard_level_set(shape, period):
     return (period / np.pi) * np.sin(np.pi * r / period) * np.sin(np.pi * c / period)
 
 
+def has_phi(init):
+    """Whether ``init`` is a result with a level set: its phi is the start, its zero set kept exactly."""
+    return getattr(init, "phi", None) is not None and hasattr(init, "mask")
+
+
 def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, values=None,
                       dtype=np.float64, mu=0.0):
     """The signed-distance level set of any ``init`` that :func:`segment_levelset` accepts.
@@ -50,14 +55,13 @@ def initial_level_set(init, shape, *, band=np.inf, checkerboard_period=16.0, val
                 f"{', '.join(map(repr, INIT_STRINGS))} (or pass None, a (K, 2) curve, a list of "
                 "curves, a bool mask or a SegmentationResult)"
             )
-    phi = getattr(init, "phi", None)
-    if phi is not None and hasattr(init, "mask"):
-        phi = np.asarray(phi)
+    if has_phi(init):
+        phi = np.asarray(init.phi)
         if phi.shape != tuple(shape):
             raise ValueError(
                 f"init result has phi of shape {phi.shape}, but the image has shape {tuple(shape)}"
             )
         if not np.any(phi > 0):
             raise ValueError("init result has an empty inside (phi <= 0 everywhere)")
-        return _redistance(phi, band, dtype=dtype).phi
+        return _redistance(phi, band, dtype=dtype, keep_front=True).phi
     return curves_level_set(initial_curves(init, shape, values, mu), shape, band, dtype=dtype)

@@ -67,10 +67,11 @@ class _Problem:
                 and len(self._spare) < 2:
             self._spare.append(array)
 
-    def redistance(self, phi, previous=None):
-        """The reinitialised state of phi (float32); ``previous``: the state phi was stepped from."""
+    def redistance(self, phi, previous=None, keep_front=False):
+        """The reinitialised state of phi (float32); ``previous``: the state phi was stepped from;
+        ``keep_front``: phi's zero set kept exactly (a previous result's, see :func:`_redistance`)."""
         return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, previous=previous,
-                           out=None if previous is None else self.take())
+                           out=None if previous is None else self.take(), keep_front=keep_front)
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.

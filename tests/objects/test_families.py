@@ -1,0 +1,187 @@
+"""Touching objects on the families of scenes (issue 23): the scenes, the split, the corner stage."""
+
+import numpy as np
+import pytest
+import scipy.ndimage
+import shapely
+
+import activecontour as ac
+from activecontour import synthetic
+from activecontour.geometry.curve import orient
+from activecontour.objects.metrics import match_instances
+from activecontour.objects.split import (
+    MIN_WAIST_DEPTH,
+    _block_spread,
+    _concave_corners,
+    _corner_parts,
+    _ellipse_fit,
+    _hull_depth,
+    split_touching,
+)
+
+# ---- the families: exact truth, what they say they draw ----------------------------------------
+
+
+def test_rendering_is_the_covered_fraction_and_the_labels_the_deepest_shape():
+    # two ellipses apart and one pair overlapping: the noise-free image sums to the exact union
+    # area (within the sub-sampling: 16 samples a pixel, a boundary error of ~ perimeter / 16 / 4)
+    shapes = [synthetic._Ellipse((20.0, 20.0), 12.0, 5.0, 0.3),
+              synthetic._Ellipse((20.0, 60.0), 9.0, 9.0, 0.0),
+              synthetic._Ellipse((30.0, 72.0), 9.0, 4.0, 1.0)]
+    image, labels = synthetic.render_instances(shapes, (50, 90))
+    polygons = [shapely.Polygon(_ellipse(s.center, s.a, s.b, s.angle, n=4000)) for s in shapes]
+    union = shapely.union_all(polygons).area
+    perimeter = sum(p.length for p in polygons)
+    assert image.sum() == pytest.approx(union, abs=perimeter / 16)
+    rr, cc = np.mgrid[:50, :90] + 0.5  # pixel centres in the scene frame
+    depth = np.stack([s.depth(rr, cc) for s in shapes])
+    expected = np.where(depth.min(axis=0) <= 1, depth.argmin(axis=0) + 1, 0)
+    np.testing.assert_array_equal(labels, expected)
+
+
+@pytest.mark.parametrize("family", ["disks", "ellipses"])
+def test_touching_families_are_clumps_of_the_stated_sizes(family):
+    for seed in range(3):
+        image, truth = synthetic.FAMILIES[family](seed)
+        ids = np.arange(1, truth.max() + 1)
+        radius = np.sqrt(scipy.ndimage.sum_labels(np.ones_like(truth), truth, ids) / np.pi)
+        # equal-area radii 6-40 px, less what an overlap gives to a neighbour
+        assert radius.max() <= 40.0 + 1.0 and radius.min() >= 6.0 * np.sqrt(1 - 0.25) - 1.0
+        # every object touches its clump: pieces of 2-8 objects (a clump whose others found no
+        # room is one object)
+        pieces, count = scipy.ndimage.label(truth > 0)
+        sizes = np.array([len(np.unique(truth[pieces == k])) for k in range(1, count + 1)])
+        assert sizes.max() <= synthetic.FAMILY_CLUMP[1] and np.mean(sizes >= 2) >= 0.75
+
+
+def test_a_scene_at_half_the_pixel_size_has_four_times_the_pixels_per_object():
+    fine, coarse = synthetic.touching_ellipses(2, pixel=0.5)[1], synthetic.touching_ellipses(2, pixel=1.0)[1]
+    assert fine.max() == coarse.max()
+    areas = [scipy.ndimage.sum_labels(np.ones_like(t), t, np.arange(1, t.max() + 1)) for t in (fine, coarse)]
+    np.testing.assert_allclose(areas[0] / 4, areas[1], rtol=0.15)
+
+
+# ---- the split on family scenes: F1 against the constructed truth -------------------------------
+
+@pytest.mark.parametrize(("family", "seed", "least"), [("disks", 1, 0.9), ("disks", 3, 0.9),
+                                                       ("ellipses", 4, 0.8), ("ellipses", 5, 0.8)])
+def test_touching_objects_are_split(family, seed, least):
+    image, truth = synthetic.FAMILIES[family](seed)
+    res = ac.segment(image)
+    assert match_instances(res.labels, truth)["f1"] >= least
+    # the connected pieces are clumps: without the split most objects are lost
+    assert match_instances(ac.segment(image, separate=False).labels, truth)["f1"] < least - 0.3
+
+
+def test_touching_objects_are_split_from_the_level_set_too():
+    image, truth = synthetic.touching_disks(3)
+    assert match_instances(ac.segment(image, backend="levelset").labels, truth)["f1"] >= 0.9
+
+
+@pytest.mark.parametrize("seed", [1, 4, 5])
+def test_singles_are_never_split(seed):
+    image, _ = synthetic.singles(seed)
+    pieces = ac.segment(image, separate=False).labels
+    labels = ac.segment(image).labels
+    # the objects of labels inside each connected piece: one each
+    owner = scipy.ndimage.maximum(pieces, labels, np.arange(1, labels.max() + 1))
+    assert len(np.unique(owner)) == labels.max()
+
+
+# ---- the corner stage on exact polygons -------------------------------------------------------
+
+def _ellipse(center, a, b, angle, n=600):
+    t = 2 * np.pi * np.arange(n) / n
+    turn = np.array([[np.cos(angle), np.sin(angle)], [-np.sin(angle), np.cos(angle)]])
+    return orient(np.asarray(center) + np.column_stack([a * np.cos(t), b * np.sin(t)]) @ turn)
+
+
+def _union(*curves):
+    region = shapely.union_all([shapely.Polygon(c) for c in curves])
+    return orient(np.asarray(region.exterior.coords)[:-1])
+
+
+def test_two_ellipses_side_by_side_are_cut_along_their_common_chord():
+    # aspect 3, parallel, overlapping by a third of the minor axis: no neck narrower than the
+    # parts (the chord is 0.75 of the major axis), but two concave corners where they cross
+    a, b = 30.0, 10.0
+    # (major axes along the rows, the second ellipse 2 b - 2 b / 3 further along the columns)
+    first, second = _ellipse((50.0, 50.0), a, b, 0.0), _ellipse((50.0, 50.0 + 4 * b / 3), a, b, 0.0)
+    outline = _union(first, second)
+    corners, _, _ = _concave_corners(outline)
+    assert len(corners) == 2
+    # they cross half-way, at (v / b)^2 = (2/3)^2: rows 50 -+ a sqrt(1 - 4/9), column 50 + 2 b / 3
+    np.testing.assert_allclose(np.sort(outline[corners, 0]), 50 + np.array([-1, 1]) * a * np.sqrt(5 / 9),
+                               atol=1.0)
+    np.testing.assert_allclose(outline[corners, 1], 50 + 2 * b / 3, atol=1.0)
+    parts = _corner_parts(outline)
+    assert len(parts) == 2
+    areas = sorted(shapely.Polygon(p).area for p in parts)
+    lens = shapely.Polygon(first).intersection(shapely.Polygon(second)).area
+    np.testing.assert_allclose(areas, np.pi * a * b - lens / 2, rtol=0.01)
+    assert sum(areas) == pytest.approx(shapely.Polygon(outline).area, rel=1e-9)  # they tile it
+
+
+def _capsule_v(width, arm, bend):
+    """A rod of ``width`` bent by ``bend`` radians in the middle (round ends and joint)."""
+    points = [(0.0, 0.0), (arm, 0.0), (arm + arm * np.cos(bend), arm * np.sin(bend))]
+    region = shapely.LineString(points).buffer(width / 2, quad_segs=32)
+    return orient(np.asarray(region.exterior.coords)[:-1] + 60.0)
+
+
+def _star(radius, amplitude, arms, n=800):
+    t = 2 * np.pi * np.arange(n) / n
+    rho = radius * (1 + amplitude * np.cos(arms * t))
+    return orient(np.column_stack([60 + rho * np.cos(t), 60 + rho * np.sin(t)]))
+
+
+@pytest.mark.parametrize("outline", [
+    _ellipse((60.0, 60.0), 36.0, 12.0, 0.4),  # aspect 3
+    _capsule_v(14.0, 40.0, np.pi / 3),
+    _capsule_v(10.0, 30.0, 2 * np.pi / 3),
+    _star(30.0, 0.35, 5),
+    _star(25.0, 0.25, 4),
+], ids=["ellipse aspect 3", "rod bent 60", "rod bent 120", "star 5", "star 4"])
+def test_a_single_shape_is_not_cut_at_its_corners(outline):
+    assert len(_corner_parts(outline)) == 1
+
+
+def test_the_ellipse_fit_is_exact_on_an_ellipse():
+    outline = _ellipse((12.0, -4.0), 20.0, 7.0, 0.7, n=200)
+    (centre, semi_axes, axes), residual = _ellipse_fit(outline)
+    np.testing.assert_allclose(centre, [12.0, -4.0], atol=1e-9)
+    np.testing.assert_allclose(np.sort(semi_axes), [7.0, 20.0], rtol=1e-9)
+    assert residual < 1e-12
+    major = axes[:, np.argmax(semi_axes)]
+    assert abs(major @ [np.cos(0.7), np.sin(0.7)]) == pytest.approx(1.0, abs=1e-9)
+
+
+# ---- the cheap tests that spare single objects -------------------------------------------------
+
+def test_a_convex_object_skips_the_split(monkeypatch):
+    import activecontour.imaging.noise as noise
+    import activecontour.objects.split as split
+
+    disk = [ac.circle((300.0, 300.0), 250.0, n=2000)]
+    assert _hull_depth(disk[0]).max() < MIN_WAIST_DEPTH
+    rr, cc = np.mgrid[:600, :600]
+    labels = (np.hypot(rr - 300, cc - 300) <= 250).astype(np.int32)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a convex object of one intensity reached the split")
+
+    for name in ("_boundary_distance", "_may_have_necks", "_contrast_parts", "_corner_parts"):
+        monkeypatch.setattr(split, name, refuse)
+    monkeypatch.setattr(noise, "estimate_noise", refuse)  # nor did it need the noise
+    noisy = synthetic.add_noise((labels > 0).astype(float), 0.3, seed=2)
+    assert split_touching([disk], labels, noisy)[0] is disk
+
+
+def test_the_block_means_see_a_contrast_and_no_noise():
+    rr, cc = np.mgrid[:80, :80]
+    mask = np.hypot(rr - 40, cc - 40) <= 30
+    flat = synthetic.add_noise(mask * 1.0, 0.3, seed=3)
+    # blocks of 6 x 6: their means carry the noise / 6, well below the least contrast 2 sigma
+    assert _block_spread(mask, flat, 3.0) < 2 * 0.3
+    halves = synthetic.add_noise(mask * np.where(cc < 40, 1.0, 0.5), 0.3 / 3, seed=3)
+    assert _block_spread(mask, halves, 3.0) > 0.5 - 2 * 0.3 / 3  # the step, less the noise
