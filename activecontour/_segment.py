@@ -18,8 +18,19 @@ import numpy as np
 from activecontour.backends import solver_for
 from activecontour.geometry.raster import mask_to_curves
 from activecontour.geometry.regions import clip_region, complement_region
-from activecontour.imaging.roi import ROI_INIT_MARGIN, crop_init, init_neighbourhood, resolve_roi
-from activecontour.objects.measure import find_objects
+from activecontour.imaging.noise import auto_mu, is_auto
+from activecontour.imaging.roi import (
+    ROI_APART,
+    ROI_INIT_MARGIN,
+    apart,
+    crop_init,
+    drawn_region,
+    init_neighbourhood,
+    pointed_label,
+    resolve_roi,
+)
+from activecontour.initial import DEFAULT_INIT_MIN_AREA, Start, threshold_mask
+from activecontour.objects.measure import default_min_size, find_objects
 from activecontour.problem import prepare
 from activecontour.result import SegmentationResult, build_result, scalar_if_gray
 from activecontour.settings import Settings
@@ -30,6 +41,9 @@ __all__ = ["segment"]
 #: light step lowers J by less than the light's BIC cost ends it sooner (:func:`_smooth_light`).
 _LIGHT_ROUNDS = 4
 
+#: ``roi="init"`` tells bright objects from dark ones on block means of at most this many pixels.
+_SIDE_PIXELS = 128 * 128
+
 #: The defaults of segment's keywords (stated in :class:`~activecontour.settings.Settings`).
 _DEFAULT = Settings()
 
@@ -39,7 +53,7 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
             tol=_DEFAULT.tol, callback=None, c_in=_DEFAULT.c_in, c_out=_DEFAULT.c_out, color=_DEFAULT.color,
             normalize=_DEFAULT.normalize, n_regions=_DEFAULT.n_regions, fit=_DEFAULT.fit,
             noise=_DEFAULT.noise, inside=_DEFAULT.inside, roi=_DEFAULT.roi, separate=_DEFAULT.separate,
-            channel_axis=_DEFAULT.channel_axis, options=_DEFAULT.options):
+            min_size=_DEFAULT.min_size, channel_axis=_DEFAULT.channel_axis, options=_DEFAULT.options):
     """Segment an image by minimising the Chan-Vese functional (6.38) with an active contour.
 
     Parameters
@@ -143,6 +157,17 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
         piece.  With ``n_regions > 2`` an object is a piece of one class (touching pieces of two
         classes are two objects; ``result.objects["class"]`` says which).  ``result.mask``,
         ``result.contours`` and the energy do not depend on it.
+    min_size : float or "auto"
+        Objects of a smaller area (px^2, of their sub-pixel outline) are not objects: they have no
+        id in ``result.labels`` and no row in ``result.objects``.  ``"auto"`` (default): the area
+        below which the length term removes a disk,
+        :func:`~activecontour.objects.measure.default_min_size` (from ``mu``, which the noise
+        sets, and the contrast of the two nearest regions); ``result.min_size`` reports the value
+        used.  Only the objects leave out such specks: ``result.mask``, ``contours``,
+        ``classes`` and ``energy`` stay those of the partition (6.38) was minimised over, so the
+        energy is still that of the contours (:func:`activecontour.chan_vese_energy`) and a
+        continued run starts from the same stationary point (dropping them from the contours
+        too would raise or lower J and the flow's nucleation could bring them back).
     channel_axis : int, optional
         The axis holding the colour channels of a 3-D array, e.g. 0 for channel-first (3, M, N);
         None: the last, when it has 1-4 entries.
@@ -162,7 +187,8 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
     settings = Settings(backend=backend, mu=mu, omega=omega, lambda_in=lambda_in, lambda_out=lambda_out,
                         max_num_iter=max_num_iter, tol=tol, c_in=c_in, c_out=c_out, color=color,
                         normalize=normalize, n_regions=n_regions, fit=fit, noise=noise, inside=inside,
-                        roi=roi, separate=separate, channel_axis=channel_axis, options=options)
+                        roi=roi, separate=separate, min_size=min_size, channel_axis=channel_axis,
+                        options=options)
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
     problem = prepare(image, settings)
@@ -170,18 +196,10 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
     run = functools.partial(solver.solve, options=settings.backend_options, n_regions=problem.n_regions,
                             max_num_iter=int(settings.max_num_iter), tol=float(settings.tol))
     if isinstance(settings.roi, str):  # "init"
-        # the smallest neighbourhood of the init that holds the object: grown while the result
-        # reaches the domain's edge (or is empty), e.g. when the curve was drawn inside the object
-        margin = ROI_INIT_MARGIN
-        while True:
-            neighbourhood = init_neighbourhood(init, problem.shape, margin)
-            solution = _solve(problem, run, init, neighbourhood, callback)
-            if neighbourhood.all() or not _reaches_edge(solution, neighbourhood):
-                break
-            margin *= 2
+        solution = _pointed(problem, run, init, callback)
     else:
         solution = _solve(problem, run, init, settings.roi, callback)
-    fields, objects_of = _result_fields(problem, solution)
+    fields, objects_of = _result_fields(problem, solution, getattr(init, "seeds", None))
     del problem, solution  # the normalised image goes before the objects' pass, the peak of memory
     return _with_objects(fields, *objects_of)
 
@@ -226,10 +244,11 @@ def _solve(problem, run, init, roi, callback):
     return _Solution(problem, result, light, *_in_whole_image(result, problem.box, problem.domain, shape))
 
 
-def _result_fields(problem, solution):
+def _result_fields(problem, solution, seeds=None):
     """The result's fields, in the whole image's frame and the caller's units, but the objects;
-    and what the objects are found from (:func:`_with_objects`).  They hold neither the problem
-    nor the backend's result."""
+    and what the objects are found from (:func:`_with_objects`; ``seeds``: a
+    :class:`~activecontour.initial.Start`'s, the objects of the frame before).  They hold neither
+    the problem nor the backend's result."""
     part, result = solution.problem, solution.result
     energy, energies, c_in, c_out, constants = (result.energy, result.energies, result.c_in, result.c_out,
                                                 result.constants)
@@ -245,37 +264,185 @@ def _result_fields(problem, solution):
         constants = np.array([np.atleast_1d(c_out), np.atleast_1d(c_in)])
     offset, scale = part.units
     shape = problem.shape
-    pixels = np.asarray(problem.image)
-    if pixels.shape[:2] != shape:  # a channel-first stack, read as channel-last
-        pixels = np.moveaxis(pixels, 0, -1)
+    pixels = _pixels(problem.image, shape)
     # objects are the connected pieces of each non-background region (N regions: of each class,
     # its sub-pixel curves)
     by_class = solution.contours if result.class_contours is None else result.class_contours[1:]
+    min_size = _min_size(problem.settings.min_size, part.mu, constants, result.success)
     fields = dict(
         mask=solution.mask, contours=solution.contours, c_in=c_in, c_out=c_out, energy=energy,
         energies=energies, n_iter=result.n_iter, status=result.status, backend=result.backend,
         phi=solution.phi, mu=part.mu, c_in_image=scalar_if_gray(offset + scale * np.asarray(c_in)),
         c_out_image=scalar_if_gray(offset + scale * np.asarray(c_out)), classes=result.classes,
         constants=constants, light=solution.light, roi=solution.roi, n_regions=problem.n_regions,
-        class_contours=result.class_contours)
-    return fields, (by_class, shape, pixels, bool(problem.settings.separate))
+        class_contours=result.class_contours, min_size=min_size)
+    return fields, (by_class, shape, pixels, bool(problem.settings.separate), min_size, seeds)
 
 
-def _with_objects(fields, by_class, shape, pixels, separate):
-    """The result: its fields with the objects (:func:`activecontour.objects.measure.find_objects`)
-    and, for two regions, the classes of its mask."""
-    object_contours, labels, objects = find_objects(by_class, shape, pixels, separate=separate)
+def _with_objects(fields, by_class, shape, pixels, separate, min_size, seeds):
+    """The result: its fields with the objects (:func:`activecontour.objects.measure.find_objects`,
+    of ``min_size`` at least, split by ``seeds`` where given) and, for two regions, the classes of
+    its mask."""
+    object_contours, labels, objects = find_objects(by_class, shape, pixels, separate=separate,
+                                                    min_size=min_size, seeds=seeds)
     if fields["classes"] is None:
         fields["classes"] = fields["mask"].astype(np.int32)
     return SegmentationResult(**fields, labels=labels, objects=objects, object_contours=object_contours)
 
 
-def _reaches_edge(solution, domain):
-    """Whether a solution is empty or has pixels on the edge of its domain (not the image's)."""
+def _pointed(problem, run, init, callback):
+    """``roi="init"``: the object the init encloses, alone (:mod:`activecontour.imaging.roi`).
+
+    The object pointed at is, of the objects found on a neighbourhood of the drawn region
+    (:func:`init_neighbourhood`; :func:`find_objects`, touching ones apart as ``separate`` says),
+    the one holding most of the drawn region (:func:`pointed_label`).  Its neighbours are not part
+    of the problem: the domain D of (6.38) is the neighbourhood without them (grown by
+    ``ROI_APART`` px, :func:`apart`), so the constants (6.42) are those of the object and the
+    background around it, the result holds the object alone, ``result.roi`` is that domain and
+    a continued run stays on the object.
+
+    Before the run, the neighbours the default start's threshold set shows
+    (:func:`~activecontour.initial.threshold_mask`: its pieces that reach outside the drawn
+    region, other than the one pointed at) are taken out; after it, any other object the run
+    found (a touching neighbour split off, a neighbour wholly inside the drawn curve) is, and the
+    flow continues from the pointed object alone on that domain (one run in the common case, two
+    when a neighbour showed up only in the first).  While the object reaches the neighbourhood's
+    edge (the curve was drawn inside it, or cuts it), the neighbourhood is made again around the
+    drawn region and the object together (each round it grows by a quarter of the object's
+    radius at least); while the run finds no object at all (a curve drawn inside a uniform
+    object), its margin doubles; up to the whole image.  A neighbour reaching the edge does not
+    count.  When the run finds objects but none holds any of the drawn region (a curve drawn on
+    the background), nothing was pointed at: the result is empty.
+    """
+    shape = problem.shape
+    drawn = drawn_region(init, shape)
+    problem = dataclasses.replace(problem, settings=dataclasses.replace(problem.settings,
+                                                                      inside=_objects_side(problem)))
+    around, margin = drawn, ROI_INIT_MARGIN
+    while True:
+        neighbourhood = init_neighbourhood(around, margin)
+        solution = _solve(problem, run, init, _without_neighbours(problem, neighbourhood, around),
+                          callback)
+        (r0, c0, r1, c1), objects, labels, target = _pointed_in(solution, drawn)
+        mine = labels == target
+        if neighbourhood.all() or (not target and labels.any()) or (
+                target and not (mine & _near_edge(neighbourhood, (r0, c0, r1, c1))).any()):
+            break
+        if target:  # cut by the edge: the default margin around the drawn region and the object
+            around = around.copy()
+            around[r0:r1, c0:c1] |= mine
+            margin = ROI_INIT_MARGIN
+        else:  # nothing there yet (a curve drawn inside a uniform object): look further
+            margin *= 2
+    if not target:  # objects, but none holds any of the drawn region: nothing was pointed at
+        model, working = solution.problem.model(solution.light)
+        empty = _rebuilt(solution.result, [], model, working, phi=None)
+        return dataclasses.replace(solution, result=empty, contours=[], mask=np.zeros(shape, dtype=bool),
+                                   phi=None)
+    domain = solution.roi[r0:r1, c0:c1]
+    others = (labels > 0) & ~mine
+    if not others.any():
+        return solution
+    carved = apart(domain, others, mine)
+    roi = np.zeros(shape, dtype=bool)
+    roi[r0:r1, c0:c1] = carved
+    offset = np.array([r0, c0], dtype=np.float64)
+    start = Start([curve + offset for curve in objects[target - 1]], np.zeros(shape, dtype=bool))
+    start.mask[r0:r1, c0:c1] = mine
+    return _solve(problem, run, start, roi, callback)
+
+
+def _without_neighbours(problem, neighbourhood, drawn):
+    """The neighbourhood without the pieces of the default start's threshold set
+    (:func:`~activecontour.initial.threshold_mask` on its crop) that reach outside ``drawn`` and
+    hold less of it than the one holding most (:func:`apart`)."""
+    import cv2
+
+    box, domain = resolve_roi(neighbourhood, problem.shape)
+    part = problem.restricted(box, domain)
+    inside = threshold_mask(part.values, part.working.mu, part.settings.inside)[0]
+    if domain is not None:
+        inside &= domain
+    r0, c0, r1, c1 = box
+    pieces = cv2.connectedComponents(inside.astype(np.uint8), connectivity=8)[1]
+    within = drawn[r0:r1, c0:c1]
+    target = pointed_label(pieces, within)
+    others = np.isin(pieces, np.unique(pieces[~within])) & (pieces > 0) & (pieces != target)
+    if not others.any():
+        return neighbourhood
+    carved = neighbourhood.copy()
+    carved[r0:r1, c0:c1] = apart(neighbourhood[r0:r1, c0:c1], others, pieces == target)
+    return carved
+
+
+def _objects_side(problem):
+    """``"bright"`` or ``"dark"``: the objects' side, ``inside`` or for ``"auto"`` the side of the
+    whole image's default start (:func:`~activecontour.initial.threshold_mask`: the class covering
+    less of the image's border), as the run on the whole image would take it; a neighbourhood's
+    own border, covered by neighbours, does not say."""
+    inside = problem.settings.inside
+    if inside != "auto":
+        return inside
+    # on block means of at most _SIDE_PIXELS pixels, an image in its own right (its own noise)
+    values = problem.normalised
+    side = int(np.ceil(np.sqrt(values.shape[0] * values.shape[1] / _SIDE_PIXELS)))
+    if side > 1:
+        m, n = values.shape[0] // side * side, values.shape[1] // side * side
+        values = values[:m, :n].reshape(m // side, side, n // side, side, -1).mean(axis=(1, 3))
+    mask, contrast = threshold_mask(values, auto_mu(values))
+    if contrast <= 0:
+        return "bright"
+    return "bright" if np.mean(values[mask]) > np.mean(values[~mask]) else "dark"
+
+
+def _pointed_in(solution, drawn):
+    """The crop box of a solution, and there its objects, their labels (all of them, specks too)
+    and the id of the one the drawn region points at, of those of ``min_size`` at least
+    (:func:`pointed_label`; 0 for none)."""
+    part, result = solution.problem, solution.result
+    r0, c0, r1, c1 = box = part.box
+    objects, labels, table = find_objects(result.contours, (r1 - r0, c1 - c0),
+                                          _pixels(part.image, drawn.shape)[r0:r1, c0:c1],
+                                          separate=bool(part.settings.separate))
+    # the least size is the same in the working frame: mu and the squared contrast scale alike
+    least = _min_size(part.settings.min_size, part.working.mu, [result.c_out, result.c_in], result.success)
+    eligible = np.concatenate([[False], table["area"] >= least])
+    return box, objects, labels, pointed_label(np.where(eligible[labels], labels, 0), drawn[r0:r1, c0:c1])
+
+
+def _min_size(setting, mu, constants, stationary):
+    """The least area of an object: ``min_size``, or for ``"auto"``
+    :func:`~activecontour.objects.measure.default_min_size` of ``mu`` and the regions' constants
+    when the run converged (``stationary``).  The length term removes a smaller disk only at a
+    stationary point of (6.38); a run stopped before one (``max_num_iter=0`` returns the start
+    itself, whose constants may be nearly equal) keeps every piece of at least
+    ``DEFAULT_INIT_MIN_AREA`` px^2."""
+    if not is_auto(setting):
+        return float(setting)
+    return float(default_min_size(mu, constants) if stationary else DEFAULT_INIT_MIN_AREA)
+
+
+def _near_edge(neighbourhood, box):
+    """The pixels of ``box`` (r0, c0, r1, c1) within ``ROI_APART`` px of the outside of the bool
+    ``neighbourhood`` (the image's border is no edge): where an object is cut by the edge, though
+    the flow stopped short of it (the pixels beyond read as background,
+    :func:`~activecontour.imaging.roi.restrict_values`)."""
     import scipy.ndimage
 
-    edge = domain & ~scipy.ndimage.binary_erosion(domain, border_value=1)
-    return solution.result.status == 3 or bool((solution.mask & edge).any())
+    r0, c0, r1, c1 = box
+    pad = int(np.ceil(ROI_APART)) + 1
+    m, n = neighbourhood.shape
+    low, high = (max(r0 - pad, 0), max(c0 - pad, 0)), (min(r1 + pad, m), min(c1 + pad, n))
+    # beyond the window is inside: at the image's border no edge, elsewhere farther than ROI_APART
+    window = np.pad(neighbourhood[low[0]:high[0], low[1]:high[1]], 1, constant_values=True)
+    near = scipy.ndimage.distance_transform_edt(window)[1:-1, 1:-1] <= ROI_APART
+    return near[r0 - low[0]:r1 - low[0], c0 - low[1]:c1 - low[1]]
+
+
+def _pixels(image, shape):
+    """The input image channel-last, (M, N[, C]) of ``shape`` (a channel-first stack moved)."""
+    pixels = np.asarray(image)
+    return pixels if pixels.shape[:2] == tuple(shape) else np.moveaxis(pixels, 0, -1)
 
 
 def _make_inside(result, inside, model, params):

@@ -206,16 +206,20 @@ def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_leve
 def _checkerboard_start(image, mu, keywords):
     """scikit-image's ``"checkerboard"`` here: the default start's threshold set, of the image
     blurred by whichever of ``CHECKERBOARD_BLURS`` gives it the lowest (6.38)
-    (:func:`activecontour.initial.threshold_starts`), flowed from as the default start is (a 2 px
-    first smoothing, no global move: it is one already).  ``keywords`` gain those options."""
+    (:func:`activecontour.initial.threshold_starts`), flowed from as the default start is (resampled
+    at the polygon's spacing, a 2 px first smoothing, no global move: it is one already).
+    ``keywords`` gain those options."""
+    from activecontour.backends.options import PolygonOptions
     from activecontour.backends.polygon import _START_SMOOTHING
+    from activecontour.geometry.curve import resample
     from activecontour.imaging.normalize import normalize_image
     from activecontour.initial import threshold_starts
 
     if not _is_number(mu) or mu < 0:
         return None  # segment names the parameter
     values = normalize_image(image, normalize=keywords["normalize"])
-    curves = threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]
+    spacing = PolygonOptions().spacing
+    curves = [resample(c, spacing) for c in threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]]
     if curves:
         keywords["options"] = {"global_start": False, "smoothing": _START_SMOOTHING}
     return curves or None

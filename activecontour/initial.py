@@ -2,17 +2,42 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from activecontour.geometry.curve import as_curve, orient, signed_area
 from activecontour.geometry.raster import mask_to_curves
 
-__all__ = ["circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_split",
-           "threshold_starts"]
+__all__ = ["Start", "circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_mask",
+           "threshold_split", "threshold_starts"]
 
 #: Radius of the default initial circle, as a fraction of the image's smaller side (the same as
 #: ``skimage.segmentation.morphological_chan_vese``'s default circle).
 DEFAULT_RADIUS_FRACTION = 3.0 / 8.0
+
+
+@dataclass
+class Start:
+    """Curves that lie on the objects' boundaries already, as an ``init``: like a result, they are
+    taken as oriented and started with the small smoothing length of a start on the boundaries
+    (a sequence's warm start, the object a ``roi="init"`` run continues from).
+
+    Attributes
+    ----------
+    contours : list of ndarray (K, 2)
+        Oriented as a result's (outer boundaries positive, holes negative).
+    mask : bool ndarray (M, N)
+        Their inside.
+    seeds : int ndarray (M, N), optional
+        The objects these curves were (a sequence's frame before: its ``labels``): objects that
+        hold two of them are cut between them
+        (:func:`activecontour.objects.measure.split_by_seeds`), so touching objects keep apart.
+    """
+
+    contours: list
+    mask: np.ndarray
+    seeds: np.ndarray | None = None
 
 
 def circle(center, radius, n=None):
@@ -311,6 +336,33 @@ def default_init(shape, values=None, mu=0.0):
     return threshold_starts(values, mu)[0] or fallback
 
 
+def threshold_mask(values, mu=0.0, inside="auto", *, blurs=None):
+    """The default start's object class, a bool (M, N) mask, and its contrast ``(c_in - c_out)^2``
+    (the mean over channels; 0 for an image with one class): the threshold set of
+    :func:`default_init` with every piece (:func:`threshold_starts` drops the specks).
+
+    ``inside``: which class is the objects, as ``segment``'s: ``"auto"`` the one covering less
+    of the border, ``"bright"``/``"dark"`` the one of the larger/smaller mean (over channels).
+    ``blurs``: as :func:`threshold_starts`'.
+    """
+    blurs = (DEFAULT_INIT_BLUR,) if blurs is None else tuple(blurs)
+    blur, smooth = blurs[0], _blurred(values, blurs[0])
+    if len(blurs) > 1:
+        cost = threshold_split(smooth, values, mu)[2]
+        for other in blurs[1:]:
+            candidate = _blurred(values, other)
+            other_cost = threshold_split(candidate, values, mu)[2]
+            if other_cost < cost:
+                blur, smooth, cost = other, candidate, other_cost
+    split = _split_that_holds_at_twice_the_scale(values, smooth, mu, blur)
+    mask, contrast = _object_class(smooth, values, mu, split)
+    if inside != "auto" and contrast > 0:
+        brighter = np.mean(values[mask]) > np.mean(values[~mask])
+        if brighter != (inside == "bright"):
+            mask = ~mask
+    return mask, contrast
+
+
 def threshold_starts(values, mu=0.0, *, background=False, blurs=None):
     """The curves of the default start's object class, and with ``background`` of the other one.
 
@@ -335,18 +387,7 @@ def threshold_starts(values, mu=0.0, *, background=False, blurs=None):
     list of (list of ndarray (K, 2))
         One or two curve lists.
     """
-    blurs = (DEFAULT_INIT_BLUR,) if blurs is None else tuple(blurs)
-    blur, smooth = blurs[0], _blurred(values, blurs[0])
-    if len(blurs) > 1:
-        cost = threshold_split(smooth, values, mu)[2]
-        for other in blurs[1:]:
-            candidate = _blurred(values, other)
-            other_cost = threshold_split(candidate, values, mu)[2]
-            if other_cost < cost:
-                blur, smooth, cost = other, candidate, other_cost
-    split = _split_that_holds_at_twice_the_scale(values, smooth, mu, blur)
-    inside, contrast = _object_class(smooth, values, mu, split)
-    del smooth  # image-sized: free before tracing the mask's outlines
+    inside, contrast = threshold_mask(values, mu, blurs=blurs)  # the smoothed image is freed here
     if contrast <= 0:
         return [[]] * (1 + background)
     speck = speck_area(mu, contrast)

@@ -88,6 +88,10 @@ class SegmentationResult:
         With ``n_regions > 2``: the closed curves of every region k (outer boundaries positive,
         holes negative; region 0 the background), the sub-pixel partition whose functional is
         ``energy``: ``chan_vese_energy(image, regions=result.class_contours)`` scores it.
+    min_size : float or None
+        The least area (px^2) of an object (``segment(min_size=...)``, the value ``"auto"``
+        chose): smaller pieces of the inside are in ``mask`` and ``contours`` but not in
+        ``labels`` or ``objects``.
     """
 
     mask: np.ndarray
@@ -112,6 +116,7 @@ class SegmentationResult:
     roi: np.ndarray | None = None
     n_regions: int | None = None
     class_contours: list | None = None
+    min_size: float | None = None
     success: bool = field(init=False)
     message: str = field(init=False)
 

@@ -120,6 +120,10 @@ class Settings:
         "default: the whole image", "roi")
     separate: bool = _setting(
         True, "give touching objects their own ids", "flag")
+    min_size: object = _setting(
+        "auto", "objects smaller than this many square pixels are left out of the objects (the "
+        "contours keep them); auto: the size the length term removes, from mu and the regions' "
+        "contrast", "number", auto=True)
     channel_axis: object = _setting(
         None, "the axis of a 3-D array that holds the colour channels (default: the last, when it "
         "has 1-4 entries)", "axis")
@@ -243,7 +247,7 @@ def _choice(name, value):
         raise ValueError(f"{name} must be one of {choices}, got {value!r}")
 
 
-def _mu(name, value):
+def _auto_or_at_least_zero(name, value):
     if not _is_auto(value):
         _number("a finite number >= 0 or 'auto'", lambda v: v >= 0)(name, value)
 
@@ -319,7 +323,7 @@ def _options(name, value):
 _FIELDS = {field.name: field for field in dataclasses.fields(Settings)}
 _CHECKS = {
     "backend": _choice,
-    "mu": _mu,
+    "mu": _auto_or_at_least_zero,
     "omega": _number("a finite number", lambda v: True),
     "lambda_in": _per_channel("a finite number > 0 or one per channel", False, lambda a: a > 0),
     "lambda_out": _per_channel("a finite number > 0 or one per channel", False, lambda a: a > 0),
@@ -335,6 +339,7 @@ _CHECKS = {
     "inside": _choice,
     "roi": _roi,
     "separate": _flag,
+    "min_size": _auto_or_at_least_zero,
     "channel_axis": _axis,
     "options": _options,
 }

@@ -180,22 +180,29 @@ def scale_consistency(seeds):
               f"worst {min(scores[False]):.3f} mean {np.mean(scores[False]):.3f}", flush=True)
 
 
+def dsb(repeat=2):
+    """The DSB 2018 nuclei image: ``(image, result, truth or None, F1 or None, cost ratio)`` (the
+    truth is StarDist's mask, when it is installed)."""
+    image = ac.load_image(Path(__file__).resolve().parents[1] / "sample_images/nuclei.png")
+    truth = stardist_truth()
+    res, seconds = timed(image, repeat)
+    alone = timed(image, repeat, separate=False)[1]
+    return image, res, truth, None if truth is None else f1(res.labels, truth), seconds / alone
+
+
 def real_images(folder):
     print()
-    dsb = ac.load_image(Path(__file__).resolve().parents[1] / "sample_images/nuclei.png")
-    truth = stardist_truth()
-    res, seconds = timed(dsb)
-    alone = timed(dsb, separate=False)[1]
-    score = f"F1 {f1(res.labels, truth):.3f}, " if truth is not None else "(no truth found) "
-    print(f"DSB 2018 nuclei: {score}{res.labels.max()} objects / "
-          f"{len(np.unique(truth)) - 1 if truth is not None else '-'}; cost ratio {seconds / alone:.2f}")
+    image, res, truth, score, ratio = dsb()
+    scored = "(no truth found) " if truth is None else f"F1 {score:.3f}, "
+    print(f"DSB 2018 nuclei: {scored}{res.labels.max()} objects / "
+          f"{'-' if truth is None else len(np.unique(truth)) - 1}; cost ratio {ratio:.2f}")
     from skimage.data import coins
 
     coin = ac.segment(coins())
     print(f"coins: {coin.labels.max()} objects (24 coins), separate=False: "
           f"{ac.segment(coins(), separate=False).labels.max()}")
     if folder:
-        render(folder / "dsb.png", dsb, *(() if truth is None else (truth,)), res.labels)
+        render(folder / "dsb.png", image, *(() if truth is None else (truth,)), res.labels)
         render(folder / "coins.png", coins(), coin.labels)
 
 

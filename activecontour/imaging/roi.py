@@ -27,13 +27,17 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ROI_INIT_MARGIN", "ROI_INIT_MIN_MARGIN", "crop_init", "init_neighbourhood", "resolve_roi",
-           "restrict_values"]
+__all__ = ["ROI_APART", "ROI_INIT_MARGIN", "ROI_INIT_MIN_MARGIN", "apart", "crop_init", "drawn_region",
+           "init_neighbourhood", "pointed_label", "resolve_roi", "restrict_values"]
 
 #: ``roi="init"``: the init's region grown by this fraction of its equivalent radius ...
 ROI_INIT_MARGIN = 0.25
 #: ... and by at least this many pixels.
 ROI_INIT_MIN_MARGIN = 4.0
+#: The pointed-at object's neighbours are taken out of its domain grown by this many pixels: the
+#: blurred rim of an object (the default start's blur and an optics' point spread, a pixel or two)
+#: is neither object nor background.
+ROI_APART = 2.0
 
 
 def resolve_roi(roi, shape):
@@ -69,11 +73,9 @@ def resolve_roi(roi, shape):
     return (r0, c0, r1, c1), None
 
 
-def init_neighbourhood(init, shape, margin=ROI_INIT_MARGIN):
-    """The bool (M, N) mask of ``roi="init"``: the init's region dilated by ``margin`` times its
-    equivalent radius ``sqrt(area / pi)``, and by at least ``ROI_INIT_MIN_MARGIN`` pixels."""
-    import scipy.ndimage
-
+def drawn_region(init, shape):
+    """The bool (M, N) region the init encloses (pixel centres inside its curves or mask): what
+    ``roi="init"`` points at."""
     from activecontour.geometry.raster import rasterize
     from activecontour.initial import initial_curves
 
@@ -82,8 +84,44 @@ def init_neighbourhood(init, shape, margin=ROI_INIT_MARGIN):
     region = rasterize(initial_curves(init, shape), shape)
     if not region.any():
         raise ValueError("roi='init': the init encloses no pixel centre")
-    width = max(ROI_INIT_MIN_MARGIN, margin * np.sqrt(region.sum() / np.pi))
-    return scipy.ndimage.distance_transform_edt(~region) <= width
+    return region
+
+
+def init_neighbourhood(region, margin=ROI_INIT_MARGIN):
+    """The bool (M, N) mask of ``roi="init"``: ``region`` dilated by ``margin`` times its
+    equivalent radius ``sqrt(area / pi)``, and by at least ``ROI_INIT_MIN_MARGIN`` pixels (the
+    distance transform of the region's box grown by that width, not of the whole image)."""
+    import scipy.ndimage
+
+    width = max(ROI_INIT_MIN_MARGIN, margin * np.sqrt(np.count_nonzero(region) / np.pi))
+    rows, cols = np.flatnonzero(region.any(axis=1)), np.flatnonzero(region.any(axis=0))
+    pad = int(np.ceil(width)) + 1
+    r0, c0 = max(rows[0] - pad, 0), max(cols[0] - pad, 0)
+    r1, c1 = min(rows[-1] + pad + 1, region.shape[0]), min(cols[-1] + pad + 1, region.shape[1])
+    neighbourhood = np.zeros_like(region)
+    neighbourhood[r0:r1, c0:c1] = scipy.ndimage.distance_transform_edt(~region[r0:r1, c0:c1]) <= width
+    return neighbourhood
+
+
+def pointed_label(labels, drawn):
+    """The id of the object holding most of the drawn region (the larger object on a tie), 0 when
+    none holds any of it."""
+    counts = np.bincount(labels[drawn], minlength=1)
+    counts[0] = 0
+    if not counts.any():
+        return 0
+    sizes = np.bincount(labels.ravel(), minlength=counts.size)[:counts.size]
+    return int(np.lexsort((sizes, counts))[-1])
+
+
+def apart(domain, others, keep):
+    """The domain (bool) without the pixels ``others`` grown by ``ROI_APART`` pixels, but not into
+    ``keep``; ``domain`` itself when ``others`` has none."""
+    import scipy.ndimage
+
+    if not others.any():
+        return domain
+    return domain & ~((scipy.ndimage.distance_transform_edt(~others) <= ROI_APART) & ~keep)
 
 
 def restrict_values(values, box, domain):
@@ -100,17 +138,19 @@ def restrict_values(values, box, domain):
 
 
 def crop_init(init, box, shape):
-    """The init in the crop's frame: curves shifted, a mask cropped; None and names as they are."""
-    from activecontour.initial import _is_mask
+    """The init in the crop's frame: curves shifted, a mask cropped, a result (or a
+    :class:`~activecontour.initial.Start`) both, as a ``Start``; None and names as they are."""
+    from activecontour.initial import Start, _is_mask
 
     r0, c0, r1, c1 = box
     if init is None or isinstance(init, str):
         return init
+    offset = np.array([r0, c0], dtype=np.float64)
     if hasattr(init, "contours") and hasattr(init, "mask"):
-        init = init.contours
+        return Start([np.asarray(c, dtype=np.float64) - offset for c in init.contours],
+                     np.asarray(init.mask)[r0:r1, c0:c1])
     if _is_mask(init, shape) and np.shape(init) == tuple(shape):
         return np.asarray(init)[r0:r1, c0:c1]
-    offset = np.array([r0, c0], dtype=np.float64)
     if isinstance(init, (list, tuple)) and len(init) and np.ndim(init[0]) == 2:
         return [np.asarray(c, dtype=np.float64) - offset for c in init]
     return np.asarray(init, dtype=np.float64) - offset

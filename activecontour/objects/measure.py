@@ -32,10 +32,118 @@ from activecontour.geometry.raster import rasterize
 from activecontour.geometry.regions import group_curves, top_left
 from activecontour.objects.split import split_touching
 
-__all__ = ["find_objects", "group_curves", "label_image", "measure", "polygon_moments"]
+__all__ = ["SEED_SHARE", "default_min_size", "find_objects", "group_curves", "label_image", "measure",
+           "polygon_moments", "split_by_seeds"]
 
 
-def find_objects(contours, shape, image=None, *, separate=True):
+def default_min_size(mu, constants):
+    """The least area (px^2) of an object by default: the area below which the length term of
+    (6.38) removes a disk of one region's intensity from inside another's.
+
+    A disk of radius r of region k inside region j pays ``2 pi r mu`` of length for
+    ``pi r^2 (c_k - c_j)^2`` of fit (the pixels at c_k; the mean over channels), so below
+    ``r = 2 mu / (c_k - c_j)^2`` removing it lowers (6.38): the rule by which the default start
+    drops specks, :func:`activecontour.initial.speck_area`, with its floor of
+    ``DEFAULT_INIT_MIN_AREA`` px^2.  With more than two regions the contrast is that of the two
+    nearest constants (the weakest interface).  ``mu="auto"`` is ``MU_PER_NOISE_VARIANCE``
+    times the noise variance (:func:`activecontour.imaging.noise.auto_mu`), so at a
+    signal-to-noise ratio s = |c_k - c_j| / sigma the radius is ``2 MU_PER_NOISE_VARIANCE / s^2``:
+    2.2 px at SNR 3, 5 px at SNR 2.
+
+    Parameters
+    ----------
+    mu : float
+        The length weight (normalised units, ``result.mu``).
+    constants : ndarray (K, C)
+        The regions' constants in the same units.
+    """
+    from activecontour.initial import DEFAULT_INIT_MIN_AREA, speck_area
+
+    constants = np.asarray(constants, dtype=np.float64).reshape(len(constants), -1)
+    first, second = np.triu_indices(len(constants), k=1)
+    contrast = np.mean((constants[first] - constants[second]) ** 2, axis=1)
+    contrast = float(contrast.min()) if contrast.size else 0.0
+    return speck_area(mu, contrast) if contrast > 0 else DEFAULT_INIT_MIN_AREA
+
+
+#: A seed (an object of the frame before, :func:`split_by_seeds`) claims a part of an object when at
+#: least this fraction of its area lies inside the object: a neighbour that grew into its
+#: contact by a few pixels does not.
+SEED_SHARE = 0.5
+
+
+def split_by_seeds(objects, labels, seeds, image=None):
+    """Touching objects kept apart by the objects they were: the previous frame's objects seed
+    the split of this frame's.
+
+    An object that holds two or more seeds (ids of ``seeds`` with at least ``SEED_SHARE`` of
+    their pixels inside it) is cut between them: its pixels (holes filled) go to the seeds by the
+    watershed of their distance to the outline, from markers that are each seed's pixels inside
+    it less a pixel along the borders between seeds (so that the cut follows the neck the two
+    objects make now, where there is one, not the line of the frame before); the sub-pixel
+    polygon is then cut along the parts' borders as :func:`split_touching` cuts it.  Objects that
+    touch keep apart however deep the contact, and two objects that merged without a waist stay
+    two while they overlap.  Every other object is split by :func:`split_touching` (an object
+    entering the field against another, a dividing cell).
+
+    Objects move between frames: the seeds must still overlap their objects by ``SEED_SHARE``,
+    i.e. move by less than about a third of their radius a frame.
+
+    Parameters
+    ----------
+    objects : list of list of ndarray
+        Object k: outer boundary, then holes; id k + 1 in ``labels``.
+    labels : int ndarray (M, N)
+    seeds : int ndarray (M, N)
+        The previous frame's objects (0: background), e.g. its ``result.labels``.
+    image : ndarray, optional
+        As :func:`split_touching` takes it.
+
+    Returns
+    -------
+    list of list of ndarray
+        The objects, cut ones replaced by their parts.
+    """
+    import scipy.ndimage
+    import skimage.segmentation
+
+    from activecontour.objects.split import _cut
+
+    boxes = scipy.ndimage.find_objects(labels, max_label=len(objects))
+    seed_area = np.bincount(seeds.ravel())
+    result, rest = [], []
+    for k, (curves, box) in enumerate(zip(objects, boxes, strict=True)):
+        if box is None:
+            rest.append(k)
+            continue
+        window = scipy.ndimage.binary_fill_holes(labels[box] == k + 1)
+        held = seeds[box] * window
+        counts = np.bincount(held.ravel(), minlength=seed_area.size)
+        counts[0] = 0
+        claiming = np.flatnonzero(counts >= SEED_SHARE * np.maximum(seed_area, 1))
+        if len(claiming) < 2:
+            rest.append(k)
+            continue
+        lookup = np.zeros(seed_area.size, dtype=np.int32)
+        lookup[claiming] = np.arange(1, len(claiming) + 1)
+        markers = lookup[held]
+        inner = markers * (scipy.ndimage.minimum_filter(markers, size=3, mode="nearest") ==
+                           scipy.ndimage.maximum_filter(markers, size=3, mode="nearest"))
+        for part in range(1, len(claiming) + 1):  # a seed of one pixel's width keeps its pixels
+            if not (inner == part).any():
+                inner[markers == part] = part
+        window = np.pad(window, 1)
+        parts = skimage.segmentation.watershed(-scipy.ndimage.distance_transform_edt(window),
+                                               np.pad(inner, 1), mask=window)
+        result.extend(_cut(curves, parts, np.array([box[0].start - 1, box[1].start - 1])))
+    if rest:
+        lookup = np.zeros(len(objects) + 1, dtype=labels.dtype)
+        lookup[np.array(rest) + 1] = np.arange(1, len(rest) + 1)
+        result.extend(split_touching([objects[k] for k in rest], lookup[labels], image))
+    return result
+
+
+def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, seeds=None):
     """The objects of a result: their curves, the label image and the measurement table.
 
     Parameters
@@ -51,6 +159,12 @@ def find_objects(contours, shape, image=None, *, separate=True):
     separate : bool
         Split touching objects along their necks, and by contrast where the image is given
         (:func:`split_touching`); False keeps the connected pieces.
+    min_size : float
+        Objects (after the split) whose area (px^2, of the sub-pixel outline, holes subtracted)
+        is below this are left out.
+    seeds : int ndarray (M, N), optional
+        The objects of the frame before (a sequence's): with ``separate``, objects that hold two
+        of them are cut between them (:func:`split_by_seeds`).
 
     Returns
     -------
@@ -67,12 +181,18 @@ def find_objects(contours, shape, image=None, *, separate=True):
         found = group_curves(curves)
         if separate and found:
             drawn = label_image(found, shape)
-            split = split_touching(found, drawn, image)
-            if len(by_class) == 1 and len(split) == len(found):
+            split = (split_touching(found, drawn, image) if seeds is None else
+                     split_by_seeds(found, drawn, seeds, image))
+            if len(by_class) == 1 and seeds is None and len(split) == len(found):
                 # nothing was cut: these are the objects in reading order (group_curves), and
                 # their label image is the one just drawn
                 labels = drawn
             found = split
+        if min_size > 0:
+            kept = [curves for curves in found if sum(map(signed_area, curves)) >= min_size]
+            if len(kept) < len(found):  # the label image drawn holds them: draw it again
+                labels = None
+            found = kept
         objects += found
         classes += [k + 1] * len(found)
     order = sorted(range(len(objects)), key=lambda i: top_left(objects[i]))

@@ -741,6 +741,12 @@ def _lattice_points(vertices):
 SPLIT_LINE_TOLERANCE = 1.0
 
 
+#: A piece of a cut smaller than this (px^2) is a sliver of the outline beside a cell's staircase ...
+_SLIVER_AREA = 1.0
+#: ... and joins the piece within this distance (px) of it that it overlaps most once grown by it
+_SLIVER_REACH = 1e-6
+
+
 def _cut(curves, parts, low):
     """The object's polygon cut along the borders of its pixel parts, as lists of curves."""
     import scipy.ndimage
@@ -757,22 +763,31 @@ def _cut(curves, parts, low):
     geometries = [_to_shapely([c + low + (box[0].start, box[1].start)
                                for c in mask_to_curves(cells[box] == j)])
                   for j, box in enumerate(boxes, start=1)]
-    geometries = shapely.coverage_simplify(geometries, SPLIT_LINE_TOLERANCE, simplify_boundary=False)
-    region = _to_shapely(curves)
+    # cells traced one by one cut the corners of their staircases each their own way, so they
+    # overlap there: the overlap goes to the earlier cell, and the cells become a coverage, which
+    # the simplification keeps (simplifying overlapping cells opened gaps between them)
     tree = shapely.STRtree(geometries)
-    pieces = []
     for j, cell in enumerate(geometries):
-        piece = shapely.intersection(region, cell)
-        # floating-point slivers along a shared border go to the first cell
         earlier = [k for k in tree.query(cell) if k < j]
         if earlier:
-            piece = shapely.difference(piece, shapely.union_all(geometries[earlier]))
-        for polygon in getattr(piece, "geoms", [piece]):
-            if isinstance(polygon, shapely.Polygon) and polygon.area > 0:
-                part = _from_shapely(polygon)
-                if part:
-                    pieces.append(part)
-    return pieces
+            geometries[j] = shapely.difference(cell, shapely.union_all([geometries[k] for k in earlier]))
+    geometries = shapely.coverage_simplify(geometries, SPLIT_LINE_TOLERANCE, simplify_boundary=False)
+    region = _to_shapely(curves)
+    polygons = [polygon for piece in shapely.intersection(region, geometries)
+                for polygon in getattr(piece, "geoms", [piece])
+                if isinstance(polygon, shapely.Polygon) and polygon.area > 0]
+    # where the sub-pixel outline crosses a cell's staircase, a sliver of the region can fall in
+    # the other cell, apart from its body: it joins the piece it touches, the region stays whole
+    slivers = [k for k, polygon in enumerate(polygons) if polygon.area < _SLIVER_AREA]
+    for k in slivers:
+        touching = np.nan_to_num(shapely.area(shapely.intersection(polygons[k].buffer(_SLIVER_REACH),
+                                                                   polygons)))
+        touching[slivers] = 0.0
+        j = int(np.argmax(touching))
+        joined = shapely.union(polygons[j], polygons[k]) if touching[j] > 0 else None
+        if isinstance(joined, shapely.Polygon):
+            polygons[j], polygons[k] = joined, None
+    return [part for polygon in polygons if polygon is not None and (part := _from_shapely(polygon))]
 
 
 # ---- stage 2: concave corners paired into cut lines ---------------------------------------------

@@ -11,11 +11,16 @@ that moved further than the flow travels in a few iterations): see
 
 Objects keep their identity: each frame's objects (``result.labels``, touching objects apart) are
 matched to the previous frame's by overlap (intersection over union, Hungarian assignment by
-:func:`scipy.optimize.linear_sum_assignment`).  An object without a match in the next frame ends
-its track; one without a match in the previous frame starts a new one; an object that splits
-(two or more objects of frame t lying mostly inside one object of frame t-1, e.g. a dividing cell)
-ends its track and its pieces start new ones, with the parent recorded in ``graph`` (napari's
-Tracks ``graph``: child id -> [parent id]).  Ids are never reused.
+:func:`scipy.optimize.linear_sum_assignment`).  The previous frame's objects seed this frame's
+split (:func:`activecontour.objects.measure.split_by_seeds`): objects that touch, or overlap with
+no waist left between them, stay apart and keep their ids.  An object without a match in the next
+frame ends its track, but for ``TRACK_GAP`` (5) frames an object without a match that overlaps the
+track's last outline takes its id back (two objects that merged and separated again, an object
+missed for a frame or two); one without a match in the previous frame (or a gap) starts a new one;
+an object that splits (two or more objects of frame t lying mostly inside one object of frame t-1,
+e.g. a dividing cell) ends its track and its pieces start new ones, with the parent recorded in
+``graph`` (napari's Tracks ``graph``: child id -> [parent id]).  Ids are never reused
+(:mod:`activecontour.sequence.tracking`).
 
 :func:`iter_sequence` is the generator underneath: it holds one frame and one result at a time, so
 a movie of any length streams at constant memory; :func:`segment_sequence` collects what it

@@ -8,7 +8,6 @@ and the frame is prepared as :func:`activecontour.segment` prepares it
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -45,7 +44,7 @@ def _warm_start(previous, image, settings):
     from activecontour.energy import evaluate
     from activecontour.geometry.curve import stack_curves
     from activecontour.geometry.raster import mask_to_curves
-    from activecontour.initial import DEFAULT_INIT_BLUR, speck_area
+    from activecontour.initial import DEFAULT_INIT_BLUR, Start, speck_area
     from activecontour.problem import prepare
 
     if not previous.contours:
@@ -75,13 +74,4 @@ def _warm_start(previous, image, settings):
     energies = [evaluate(model, *stack_curves(curves)[:2], params).energy if curves else np.inf
                 for curves in starts]
     curves = starts[int(np.argmin(energies))]
-    return _Start(contours=curves, mask=previous.mask) if curves else None
-
-
-@dataclass
-class _Start:
-    """A previous result's contours (with new pieces) as an ``init``: taken as already oriented,
-    and, like a result, started with the small smoothing length of a start on the boundaries."""
-
-    contours: list
-    mask: np.ndarray
+    return Start(contours=curves, mask=previous.mask, seeds=previous.labels) if curves else None

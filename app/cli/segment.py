@@ -222,12 +222,14 @@ def _interrupt_at_once():
 
 
 def summary(name, result, elapsed, written, regions=False):
-    """One line per image; a result that did not converge says why.  ``regions``: say how many
-    regions the model had (when they were asked for, or chosen)."""
+    """One line per image: the count of objects (``result.labels``' ids), iterations, energy, ...;
+    a result that did not converge says why.  ``regions``: say how many regions the model had
+    (when they were asked for, or chosen)."""
     stem = os.path.commonprefix([os.fspath(p) for p in written])
     why = "" if result.success else f" ({result.message.rstrip('.')})"
+    count = 0 if result.objects is None else len(result.objects["label"])
     return shown(
-        f"{name}: iterations={result.n_iter} energy={result.energy:.6g} mu={result.mu:.4g} "
+        f"{name}: objects={count} iterations={result.n_iter} energy={result.energy:.6g} mu={result.mu:.4g} "
         f"{f'regions={result.n_regions} ' if regions else ''}"
         f"c_in={_format_constant(result.c_in)} c_out={_format_constant(result.c_out)} "
         f"time={elapsed:.2f}s success={result.success}{why} output={stem}*"

@@ -3,9 +3,14 @@
 A matplotlib window that shows an image with the current contour(s), lets the user set the initial
 curve with the mouse (circle, box, polygon) or from a mask file, and runs, pauses and single-steps
 the flow of :func:`activecontour.segment` while showing the iteration, the energy (6.38), the
-constants c_in, c_out (6.42) and a small plot of the energy history.  Sliders set mu, omega,
-lambda_in, lambda_out and the backend's step size; fields set max_num_iter and tol; radio
-buttons choose the backend and the init gesture.  Changes apply to the next run.  Another image
+object and background brightness (c_in, c_out of (6.42)) and a small plot of the energy history.
+After a run each object (``result.labels``: touching ones apart) is drawn in its own colour, the
+readout counts them, and a click on one (or a right click) shows its measurements
+(``result.objects``) on the status line.  Sliders set smoothness (mu), shrink / grow (omega),
+object fit and background fit (lambda_in, lambda_out) and the backend's step size; fields set
+max_num_iter and tol; radio buttons choose the backend and the init gesture.  The controls speak
+a user's words; key h shows the help, where each is given with the book's symbol and equation
+number.  Changes apply to the next run.  Another image
 can be opened from the window (the "image" field, key i).  Key k chooses the number of regions
 (2, 3, 4, 5, 6, auto: ``n_regions`` of :func:`activecontour.segment`) and key l the light
 (``fit``: constant or smooth); with more than two regions every region's boundary is drawn in its

@@ -109,7 +109,9 @@ class Controls:
         self.start_stale = True
 
     def _show_mu_mode(self):
-        self.layout.slider_labels["mu"].set_text("mu (auto)" if self.mu_auto else _SLIDER_LABELS["mu"])
+        label = _SLIDER_LABELS["mu"]
+        shown = f"{label} (auto)" if self.mu_auto else label
+        self.layout.set_fitted_text(self.layout.slider_labels["mu"], shown)
 
     # ---------------------------------------------------------------------- widgets
     def on_slider(self, _value):

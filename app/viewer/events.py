@@ -26,6 +26,7 @@ SHORTCUTS = (
     ("g", "g", "gray/colour"),
     ("k", "k", "regions"),
     ("l", "l", "light fit"),
+    ("h", "h", "help"),
     ("q", "q", "quit"),
 )
 
@@ -87,6 +88,7 @@ class _Events:
             "gray/colour": viewer.toggle_color,
             "regions": viewer.cycle_regions,
             "light fit": viewer.toggle_fit,
+            "help": viewer.toggle_help,
             "quit": viewer.quit,
         }
         self.keys = {key: actions[action] for key, _, action in SHORTCUTS}

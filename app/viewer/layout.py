@@ -17,8 +17,8 @@
 
 The positions are fractions of the figure, designed so that nothing overlaps at 900 x 600 pixels
 (at 100 dpi) with the fixed font sizes; a larger window only adds space.  The texts whose length
-varies (the readout, the status and help lines) are fitted to their width by :func:`fit_text`,
-again whenever the window is resized.
+varies (the readout, the status and help lines, the sliders' labels) are fitted to their width
+by :func:`fit_text`, again whenever the window is resized.
 """
 
 from __future__ import annotations
@@ -40,14 +40,16 @@ INIT_COLOR = (0.0, 0.85, 1.0)
 PREVIEW_COLOR = (1.0, 0.85, 0.0)
 
 #: (parameter, slider label, lowest, highest, scale) for the functional's weights; the range widens
-#: to include a starting value outside it.  mu is logarithmic: its useful values span 1e-3 (a clean
-#: image) to a few units (heavy noise), and the automatic value is often near 0.01; on a log scale
-#: every decade gets the same room (mu = 0 shows as the lowest value, 1e-4).
+#: to include a starting value outside it.  The labels are in a user's words; the book's symbols
+#: and equations are in the help (key h, :func:`.display.help_text`).  mu is logarithmic: its
+#: useful values span 1e-3 (a clean image) to a few units (heavy noise), and the automatic value
+#: is often near 0.01; on a log scale every decade gets the same room (mu = 0 shows as the lowest
+#: value, 1e-4).
 SLIDERS = (
-    ("mu", "mu (length)", 1e-4, 10.0, "log"),
-    ("omega", "omega (area)", -1.0, 1.0, "linear"),
-    ("lambda_in", "lambda_in", 0.05, 5.0, "linear"),
-    ("lambda_out", "lambda_out", 0.05, 5.0, "linear"),
+    ("mu", "smoothness", 1e-4, 10.0, "log"),
+    ("omega", "shrink / grow", -1.0, 1.0, "linear"),
+    ("lambda_in", "object fit", 0.05, 5.0, "linear"),
+    ("lambda_out", "background fit", 0.05, 5.0, "linear"),
 )
 
 #: backend -> (option, label, lowest, highest) of the "step" slider: the polygon flow's largest
@@ -60,6 +62,7 @@ STEP_OPTIONS = {"polygon": ("max_step", "step (px)", 0.25, 10.0),
 #: The window's size in inches (at matplotlib's default 100 dpi: 1200 x 740 pixels).
 DEFAULT_SIZE = (12.0, 7.4)
 _PANEL_X, _PANEL_RIGHT = 0.655, 0.985  # the control panel's edges, figure fraction
+_SLIDER_LABEL_WIDTH = 0.1  # a slider's label, left of the slider (figure fraction)
 _TEXT_X, _TEXT_RIGHT = 0.01, 0.99  # the status and help lines
 _LABEL_SIZE = 8
 _SMALLEST_FONT = 6.0  # fit_text shrinks no further, it cuts the text instead
@@ -97,6 +100,7 @@ class Layout:
     save_button: object
     status_text: object
     help_text: object
+    help_panel: object
 
     @property
     def text_boxes(self):
@@ -120,8 +124,10 @@ class Layout:
     @property
     def fitted_texts(self):
         """(text, left, right): the texts :func:`fit_text` keeps between two figure fractions."""
+        labels = tuple((text, _PANEL_X, _PANEL_X + _SLIDER_LABEL_WIDTH)
+                       for text in self.slider_labels.values())
         return ((self.readout, _PANEL_X, _PANEL_RIGHT), (self.status_text, _TEXT_X, _TEXT_RIGHT),
-                (self.help_text, _TEXT_X, _TEXT_RIGHT))
+                (self.help_text, _TEXT_X, _TEXT_RIGHT), *labels)
 
 
 def build_layout(fig, display, *, backends, backend, values, step_values, max_num_iter, tol,
@@ -157,10 +163,14 @@ def build_layout(fig, display, *, backends, backend, values, step_values, max_nu
     file_rows = _file_rows(fig, x0, save_stem)
     status_text = fig.text(_TEXT_X, 0.047, "", fontsize=9, color="0.1", va="center")
     help_text = fig.text(_TEXT_X, 0.016, "", fontsize=_LABEL_SIZE, color="0.35", va="center")
+    # the help (key h): over the image, hidden until asked for
+    help_panel = ax_image.text(0.02, 0.98, "", transform=ax_image.transAxes, fontsize=_LABEL_SIZE, va="top",
+                               wrap=True, visible=False, zorder=6,
+                               bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.92})
     layout = Layout(ax_image, init_lines, contour_lines, readout, ax_energy, energy_line,
                     energy_note, sliders, step_sliders, slider_labels, maxiter_box, tol_box,
                     backend_radio, mode_radio, run_button, step_button, reset_button, *file_rows,
-                    status_text, help_text)
+                    status_text, help_text, help_panel)
     fit_text(help_text, help_line, _TEXT_X, _TEXT_RIGHT)
     return layout
 
@@ -279,7 +289,7 @@ def _image_axes(fig, display):
 
 def _energy_axes(fig, x0):
     ax = fig.add_axes((x0 + 0.055, 0.745, _PANEL_RIGHT - x0 - 0.065, 0.1))
-    ax.set_title("energy (6.38)", fontsize=_LABEL_SIZE, pad=3)
+    ax.set_title("energy", fontsize=_LABEL_SIZE, pad=3)
     ax.tick_params(labelsize=7, pad=2)
     ax.set_xlabel("iteration", fontsize=7, labelpad=1)
     ax.yaxis.get_offset_text().set_fontsize(7)
@@ -302,12 +312,13 @@ def _sliders(fig, x0, values, step_values):
         if scale == "log":
             value = max(value, low)
         low, high = min(low, value), max(high, value)
-        ax = fig.add_axes((x0 + 0.105, y, 0.165, 0.03))
+        ax = fig.add_axes((x0 + _SLIDER_LABEL_WIDTH + 0.005, y, 0.165, 0.03))
         ax.set_xscale(scale)  # a click's data coordinate is then the value itself
         slider = Slider(ax, "", low, high, valinit=value, valfmt="%.3g")
         ax.set_xlim(low, high)
         slider.valtext.set_fontsize(_LABEL_SIZE)
-        text = fig.text(x0, y + 0.015, label, fontsize=_LABEL_SIZE, va="center")
+        text = fig.text(x0, y + 0.015, "", fontsize=_LABEL_SIZE, va="center")
+        fit_text(text, label, x0, x0 + _SLIDER_LABEL_WIDTH)
         (step_sliders if name in STEP_OPTIONS else sliders)[name] = slider
         labels[name] = text
     return sliders, step_sliders, labels

@@ -86,5 +86,10 @@ class Session:
         if result.status == 1 and self._open:
             return f"iteration {self.iteration}: n steps, space runs on"
         if result.status == 3:
-            return f"{word} after {self.iteration} iterations: try a smaller mu or another init (r resets)"
-        return f"{word} after {self.iteration} iterations"
+            return (f"{word} after {self.iteration} iterations: try less smoothness or another init "
+                    "(r resets)")
+        count = 0 if result.objects is None else len(result.objects["label"])
+        if not count:
+            return f"{word} after {self.iteration} iterations"
+        return (f"{word} after {self.iteration} iterations: {count} object{'s' * (count != 1)}, click one "
+                "for its measurements")

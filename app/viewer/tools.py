@@ -19,6 +19,8 @@ box      press at one corner, drag to the opposite corner, release.
 polygon  click the vertices; Enter, a double click or a right click closes it (three vertices at
          least); Backspace removes the last vertex; Escape cancels.  Clicked in either direction,
          the polygon is an outer boundary (positively oriented).
+click    (circle and box: a click without a drag; any mode: a right click with no polygon begun)
+         hands the point to ``on_click``, e.g. to show the object there.
 """
 
 from __future__ import annotations
@@ -55,14 +57,18 @@ class CurveDrawer:
         ``redraw()`` asks for the canvas to be redrawn (the viewer coalesces these).
     color : str
         Colour of the dashed preview.
+    on_click : callable, optional
+        ``on_click(point)`` with the (row, col) of a click that draws nothing (see the module);
+        it returns whether it used it (else a click too small for a circle or box says so).
     """
 
-    def __init__(self, ax, on_curve, on_message, redraw, *, color="yellow"):
+    def __init__(self, ax, on_curve, on_message, redraw, *, color="yellow", on_click=None):
         self.ax = ax
         self._redraw = redraw
         self.mode = INIT_MODES[0]
         self._on_curve = on_curve
         self._on_message = on_message
+        self._on_click = on_click
         self._anchor = None  # (row, col) of the press of a circle or box drag
         self._vertices = []  # polygon vertices clicked so far, (row, col)
         (self.preview,) = ax.plot([], [], linestyle="--", linewidth=1.5, color=color,
@@ -93,6 +99,8 @@ class CurveDrawer:
     def press(self, event):
         """A button press inside the image axes; returns True when it was used."""
         point = self.point(event)
+        if event.button == 3 and not self._vertices and self._on_click is not None:
+            return bool(self._on_click(point))
         if self.mode == "polygon":
             return self._polygon_press(event, point)
         if event.button != 1:
@@ -113,6 +121,8 @@ class CurveDrawer:
         anchor, point = self._anchor, self.point(event)
         self.cancel()
         if np.hypot(*(point - anchor)) < MIN_DRAG:
+            if self._on_click is not None and self._on_click(anchor):
+                return
             noun = "radius" if self.mode == "circle" else "opposite corner"
             self._on_message(f"{self.mode}: press and drag to the {noun}")
             return

@@ -148,7 +148,8 @@ class Viewer:
                                      has_run=lambda: self.running or self.result is not None)
         self._contour_rgb = contour_color(display_image)  # of two regions' contours
         self.drawer = CurveDrawer(self.ax_image, lambda curve: self.set_init([curve]), self.say, self.redraw,
-                                  color=PREVIEW_COLOR)
+                                  color=PREVIEW_COLOR, on_click=self.select)
+        self.selected = None  # the id of the object whose measurements are shown
         self.ax_image.format_coord = lambda x, y: display.format_coord(self.image, self.shape, x, y)
         if not self.live:
             for widget in self.layout.widgets:
@@ -543,13 +544,38 @@ class Viewer:
 
     # ---------------------------------------------------------------------------- drawing
     def _show(self, state):
-        """The curves and the readout of ``state`` (a result, or None: not run)."""
+        """The curves and the readout of ``state`` (a result, or None: not run); no object
+        selected."""
+        self.selected = None
         self._show_curves()
         self._show_readout(state)
 
     def _show_curves(self):
         display.show_curves(self.layout, self.init_curves, self.contours, self._region_curves(),
-                            self._contour_rgb)
+                            self._contour_rgb, self.result, self.selected)
+
+    def select(self, point):
+        """Show the measurements of the object of the last result at ``point`` (row, col) and draw
+        it wider; returns False when no object is there."""
+        result = self.result
+        if result is None or result.labels is None or self.running:
+            return False
+        row, col = (int(np.floor(v + 0.5)) for v in point)
+        if not (0 <= row < self.shape[0] and 0 <= col < self.shape[1]) or not result.labels[row, col]:
+            return False
+        self.selected = int(result.labels[row, col])
+        self._show_curves()
+        self.say(display.object_summary(result, self.selected))
+        return True
+
+    def toggle_help(self):
+        """Show or hide the help: the controls and the readout in a user's words, with the book's
+        symbols and equation numbers (:func:`.display.help_text`)."""
+        panel = self.layout.help_panel
+        if not panel.get_text():
+            panel.set_text(display.help_text())
+        panel.set_visible(not panel.get_visible())
+        self.say("help shown: h hides it" if panel.get_visible() else "help hidden: h shows it")
 
     def _region_curves(self):
         """The curves of regions 1..K-1 when the contours are those of a result of K > 2 regions."""

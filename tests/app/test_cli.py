@@ -12,6 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import scipy.ndimage
 
 import app
 from activecontour import io, synthetic
@@ -77,6 +78,21 @@ def test_segment_sample_image_end_to_end(tmp_path, capsys):
     contours = io.read_contours(out / "disk_noisy_contours.geojson")
     assert all(np.array_equal(a, b) for a, b in
                zip(contours, io.read_contours(out / "disk_noisy_contours.json"), strict=True))
+
+
+def test_summary_counts_the_objects(tmp_path, capsys):
+    """objects= is the count of result.labels' ids: three disks, two of them touching, are three."""
+    disks = [synthetic.disk((40.0, 40.0), 16.0), synthetic.disk((40.0, 68.8), 16.0),
+             synthetic.disk((96.0, 90.0), 14.0)]
+    clean, truth = synthetic.render(synthetic.union(*disks), (128, 128))
+    path = tmp_path / "three.png"
+    noisy = np.clip(synthetic.add_noise(clean, 0.1, seed=6), 0, 1)
+    cv2.imwrite(str(path), np.round(noisy * 255).astype(np.uint8))
+    status, stdout, _ = run(capsys, "segment", path, "-o", tmp_path / "out", "--objects", "labels")
+    assert status == 0
+    labels = cv2.imread(str(tmp_path / "out" / "three_labels.png"), cv2.IMREAD_UNCHANGED)
+    assert int(summary_fields(stdout)["objects"]) == len(np.unique(labels[labels > 0])) == len(disks)
+    assert scipy.ndimage.label(truth)[1] == 2  # the touching pair is one piece of the mask
 
 
 def test_default_output_is_next_to_the_image_and_quiet_prints_nothing(small, capsys):

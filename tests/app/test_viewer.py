@@ -7,6 +7,8 @@ behave like a GUI's (:func:`gui_like`): the viewer redraws and processes events 
 library's callback, which is where a GUI delivers them.
 """
 
+import re
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -25,6 +27,7 @@ from activecontour.io import read_contours, read_mask, write_mask  # noqa: E402
 from activecontour.io.pictures import display_rgb  # noqa: E402
 from app import viewer as viewer_module  # noqa: E402
 from app.viewer import SHORTCUTS, Viewer, launch  # noqa: E402
+from app.viewer.display import OBJECT_COLORS, object_colors  # noqa: E402
 from app.viewer.layout import DEFAULT_SIZE  # noqa: E402
 
 SIZE = (128, 128)
@@ -471,7 +474,9 @@ def test_screenshot_shows_the_contour_on_the_object_boundary(disk_image, make_vi
     viewer.fig.savefig(path)
     shot = plt.imread(path)[:, :, :3]
     height = shot.shape[0]
-    contour_rgb = np.array(viewer_module.CONTOUR_COLOR)
+    # the one object, in the first of the objects' colours
+    contour_rgb = np.array(OBJECT_COLORS[0])
+    np.testing.assert_allclose(viewer.contour_lines.get_colors()[0][:3], contour_rgb)
 
     def near_contour_colour(row, col, reach=2):
         x, y = _display(viewer.ax_image, col, row)
@@ -723,8 +728,8 @@ def test_colour_constants_fit_the_readout(make_viewer):
     key(viewer, " ")
     viewer.fig.canvas.draw()
     text = viewer.readout.get_text()
-    for name in ("c_in", "c_out"):
-        line = next(t for t in text.splitlines() if t.startswith(name + " "))
+    for name, words in (("c_in", "object brightness"), ("c_out", "background brightness")):
+        line = next(t for t in text.splitlines() if t.startswith(words + " "))
         values = np.atleast_1d(getattr(viewer.result, name))
         assert len(values) == image.shape[2]
         for value in values:
@@ -869,13 +874,13 @@ def test_automatic_mu_follows_the_image_until_the_slider_is_moved(disk_image, ma
     second = _write_png(clean, disk_image[1] * 0.8 + 0.1)
     viewer = make_viewer(first, image_path=noisy, max_num_iter=1)
     mu = viewer.sliders["mu"]
-    assert viewer.slider_labels["mu"].get_text() == "mu (auto)"
+    assert viewer.slider_labels["mu"].get_text() == "smoothness (auto)"
     assert mu.val == pytest.approx(ac.segment(first, max_num_iter=0).mu)
     viewer.open_image(clean)
     assert mu.val == pytest.approx(ac.segment(second, max_num_iter=0).mu)
     assert ac.segment(second, max_num_iter=0).mu != ac.segment(first, max_num_iter=0).mu
     set_slider(viewer, mu, 1.5)
-    assert viewer.slider_labels["mu"].get_text() == "mu (length)"
+    assert viewer.slider_labels["mu"].get_text() == "smoothness"
     viewer.open_image(noisy)
     assert viewer.parameters()["mu"] == pytest.approx(1.5, abs=1e-9)  # the user's value stays
 
@@ -944,3 +949,88 @@ def test_step_sliders_start_at_the_options_dataclass_defaults(disk_image, make_v
     for name, backend in BACKENDS.items():
         option = STEP_OPTIONS[name][0]
         assert viewer.step_sliders[name].val == getattr(backend.options(), option)
+
+
+# ------------------------------------------------------------------ objects you can see (issue 23, 5)
+@pytest.fixture(scope="module")
+def touching_image():
+    """Three disks, the first two touching (their centres 1.8 radii apart), the third apart."""
+    disks = [synthetic.disk((40.0, 40.0), 16.0), synthetic.disk((40.0, 68.8), 16.0),
+             synthetic.disk((96.0, 90.0), 14.0)]
+    clean, _ = synthetic.render(synthetic.union(*disks), SIZE)
+    truths = [synthetic.render(d, SIZE)[1] for d in disks]
+    return synthetic.add_noise(clean, 0.1, seed=6), truths
+
+
+def test_each_object_is_drawn_in_its_own_colour_and_counted(touching_image, make_viewer):
+    image, truths = touching_image
+    viewer = make_viewer(image)
+    key(viewer, " ")
+    res = viewer.result
+    assert res.labels.max() == len(truths) == 3  # the touching pair split apart
+    # every object's outline in its colour, and the two touching objects' colours differ
+    first, second = (int(np.bincount(res.labels[t]).argmax()) for t in truths[:2])
+    assert first and second and first != second
+    wanted = object_colors(res.labels, 3)
+    assert wanted[first - 1] != wanted[second - 1]
+    drawn = [tuple(np.round(c[:3], 6)) for c in viewer.contour_lines.get_colors()]
+    expected = [tuple(np.round(OBJECT_COLORS[wanted[k]], 6)) for k, curves in enumerate(res.object_contours)
+                for _ in curves]
+    assert drawn == expected and len(set(drawn)) == 3
+    assert "3 objects" in viewer.readout.get_text() and "3 objects" in viewer.message
+
+
+def test_object_colours_differ_wherever_objects_touch():
+    """Ids 1..n (n colours) in a row of blocks apart, id n + 1 under id 1: it would cycle back to
+    id 1's colour, which it touches, so it takes the first one free; the others keep their own."""
+    n = len(OBJECT_COLORS)
+    labels = np.zeros((12, 6 * n), np.int32)
+    for k in range(n):
+        labels[1:5, 6 * k + 1:6 * k + 5] = k + 1
+    labels[5:9, 1:5] = n + 1  # touches id 1 only
+    colors = object_colors(labels, n + 1)
+    assert colors[:n] == list(range(n)) and colors[n] != colors[0]
+    assert colors[n] == 1  # the first colour id 1 (its only neighbour) has not taken
+    labels[5:9, 1:5] = 0
+    labels[7:11, 1:5] = n + 1  # now apart: the next colour round, as every object apart
+    assert object_colors(labels, n + 1)[n] == 0
+
+
+@pytest.mark.parametrize("button", [1, 3])
+def test_a_click_on_an_object_shows_its_measurements(touching_image, make_viewer, button):
+    image, truths = touching_image
+    viewer = make_viewer(image)
+    key(viewer, " ")
+    res = viewer.result
+    label = int(res.labels[96, 90])
+    mouse(viewer, "button_press_event", 96, 90, button=button)
+    mouse(viewer, "button_release_event", 96, 90, button=button)
+    assert viewer.selected == label and viewer.result is res and viewer.init_curves  # no new curve drawn
+    row = list(res.objects["label"]).index(label)
+    area = res.objects["area"][row]
+    assert abs(area - truths[2].sum()) < 0.05 * truths[2].sum()
+    assert f"object {label} of 3" in viewer.message and f"area {area:.1f}" in viewer.message
+    widths = viewer.contour_lines.get_linewidths()
+    index = sum(len(curves) for curves in res.object_contours[:label - 1])
+    assert widths[index] > max(np.delete(widths, index))  # the selected object is drawn wider
+    mouse(viewer, "button_press_event", 5, 5, button=button)  # the background: nothing to show
+    mouse(viewer, "button_release_event", 5, 5, button=button)
+    assert viewer.selected == label
+
+
+def test_controls_speak_a_users_words_and_the_help_gives_the_books(make_viewer, disk_image):
+    viewer = make_viewer(disk_image[0])
+    words = [t.get_text() for t in viewer.slider_labels.values()] + [viewer.ax_energy.get_title()]
+    symbols = ("mu", "omega", "lambda", "c_in", "c_out", "(6.")
+    assert not [w for w in words if any(s in w for s in symbols)], words
+    assert not any(s in viewer.readout.get_text() for s in ("c_in", "c_out"))
+    key(viewer, "h")
+    panel = viewer.layout.help_panel
+    assert panel.get_visible()
+    help_text = panel.get_text()
+    for word, symbol in (("smoothness", "mu"), ("object fit", "lambda_in"), ("background fit", "lambda_out"),
+                         ("object brightness", "c_in"), ("energy", "(6.38)")):
+        entry = next(e for e in re.split(r"\n(?=\S)", help_text) if e.startswith(word + ":"))
+        assert symbol in entry, (word, entry)
+    key(viewer, "h")
+    assert not panel.get_visible()

@@ -12,6 +12,7 @@ import pytest  # noqa: E402
 import activecontour as ac  # noqa: E402
 from activecontour.io.pictures import REGION_COLORS  # noqa: E402
 from app.viewer import REGION_CHOICES  # noqa: E402
+from app.viewer.display import OBJECT_COLORS, object_colors  # noqa: E402
 from tests.app import test_viewer  # noqa: E402
 from tests.app.test_viewer import drag, key  # noqa: E402
 
@@ -66,13 +67,16 @@ def test_auto_regions_from_the_viewer(rings, make_viewer):
     key(viewer, " ")
     assert viewer.result.n_regions == 3
     assert "(auto: 3)" in viewer.readout.get_text()
-    key(viewer, "k")  # and round again to two regions: one colour, the drawn init applies again
+    key(viewer, "k")  # and round again to two regions: the objects' colours, the drawn init applies again
     assert viewer.parameters()["n_regions"] == 2 and viewer.result is None
     drag(viewer, (48, 48), (48, 80))
     key(viewer, " ")
-    assert viewer.result.n_regions == 2
-    colors = {mcolors.to_hex(c) for c in viewer.contour_lines.get_colors()}
-    assert colors == {mcolors.to_hex(viewer._contour_rgb)}
+    res = viewer.result
+    assert res.n_regions == 2
+    colors = [mcolors.to_hex(c) for c in viewer.contour_lines.get_colors()]
+    wanted = object_colors(res.labels, len(res.object_contours))
+    assert colors == [mcolors.to_hex(OBJECT_COLORS[wanted[k]]) for k, curves in enumerate(res.object_contours)
+                      for _ in curves]
 
 
 def test_a_drawn_curve_is_no_start_for_more_regions(rings, make_viewer):
