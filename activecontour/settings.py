@@ -19,6 +19,7 @@ import dataclasses
 import numpy as np
 
 from activecontour.backends import BACKENDS, solver_for
+from activecontour.models import NOISE_MODELS
 
 __all__ = ["COLOR_MODES", "FITS", "INSIDE", "KINDS", "NOISES", "NORMALIZATIONS", "SettingSpec", "Settings",
            "setting_specs"]
@@ -30,7 +31,7 @@ NORMALIZATIONS = ("range", "dtype", None)
 #: ``fit``: the models of the regions' intensities.
 FITS = ("constant", "smooth")
 #: ``noise``: the fit term, (6.38)'s squared error or the likelihood of photon counts.
-NOISES = ("gaussian", "poisson")
+NOISES = tuple(NOISE_MODELS)
 #: ``inside``: which region holds the objects.
 INSIDE = ("auto", "bright", "dark")
 

@@ -191,7 +191,8 @@ def stationary(context):
     return f"{held}/{len(rows)} hold" + (f"; not: {failing}" if failing else ""), held == len(rows)
 
 
-@claim("sample images", r"All \d+ sample images are segmented and converge; no result is its start\.")
+@claim("sample images", r"All \d+ sample images are segmented and converge on both backends; \d+ of \d+ runs "
+                        r"end away from their start")
 def samples_converge(context):
     import activecontour as ac
 
@@ -202,7 +203,8 @@ def samples_converge(context):
         start = ac.segment(image, backend=backend, max_num_iter=0)
         moved += bool(np.any(start.mask != result.mask))
     n = len(results)
-    return f"{converged}/{n} converge, {moved}/{n} moved from their start", converged == moved == n
+    stated = int(find(r"\d+ of \d+ runs end away from their start")[1].split()[0])
+    return f"{converged}/{n} converge, {moved}/{n} moved from their start", converged == n and moved >= stated
 
 
 # -------------------------------------------------------------------------- docs/performance.md

@@ -11,27 +11,33 @@ smooth      ``fit="smooth"``: region k's intensity c_k b(x) with a smooth light 
 poisson     ``noise="poisson"``: the fit term of photon counts, with uniform or smooth light
 """
 
+import importlib
+
 from activecontour.models.base import QuadraticForm
 from activecontour.models.two_region import ChanVeseParameters
 
-__all__ = ["ChanVeseParameters", "QuadraticForm", "noise_model"]
+__all__ = ["NOISE_MODELS", "ChanVeseParameters", "QuadraticForm", "noise_model"]
+
+
+#: The noise models by name: the module that holds each one, the name of its ``build(values, light,
+#: params) -> (ImageModel, params)`` (light None: uniform) and the name of its light update ``fit(values,
+#: classes, constants, params, previous) -> (light, drop)``.  A noise model is its module plus its line
+#: here; :data:`activecontour.settings.NOISES`, and with it ``--noise`` and the viewer, read this table.
+NOISE_MODELS = {
+    "gaussian": ("activecontour.models.smooth", "smooth_light_model", "fit_light"),  # (6.38)'s squares
+    "poisson": ("activecontour.models.poisson", "poisson_model", "fit_poisson_light"),  # photon counts
+}
 
 
 def noise_model(noise):
-    """A noise model's two parts: ``build(values, light, params) -> (ImageModel, params)`` (light
-    None: uniform) and its light update ``fit(values, classes, constants, params, previous)
-    -> (light, drop)``.
+    """A noise model's two parts, ``(build, fit)`` (:data:`NOISE_MODELS`), its module imported now.
 
     Parameters
     ----------
     noise : str
-        One of :data:`activecontour.settings.NOISES` (checked there): ``"gaussian"``, (6.38)'s
-        squared error, or ``"poisson"``, the likelihood of photon counts.
+        One of :data:`NOISE_MODELS` (checked in :mod:`activecontour.settings`): ``"gaussian"``,
+        (6.38)'s squared error, or ``"poisson"``, the likelihood of photon counts.
     """
-    if noise == "poisson":
-        from activecontour.models.poisson import fit_poisson_light, poisson_model
-
-        return poisson_model, fit_poisson_light
-    from activecontour.models.smooth import fit_light, smooth_light_model
-
-    return smooth_light_model, fit_light
+    module, build, fit = NOISE_MODELS[noise]
+    loaded = importlib.import_module(module)
+    return getattr(loaded, build), getattr(loaded, fit)
