@@ -22,6 +22,14 @@ Columns:
   contours) at wavelengths of 16 px and more.
 - ``px %``, ``dJ``: the continuation's mask change (of the mask's area) and relative energy change.
 
+What it showed when written (issue 22 item 2; the numbers in the lead's note): at the stop the
+vertices drift along the curve, steadily (``t path`` about 1), several times faster than the
+normal movement that the stop rule measures, leaving long edges and clusters of short ones that
+the remesh cannot take back (it would raise J); the continuation then shifts the boundary by a
+mean of about 0.01-0.03 px on every image, mostly at wavelengths under 16 px (a few images: a lobe
+or a whole boundary, at longer ones), and the images that fail are those where that exceeds
+``allow`` (thin objects: text, grass, gravel, brick, microaneurysms).
+
 usage (from the project's root):
     python benchmarks/tail.py [--images text,coins,moon]
 """
