@@ -11,7 +11,10 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.backends.network` (a network's segments that meet);
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
-  :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network).
+  :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
+* :func:`grow_band`, :func:`cell_segments`, :func:`edge_soup` -- :mod:`activecontour.backends.levelset`
+  (the narrow band's distances, the marching-squares segments of the zero set and their oriented
+  soup, which the common evaluator scores by (6.38)).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
@@ -1272,4 +1275,146 @@ def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::
                 current = following[current]
         offsets[count] = position
     free(seen)
+    return count
+
+
+ctypedef fused real:
+    float
+    double
+
+
+cdef inline Py_ssize_t _marching_cell(double a, double b, double c, double d, double r, double q,
+                                      Py_ssize_t cell, Py_ssize_t width, double *segments,
+                                      Py_ssize_t *keys) noexcept nogil:
+    """The marching-squares segments of the zero set in one cell (corners a, b, c, d clockwise from
+    the top left at row r, column q): ``segments`` gets 2 slots x 2 ends x (row, col), ``keys``
+    2 slots x 2 ends (the grid edge of each end, for ``width`` cells a row).  Slot 1 is for
+    saddles; unused slots are left as they are.  Returns the number of segments (0, 1 or 2)."""
+    cdef bint sa = a > 0, sb = b > 0, sc = c > 0, sd = d > 0
+    cdef bint exists[4]
+    cdef double point[4][2]
+    cdef Py_ssize_t key[4]
+    cdef Py_ssize_t count = 0, e, found = 0
+    cdef Py_ssize_t order[2]
+    exists[0], exists[1], exists[2], exists[3] = sa != sb, sb != sc, sd != sc, sa != sd
+    # crossings on the edges top (a-b), right (b-c), bottom (d-c), left (a-d), named by grid edge
+    if exists[0]:
+        point[0][0], point[0][1] = r, q + a / (a - b)
+    if exists[1]:
+        point[1][0], point[1][1] = r + b / (b - c), q + 1.0
+    if exists[2]:
+        point[2][0], point[2][1] = r + 1.0, q + d / (d - c)
+    if exists[3]:
+        point[3][0], point[3][1] = r + a / (a - d), q
+    key[0], key[1] = 2 * cell, 2 * (cell + 1) + 1
+    key[2], key[3] = 2 * (cell + width), 2 * cell + 1
+    for e in range(4):
+        count += exists[e]
+    if count == 2:  # the two crossings in edge order
+        for e in range(4):
+            if exists[e]:
+                order[found] = e
+                found += 1
+        for e in range(2):
+            segments[2 * e], segments[2 * e + 1] = point[order[e]][0], point[order[e]][1]
+            keys[e] = key[order[e]]
+        return 1
+    if count == 4:  # a saddle isolates its inside corners: a and c (top-left, right-bottom) or b and d
+        if sa:
+            order[0], order[1] = 3, 2
+        else:
+            order[0], order[1] = 1, 2
+        segments[0], segments[1] = point[0][0], point[0][1]
+        segments[2], segments[3] = point[order[0]][0], point[order[0]][1]
+        keys[0], keys[1] = key[0], key[order[0]]
+        e = 1 if sa else 3
+        segments[4], segments[5] = point[e][0], point[e][1]
+        segments[6], segments[7] = point[2][0], point[2][1]
+        keys[2], keys[3] = key[e], key[2]
+        return 2
+    return 0
+
+
+def cell_segments(const real[:, ::1] phi, const Py_ssize_t[::1] cells, double[:, :, :, ::1] segments,
+                  Py_ssize_t[:, :, ::1] keys):
+    """Marching-squares segments of phi's zero set in the grid cells ``cells`` (flat indices
+    ``row * (N - 1) + col``) (:func:`activecontour.backends.levelset.zeroset._cell_segments`).
+
+    ``segments (K, 2, 2, 2)`` (slot, end, row/col) and ``keys (K, 2, 2)`` are written where a
+    cell has segments and left as they are elsewhere (fill them with NaN and -1).  The keys name
+    each end's grid edge, for a grid of N columns."""
+    cdef Py_ssize_t n = phi.shape[1], k, row, col
+    with nogil:
+        for k in range(cells.shape[0]):
+            row = cells[k] // (n - 1)
+            col = cells[k] % (n - 1)
+            _marching_cell(phi[row, col], phi[row, col + 1], phi[row + 1, col + 1], phi[row + 1, col],
+                           <double> row, <double> col, row * n + col, n, &segments[k, 0, 0, 0],
+                           &keys[k, 0, 0])
+
+
+cdef inline double _padded(const real[:, ::1] phi, Py_ssize_t row, Py_ssize_t col) noexcept nogil:
+    """phi padded by one pixel of ``-|phi|`` (zeroset._closed_padding) at (row, col) of the padded grid."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1]
+    cdef double value = phi[_clamp(row - 1, m), _clamp(col - 1, n)]
+    if (row == 0 or row == m + 1 or col == 0 or col == n + 1) and value > 0:
+        value = -value
+    return -1e-300 if value == 0 else value
+
+
+cdef inline Py_ssize_t _oriented(const real[:, ::1] phi, Py_ssize_t row, Py_ssize_t col,
+                                 double[:, :, ::1] out, Py_ssize_t count) noexcept nogil:
+    """The segments of cell (row, col) of the padded grid, each directed with the inside on its left
+    and shifted to the image's coordinates, appended to ``out`` at ``count``; the new count."""
+    cdef double a = _padded(phi, row, col), b = _padded(phi, row, col + 1)
+    cdef double c = _padded(phi, row + 1, col + 1), d = _padded(phi, row + 1, col)
+    cdef double segments[8]
+    cdef Py_ssize_t keys[4]
+    cdef Py_ssize_t made = _marching_cell(a, b, c, d, <double> row, <double> col, 0, 0, segments, keys)
+    cdef Py_ssize_t s, inside = (a > 0) + (b > 0) + (c > 0) + (d > 0)
+    cdef double ref_r, ref_c, tangent_r, tangent_c
+    for s in range(made):
+        # a point on the inside of the segment: the mean of the inside corners of a simple cell;
+        # in a saddle each segment cuts off one inside corner (a and c, or b and d)
+        if made == 2:
+            ref_r = row + (0.0 if s == 0 else 1.0)
+            ref_c = col + ((0.0 if s == 0 else 1.0) if a > 0 else (1.0 if s == 0 else 0.0))
+        else:
+            ref_r = row + ((c > 0) + (d > 0)) / <double> inside
+            ref_c = col + ((b > 0) + (c > 0)) / <double> inside
+        tangent_r = segments[4 * s + 2] - segments[4 * s]
+        tangent_c = segments[4 * s + 3] - segments[4 * s + 1]
+        ref_r -= segments[4 * s]
+        ref_c -= segments[4 * s + 1]
+        # inside on the left: (x - p) . nu < 0 for the inside point x
+        if ref_r * tangent_c - ref_c * tangent_r > 0:
+            out[count, 0, 0], out[count, 0, 1] = segments[4 * s + 2] - 1.0, segments[4 * s + 3] - 1.0
+            out[count, 1, 0], out[count, 1, 1] = segments[4 * s] - 1.0, segments[4 * s + 1] - 1.0
+        else:
+            out[count, 0, 0], out[count, 0, 1] = segments[4 * s] - 1.0, segments[4 * s + 1] - 1.0
+            out[count, 1, 0], out[count, 1, 1] = segments[4 * s + 2] - 1.0, segments[4 * s + 3] - 1.0
+        count += 1
+    return count
+
+
+def edge_soup(const real[:, ::1] phi, const Py_ssize_t[::1] cells, double[:, :, ::1] out):
+    """The oriented zero-set segments of phi padded by ``-|phi|``
+    (:func:`activecontour.backends.levelset.zeroset._edge_soup`): the image's cells ``cells`` with a
+    sign change (flat ``row * (N - 1) + col``), then the frame's cells next to an inside pixel (top,
+    bottom, left, right), two slots a cell, in image coordinates.  ``out`` holds at least
+    ``2 (K + 2 (N + 1) + 2 (M - 1))`` segments; returns how many were written."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], k, col, row, side, pixel, count = 0
+    with nogil:
+        for k in range(cells.shape[0]):
+            count = _oriented(phi, cells[k] // (n - 1) + 1, cells[k] % (n - 1) + 1, out, count)
+        for side in range(2):  # the frame's top and bottom rows of cells
+            row, pixel = side * m, side * (m - 1)
+            for col in range(n + 1):
+                if phi[pixel, _clamp(col - 1, n)] > 0 or phi[pixel, _clamp(col, n)] > 0:
+                    count = _oriented(phi, row, col, out, count)
+        for side in range(2):  # its left and right columns
+            col, pixel = side * n, side * (n - 1)
+            for row in range(1, m):
+                if phi[row - 1, pixel] > 0 or phi[row, pixel] > 0:
+                    count = _oriented(phi, row, col, out, count)
     return count

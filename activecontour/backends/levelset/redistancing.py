@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _corners
+from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells
 from activecontour.geometry.curve import subdivide
 from activecontour.geometry.raster import rasterize
 
@@ -226,8 +226,7 @@ def _front_segments(phi, positive, rows, cols, cells):
     Gamma once, and empty saddle slots) and ``nearest (F,)``, an index into it.
     """
     m, n = phi.shape
-    cell_r, cell_c = np.divmod(cells, n - 1)
-    segments, keys = _cell_segments(*_corners(phi, cell_r, cell_c), cell_r, cell_c, n)
+    segments, keys = _cell_segments(phi, cells)
     segments, keys = segments.reshape(-1, 2, 2), keys.reshape(-1, 2)
     # the cells around every front pixel, as slots into ``cells`` (sorted; -1: none, or no sign
     # change): a search in the list of cells, not a lookup table over the image

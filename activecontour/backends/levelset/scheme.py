@@ -80,7 +80,7 @@ class _Problem:
         along the domain edge.  An empty region has the evaluator's value for the empty set.
         """
         cells = state.cells if state.cells is not None else _change_cells(state.positive)
-        points = _edge_soup(state.phi, state.positive, cells).reshape(-1, 2)
+        points = _edge_soup(state.phi, cells).reshape(-1, 2)
         next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
         return evaluate(self.model, points, next_index, self.params, empty_ok=True)
 
