@@ -12,7 +12,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
-* :func:`grow_band`, :func:`cell_segments`, :func:`edge_soup` -- :mod:`activecontour.backends.levelset`
+* :func:`grow_band`, :func:`front_and_cells`, :func:`cell_segments`, :func:`edge_soup` --
+  :mod:`activecontour.backends.levelset`
   (the narrow band's distances, the marching-squares segments of the zero set and their oriented
   soup, which the common evaluator scores by (6.38)).
 
@@ -1418,3 +1419,68 @@ def edge_soup(const real[:, ::1] phi, const Py_ssize_t[::1] cells, double[:, :, 
                 if phi[row - 1, pixel] > 0 or phi[row, pixel] > 0:
                     count = _oriented(phi, row, col, out, count)
     return count
+
+
+cdef inline bint _on_front(const unsigned char[:, ::1] positive, Py_ssize_t r, Py_ssize_t c) noexcept nogil:
+    """Whether pixel (r, c) has a 4-neighbour on the other side."""
+    cdef Py_ssize_t m = positive.shape[0], n = positive.shape[1]
+    cdef unsigned char side = positive[r, c]
+    return ((r > 0 and positive[r - 1, c] != side) or (r < m - 1 and positive[r + 1, c] != side)
+            or (c > 0 and positive[r, c - 1] != side) or (c < n - 1 and positive[r, c + 1] != side))
+
+
+def front_and_cells(const unsigned char[:, ::1] positive, const Py_ssize_t[::1] seeds,
+                    unsigned char[::1] mark, Py_ssize_t[::1] front, Py_ssize_t[::1] cells):
+    """The front pixels among ``seeds`` and their 4-neighbours, and the cells with a sign change
+    around them (:func:`activecontour.backends.levelset.redistancing._front_and_cells`).
+
+    ``seeds``: flat pixel indices (repeats allowed); ``mark``: M N zeros, returned cleared.
+    ``front`` (room for 5 seeds each) gets the front pixels (those with a 4-neighbour on the
+    other side), ``cells`` (room for 4 front pixels each) the cells ``row * (N - 1) + col`` around
+    them whose corners are not all on one side, each once, in no particular order.  Returns the
+    two counts."""
+    cdef Py_ssize_t m = positive.shape[0], n = positive.shape[1]
+    cdef Py_ssize_t i, k, s, r, c, p, n_front = 0, n_cells = 0
+    cdef unsigned char corner
+    with nogil:
+        for i in range(seeds.shape[0]):
+            r, c = seeds[i] // n, seeds[i] % n
+            for s in range(5):
+                p = r + (s == 1) - (s == 2)
+                k = c + (s == 3) - (s == 4)
+                if p < 0 or p >= m or k < 0 or k >= n or mark[p * n + k]:
+                    continue
+                mark[p * n + k] = 1
+                if _on_front(positive, p, k):
+                    front[n_front] = p * n + k
+                    n_front += 1
+        for i in range(seeds.shape[0]):  # clear the marks
+            r, c = seeds[i] // n, seeds[i] % n
+            for s in range(5):
+                p = r + (s == 1) - (s == 2)
+                k = c + (s == 3) - (s == 4)
+                if 0 <= p < m and 0 <= k < n:
+                    mark[p * n + k] = 0
+        # every cell with a sign change has an edge with one, whose ends are front pixels; a cell
+        # is marked at its top-left pixel
+        for i in range(n_front):
+            r, c = front[i] // n, front[i] % n
+            for s in range(4):
+                p = r - 1 + s // 2
+                k = c - 1 + s % 2
+                if p < 0 or p >= m - 1 or k < 0 or k >= n - 1 or mark[p * n + k]:
+                    continue
+                mark[p * n + k] = 1
+                corner = positive[p, k]
+                if positive[p, k + 1] != corner or positive[p + 1, k + 1] != corner \
+                        or positive[p + 1, k] != corner:
+                    cells[n_cells] = p * (n - 1) + k
+                    n_cells += 1
+        for i in range(n_front):
+            r, c = front[i] // n, front[i] % n
+            for s in range(4):
+                p = r - 1 + s // 2
+                k = c - 1 + s % 2
+                if 0 <= p < m - 1 and 0 <= k < n - 1:
+                    mark[p * n + k] = 0
+    return n_front, n_cells

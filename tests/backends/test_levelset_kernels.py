@@ -9,6 +9,7 @@ zeros, regions on the border, in float32 and float64.
 import numpy as np
 import pytest
 
+from activecontour.backends.levelset.redistancing import _front_and_cells, _front_pixels
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _edge_soup
 
 
@@ -118,3 +119,24 @@ def test_edge_soup_equals_the_numpy_padding_and_orientation(dtype):
     assert np.sum(np.hypot(*tangent.T)) == pytest.approx(2 * (2 + 3) + 4 * np.sqrt(0.5))
     area = 0.5 * np.sum(soup[:, 0, 0] * soup[:, 1, 1] - soup[:, 1, 0] * soup[:, 0, 1])
     assert area == pytest.approx(3 * 4 - 4 * 0.125)
+
+
+def test_front_and_cells_near_seeds_equal_the_image_wide_search():
+    # the front pixels among the seeds and their 4-neighbours are those of the image-wide test
+    # there; seeded with the whole front, the cells around it are every cell with a sign change
+    rng = np.random.default_rng(13)
+    for _ in range(300):
+        m, n = rng.integers(2, 20, 2)
+        positive = rng.random((m, n)) < rng.random()
+        seeds = rng.integers(0, m * n, rng.integers(0, 3 * m))
+        mark = np.zeros(m * n, dtype=np.uint8)
+        front, _ = _front_and_cells(positive, seeds, mark)
+        rows, cols = np.divmod(seeds, n)
+        near = np.zeros((m, n), dtype=bool)
+        for dr, dc in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)):
+            keep = (rows + dr >= 0) & (rows + dr < m) & (cols + dc >= 0) & (cols + dc < n)
+            near[rows[keep] + dr, cols[keep] + dc] = True
+        np.testing.assert_array_equal(front, np.flatnonzero(near & _front_pixels(positive)))
+        assert not mark.any()  # handed back cleared
+        _, cells = _front_and_cells(positive, np.flatnonzero(_front_pixels(positive)), mark)
+        np.testing.assert_array_equal(cells, _change_cells(positive))

@@ -31,8 +31,9 @@ class _Scratch:
     """Work arrays of the band growth kept between calls, cleared on the band's pixels only.
 
     A framed (M + 2) x (N + 2) grid: ``visited`` (the frame marked, sparing every bounds check)
-    and ``owner`` (segment ids, -1: none).  Filling them anew for every reinitialisation would
-    touch every pixel; clearing what one band touched is O(band).
+    and ``owner`` (segment ids, -1: none); ``mark``, M x N, for the search of the front next to
+    the previous one.  Filling them anew for every reinitialisation would touch every pixel;
+    clearing what one band touched is O(band).
     """
 
     def __init__(self, shape):
@@ -42,6 +43,7 @@ class _Scratch:
         visited[0], visited[-1], visited[:, 0], visited[:, -1] = True, True, True, True
         self.visited = visited.ravel()
         self.owner = np.full((m + 2) * self.width, -1, dtype=np.int32)
+        self.mark = np.zeros(m * n, dtype=np.uint8)
 
     def clear(self, touched):
         self.visited[touched] = False
@@ -101,13 +103,15 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
         front = np.flatnonzero(_front_pixels(positive))
     else:
         switched = np.flatnonzero(positive != previous.positive)
-        front = _front_among(positive, np.concatenate([previous.front, switched]))
+        mark = np.zeros(phi.size, dtype=np.uint8) if scratch is None else scratch.mark
+        front, cells = _front_and_cells(positive, np.concatenate([previous.front, switched]), mark)
     if front.size == 0 and positive.all():
         return _domain_edge_distance(phi.shape, band, dtype)
     if front.size == 0:
         return _Redistanced(_clipped(positive, band, dtype), positive, np.zeros(0, dtype=np.intp),
                             np.zeros(0), np.zeros(0, dtype=np.intp), front)
-    cells = _change_cells(positive) if previous is None else _cells_around(positive, front)
+    if previous is None:
+        cells = _change_cells(positive)
     rows, cols = np.divmod(front, phi.shape[1])
     segments, nearest = _front_segments(phi, positive, rows, cols, cells)
     # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
@@ -129,45 +133,20 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
     return state
 
 
-def _unique(flat):
-    """The distinct values of an integer array, sorted."""
-    flat = np.sort(flat)
-    return flat[np.concatenate([[True], flat[1:] != flat[:-1]])] if flat.size else flat
+def _front_and_cells(positive, seeds, mark):
+    """The front pixels among ``seeds`` (flat indices) and their 4-neighbours, and the cells with a
+    sign change (as :func:`zeroset._change_cells`) around them, both sorted.
 
-
-def _front_among(positive, seeds):
-    """The front pixels among ``seeds`` (flat indices) and their 4-neighbours, sorted."""
-    m, n = positive.shape
-    rows, cols = np.divmod(seeds, n)
-    rows = np.concatenate([rows, rows - 1, rows + 1, rows, rows])
-    cols = np.concatenate([cols, cols, cols, cols - 1, cols + 1])
-    keep = (rows >= 0) & (rows < m) & (cols >= 0) & (cols < n)
-    candidates = _unique(rows[keep] * n + cols[keep])
-    rows, cols = np.divmod(candidates, n)
-    side = positive[rows, cols]
-    front = np.zeros(candidates.size, dtype=bool)
-    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-        r, c = rows + dr, cols + dc
-        inside = (r >= 0) & (r < m) & (c >= 0) & (c < n)
-        front[inside] |= positive[r[inside], c[inside]] != side[inside]
-    return candidates[front]
-
-
-def _cells_around(positive, front):
-    """The cells with a sign change (as :func:`zeroset._change_cells`) from the front pixels: every
-    such cell has an edge with a sign change, whose two ends are front pixels."""
-    m, n = positive.shape
-    rows, cols = np.divmod(front, n)
-    rows = np.concatenate([rows - 1, rows - 1, rows, rows])
-    cols = np.concatenate([cols - 1, cols, cols - 1, cols])
-    keep = (rows >= 0) & (rows < m - 1) & (cols >= 0) & (cols < n - 1)
-    cells = _unique(rows[keep] * (n - 1) + cols[keep])
-    r, c = np.divmod(cells, n - 1)
-    corner = positive[r, c]
-    change = corner != positive[r, c + 1]
-    change |= corner != positive[r + 1, c + 1]
-    change |= corner != positive[r + 1, c]
-    return cells[change]
+    Every cell with a sign change has an edge with one, whose two ends are front pixels, so the
+    cells around the front are all of them.  ``mark``: M N zeros (uint8), returned cleared.
+    Compiled: :func:`activecontour._kernels.front_and_cells`, O(seeds).
+    """
+    seeds = np.ascontiguousarray(seeds, dtype=np.intp)
+    front = np.empty(5 * seeds.size, dtype=np.intp)
+    cells = np.empty(4 * front.size, dtype=np.intp)
+    n_front, n_cells = _kernels.front_and_cells(np.ascontiguousarray(positive).view(np.uint8), seeds, mark,
+                                                front, cells)
+    return np.sort(front[:n_front]), np.sort(cells[:n_cells])
 
 
 def _domain_edge_distance(shape, band, dtype=np.float64):
