@@ -12,17 +12,17 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
-* :func:`grow_band`, :func:`front_and_cells`, :func:`cell_segments`, :func:`edge_soup` --
-  :mod:`activecontour.backends.levelset`
-  (the narrow band's distances, the marching-squares segments of the zero set and their oriented
-  soup, which the common evaluator scores by (6.38)).
+* :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
+  :func:`band_distances`, :func:`edge_soup`, :func:`swept_area` -- :mod:`activecontour.backends.levelset`
+  (the front, the marching-squares segments of the zero set, the narrow band's distances, the
+  oriented soup of segments that the common evaluator scores by (6.38), the area swept by Gamma).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
 """
 
 from cpython.exc cimport PyErr_CheckSignals
-from libc.math cimport sqrt
+from libc.math cimport M_PI, fabs, sin, sqrt
 from libc.stdlib cimport calloc, free, malloc, realloc
 
 cdef Py_ssize_t _POLL_ROWS = 256
@@ -1484,3 +1484,107 @@ def front_and_cells(const unsigned char[:, ::1] positive, const Py_ssize_t[::1] 
                 if 0 <= p < m - 1 and 0 <= k < n - 1:
                     mark[p * n + k] = 0
     return n_front, n_cells
+
+
+def band_distances(const Py_ssize_t[::1] framed, int[::1] owner, unsigned char[::1] visited,
+                   Py_ssize_t width, const unsigned char[::1] positive, double band, double least,
+                   const double[::1] start_r, const double[::1] start_c, const double[::1] dir_r,
+                   const double[::1] dir_c, const double[::1] inverse, real[::1] phi, Py_ssize_t[::1] flat):
+    """The signed distances of the band's pixels from their segments (after :func:`grow_band`).
+
+    For each framed pixel ``framed[i]`` (row length ``width``): its distance to segment
+    ``owner[...]`` (-1: the far sentinel, the last one), at least ``least``, signed by its side
+    (``positive``, flat over the M x N image), clipped to ``+-band`` and written to ``phi`` (flat);
+    ``flat[i]`` gets its index in the image.  Clears the pixel's ``visited`` and ``owner``."""
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1, i, p, k, index
+    cdef double distance
+    with nogil:
+        for i in range(framed.shape[0]):
+            p = framed[i]
+            k = owner[p]
+            distance = sqrt(_segment_gap(<double> (p // width - 1), <double> (p % width - 1),
+                                         sentinel if k < 0 else k, start_r, start_c, dir_r, dir_c, inverse))
+            owner[p] = -1
+            visited[p] = 0
+            index = (p // width - 1) * (width - 2) + (p % width - 1)
+            flat[i] = index
+            # every pixel keeps its side, at least ``least`` from Gamma
+            if distance < least:
+                distance = least
+            if distance > band:
+                distance = band
+            phi[index] = distance if positive[index] else -distance
+
+
+def nearest_segments(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t[::1] cells,
+                     const float[::1] start_r, const float[::1] start_c, const float[::1] dir_r,
+                     const float[::1] dir_c, const float[::1] inverse, Py_ssize_t[::1] nearest):
+    """The nearest zero-set segment to each front pixel among those of the four cells around it
+    (:func:`activecontour.backends.levelset.redistancing._front_segments`), in float32.
+
+    ``front``: flat pixel indices of an image of ``n`` columns; ``cells``: the sorted cells with a
+    sign change (``row * (n - 1) + col``), two segment slots each (segment ``2 slot + s``), the
+    segment columns ending with a far sentinel.  The first nearest in the order of the cells
+    top-left, top-right, bottom-left, bottom-right and their slots; -1 where no cell has one."""
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1, count = cells.shape[0]
+    cdef Py_ssize_t i, j, s, r, c, rr, cc, key, low, high, mid, candidate, k, own
+    cdef float pr, pc, off_r, off_c, t, gap, best
+    with nogil:
+        for i in range(front.shape[0]):
+            r, c = front[i] // n, front[i] % n
+            pr, pc = <float> r, <float> c
+            own, best = -1, 0
+            for j in range(4):
+                rr, cc = r - 1 + j // 2, c - 1 + j % 2
+                candidate = -1
+                if rr >= 0 and cc >= 0 and cc < n - 1:
+                    key = rr * (n - 1) + cc
+                    low, high = 0, count  # the first cell >= key
+                    while low < high:
+                        mid = (low + high) // 2
+                        if cells[mid] < key:
+                            low = mid + 1
+                        else:
+                            high = mid
+                    if low < count and cells[low] == key:
+                        candidate = low
+                for s in range(2):
+                    k = sentinel if candidate < 0 else 2 * candidate + s
+                    off_r = pr - start_r[k]
+                    off_c = pc - start_c[k]
+                    t = (off_r * dir_r[k] + off_c * dir_c[k]) * inverse[k]
+                    t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+                    off_r = off_r - t * dir_r[k]
+                    off_c = off_c - t * dir_c[k]
+                    gap = off_r * off_r + off_c * off_c
+                    if (j == 0 and s == 0) or gap < best:
+                        own, best = (-1 if candidate < 0 else 2 * candidate + s), gap
+            nearest[i] = own
+
+
+cdef inline double _heaviside(double s) noexcept nogil:
+    """The cosine-regularised Heaviside of width 1 (scheme.heaviside)."""
+    if s >= 1.0:
+        return 1.0
+    if s <= -1.0:
+        return 0.0
+    return 0.5 * (1.0 + s + sin(M_PI * s) / M_PI)
+
+
+def swept_area(const real[::1] old, const real[::1] new, const Py_ssize_t[::1] old_band,
+               const Py_ssize_t[::1] new_band, unsigned char[::1] mark):
+    """``sum |H(new) - H(old)|`` over the pixels of either band, each once
+    (:func:`activecontour.backends.levelset.scheme._swept_area`); ``mark``: zeros, returned cleared."""
+    cdef double total = 0.0
+    cdef Py_ssize_t i, p
+    with nogil:
+        for i in range(old_band.shape[0] + new_band.shape[0]):
+            p = old_band[i] if i < old_band.shape[0] else new_band[i - old_band.shape[0]]
+            if not mark[p]:
+                mark[p] = 1
+                total += fabs(_heaviside(new[p]) - _heaviside(old[p]))
+        for i in range(old_band.shape[0]):
+            mark[old_band[i]] = 0
+        for i in range(new_band.shape[0]):
+            mark[new_band[i]] = 0
+    return total

@@ -9,7 +9,14 @@ zeros, regions on the border, in float32 and float64.
 import numpy as np
 import pytest
 
-from activecontour.backends.levelset.redistancing import _front_and_cells, _front_pixels
+from activecontour.backends.levelset import heaviside
+from activecontour.backends.levelset.redistancing import (
+    _front_and_cells,
+    _front_pixels,
+    _front_segments,
+    _redistance,
+)
+from activecontour.backends.levelset.scheme import _swept_area
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _edge_soup
 
 
@@ -140,3 +147,51 @@ def test_front_and_cells_near_seeds_equal_the_image_wide_search():
         assert not mark.any()  # handed back cleared
         _, cells = _front_and_cells(positive, np.flatnonzero(_front_pixels(positive)), mark)
         np.testing.assert_array_equal(cells, _change_cells(positive))
+
+
+def _point_segment_distance(point, start, end):
+    direction, offset = end - start, point - start
+    t = np.clip(offset @ direction / (direction @ direction), 0.0, 1.0)
+    return np.hypot(*(offset - t * direction))
+
+
+def test_nearest_segment_of_a_front_pixel_is_the_nearest_in_the_four_cells_around_it():
+    rng = np.random.default_rng(14)
+    for _ in range(100):
+        phi = rng.normal(size=tuple(rng.integers(2, 14, 2)))
+        m, n = phi.shape
+        front = np.flatnonzero(_front_pixels(phi > 0))
+        if front.size == 0:
+            continue
+        cells = _change_cells(phi > 0)
+        segments, _ = _cell_segments(phi, cells)
+        _, nearest = _front_segments(phi, front, cells)
+        for pixel, chosen in zip(front, nearest, strict=True):
+            r, c = divmod(pixel, n)
+            around = [(r + dr) * (n - 1) + c + dc for dr in (-1, 0) for dc in (-1, 0)
+                      if 0 <= r + dr < m - 1 and 0 <= c + dc < n - 1]
+            gaps = [_point_segment_distance(np.array([r, c], float), *segments[slot, s])
+                    for slot in np.flatnonzero(np.isin(cells, around)) for s in range(2)
+                    if not np.isnan(segments[slot, s, 0, 0])]
+            # a front pixel has a 4-neighbour on the other side: a segment crosses that edge
+            assert gaps and min(gaps) <= 1.0
+            picked = _point_segment_distance(np.array([r, c], float), *segments.reshape(-1, 2, 2)[chosen])
+            assert picked == pytest.approx(min(gaps), abs=1e-5)  # ranked in float32
+
+
+def test_swept_area_counts_each_pixel_of_either_band_once():
+    rng = np.random.default_rng(15)
+    rows, cols = np.indices((40, 50), dtype=np.float64)
+    for _ in range(20):
+        centre, radius = rng.uniform(15, 25, 2), rng.uniform(5, 12)
+        old = _redistance(radius - np.hypot(rows - centre[0], cols - centre[1]), 4.0)
+        moved = centre + rng.normal(size=2)
+        new = _redistance(radius + rng.normal() - np.hypot(rows - moved[0], cols - moved[1]), 4.0)
+        union = np.union1d(old.near_flat, new.near_flat)
+        expected = np.sum(np.abs(heaviside(new.phi.ravel()[union]) - heaviside(old.phi.ravel()[union])))
+        mark = np.zeros(old.phi.size, dtype=np.uint8)
+        assert _swept_area(old, new, mark) == pytest.approx(expected, rel=1e-12)
+        assert not mark.any()
+        # beyond both bands phi is +-band on the same side in both: nothing more is swept there
+        everywhere = np.sum(np.abs(heaviside(new.phi) - heaviside(old.phi)))
+        assert _swept_area(old, new) == pytest.approx(everywhere, rel=1e-12)

@@ -139,7 +139,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
         if evaluation is not None:
             n_iter += 1
             # mean normal displacement of Gamma in this iteration, pixels: swept area over length
-            moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+            moves.append(_swept_area(state, trial, problem.scratch.mark)
+                         / max(evaluation.length, current.length, 1.0))
             problem.recycle(state.phi)
             state, current = trial, evaluation
             energies.append(current.energy)

@@ -18,11 +18,10 @@ _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1,
 class _Redistanced:
     """A band-clipped signed distance, the pixels of its band and the cells Gamma crosses."""
 
-    def __init__(self, phi, positive, near_flat, near_distance, cells, front):
+    def __init__(self, phi, positive, near_flat, cells, front):
         self.phi = phi  # (M, N), exact within the band, +-band beyond
         self.positive = positive  # phi > 0
         self.near_flat = near_flat  # flat indices of the pixels whose distance was computed
-        self.near_distance = near_distance  # their signed distances (float64)
         self.cells = cells  # the cells with a sign change (zeroset._change_cells), the same after
         self.front = front  # flat indices of the pixels with a 4-neighbour on the other side
 
@@ -44,10 +43,6 @@ class _Scratch:
         self.visited = visited.ravel()
         self.owner = np.full((m + 2) * self.width, -1, dtype=np.int32)
         self.mark = np.zeros(m * n, dtype=np.uint8)
-
-    def clear(self, touched):
-        self.visited[touched] = False
-        self.owner[touched] = -1
 
 
 def signed_distance(phi, band=np.inf):
@@ -109,11 +104,11 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
         return _domain_edge_distance(phi.shape, band, dtype)
     if front.size == 0:
         return _Redistanced(_clipped(positive, band, dtype), positive, np.zeros(0, dtype=np.intp),
-                            np.zeros(0), np.zeros(0, dtype=np.intp), front)
+                            np.zeros(0, dtype=np.intp), front)
     if previous is None:
         cells = _change_cells(positive)
     rows, cols = np.divmod(front, phi.shape[1])
-    segments, nearest = _front_segments(phi, positive, rows, cols, cells)
+    segments, nearest = _front_segments(phi, front, cells)
     # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
     # of a narrow band, one sweep and the walk along Gamma are
     sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
@@ -162,7 +157,7 @@ def _domain_edge_distance(shape, band, dtype=np.float64):
     distance = np.minimum(to_rows[:, None], to_cols[None, :])
     near = np.flatnonzero(distance < band)
     return _Redistanced(np.minimum(distance, band).astype(dtype), np.ones(shape, dtype=bool), near,
-                        distance.ravel()[near], np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp))
+                        np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp))
 
 
 def _clipped(positive, band, dtype=np.float64):
@@ -198,30 +193,22 @@ def _segment_distance(points, starts, ends):
     return np.where(np.isnan(gap), np.inf, gap)
 
 
-def _front_segments(phi, positive, rows, cols, cells):
+def _front_segments(phi, front, cells):
     """The zero-set segments (every cell with a sign change) and the nearest one to each front pixel.
 
-    ``cells``: the cells with a sign change.  Returns a :class:`_Segments` (every segment of
-    Gamma once, and empty saddle slots) and ``nearest (F,)``, an index into it.
+    ``front``: the front pixels (flat indices); ``cells``: the cells with a sign change, sorted.
+    A front pixel is within one pixel of Gamma, so its nearest segment lies in one of the four
+    cells around it: the first nearest among their segments, in float32 (ample to rank them),
+    found by a search in the list of cells, not a lookup table over the image (compiled:
+    :func:`activecontour._kernels.nearest_segments`).  Returns a :class:`_Segments` (every
+    segment of Gamma once, and empty saddle slots) and ``nearest (F,)``, an index into it (-1:
+    none).
     """
-    m, n = phi.shape
     segments, keys = _cell_segments(phi, cells)
-    segments, keys = segments.reshape(-1, 2, 2), keys.reshape(-1, 2)
-    # the cells around every front pixel, as slots into ``cells`` (sorted; -1: none, or no sign
-    # change): a search in the list of cells, not a lookup table over the image
-    around = []
-    for dr, dc in ((-1, -1), (-1, 0), (0, -1), (0, 0)):
-        r, c = rows + dr, cols + dc
-        inside = (r >= 0) & (r < m - 1) & (c >= 0) & (c < n - 1)
-        key = np.where(inside, r * (n - 1) + c, -1)
-        slot = np.minimum(np.searchsorted(cells, key), cells.size - 1)
-        around.append(np.where(inside & (cells[slot] == key), slot, -1))
-    around = np.column_stack(around)
-    candidates = np.where(around[:, :, None] >= 0, 2 * around[:, :, None] + np.arange(2), -1)
-    candidates = candidates.reshape(len(rows), 8)
-    table = _Segments(segments, _links(keys))
-    gap = table.squared_gap(rows.astype(np.float32)[:, None], cols.astype(np.float32)[:, None], candidates)
-    nearest = candidates[np.arange(len(rows)), np.argmin(gap, axis=1)]
+    table = _Segments(segments.reshape(-1, 2, 2), _links(keys.reshape(-1, 2)))
+    nearest = np.empty(front.size, dtype=np.intp)
+    _kernels.nearest_segments(np.ascontiguousarray(front, dtype=np.intp), phi.shape[1],
+                              np.ascontiguousarray(cells, dtype=np.intp), *table.columns32, nearest)
     return table, nearest
 
 
@@ -244,9 +231,11 @@ class _Segments:
     """Segments of Gamma set up for nearest-segment queries; id -1 is a far sentinel.
 
     ``segments (S, 2, 2)`` holds start and end in (row, col), NaN for an empty slot (also far);
-    ``links (S, 2)`` the neighbours of each along Gamma (-1: none).  The queries run in float32
-    (a quarter of the memory traffic, ample to rank candidates on images up to ~10^4 pixels);
-    ``exact=True`` gives float64 for the final distances.
+    ``links (S, 2)`` the neighbours of each along Gamma (-1: none).  ``columns``: start (row,
+    col), direction (row, col) and the inverse squared length, float64, for the distances of the
+    band (:func:`activecontour._kernels.grow_band`, :func:`~activecontour._kernels.band_distances`);
+    ``columns32`` the same in float32 for ranking the candidates of the front pixels (ample on
+    images up to ~10^4 pixels).
     """
 
     def __init__(self, segments, links):
@@ -259,27 +248,14 @@ class _Segments:
         self.columns32 = [column.astype(np.float32) for column in self.columns]
         self.links = np.concatenate([links, [[-1, -1]]])
 
-    def squared_gap(self, point_r, point_c, ids, exact=False):
-        """Squared distance from points to the segments ``ids`` (broadcast together)."""
-        columns = self.columns if exact else self.columns32
-        start_r, start_c, dir_r, dir_c, inverse = (column[ids] for column in columns)
-        off_r = point_r - start_r
-        off_c = point_c - start_c
-        t = (off_r * dir_r + off_c * dir_c) * inverse
-        np.clip(t, 0.0, 1.0, out=t)
-        off_r -= t * dir_r
-        off_c -= t * dir_c
-        off_r *= off_r
-        off_c *= off_c
-        off_r += off_c
-        return off_r
-
 
 def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np.float64,
                scratch=None, base=None):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
-    eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
-    :func:`activecontour._kernels.grow_band`, O(pixels in the band))."""
+    eight neighbours' segments, then walks along Gamma while that gets nearer; then each takes its
+    distance to its segment (compiled loops, :func:`activecontour._kernels.grow_band` and
+    :func:`~activecontour._kernels.band_distances`, O(pixels in the band), the work arrays of
+    ``scratch`` cleared on the band's pixels)."""
     m, n = positive.shape
     scratch = _Scratch((m, n)) if scratch is None else scratch
     width, visited, owner = scratch.width, scratch.visited, scratch.owner
@@ -295,22 +271,16 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     count = _kernels.grow_band(visited.view(np.uint8), owner, out, np.empty(visited.size, np.int32),
                                ring.size, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
                                dir_c, inverse, np.ascontiguousarray(segments.links, dtype=np.intp))
-    framed = out[:count]
-    r, c = np.divmod(framed, width)
-    distance = np.sqrt(segments.squared_gap((r - 1).astype(np.float64), (c - 1).astype(np.float64),
-                                            owner[framed], exact=True))
-    scratch.clear(framed)
-    flat = (r - 1) * n + (c - 1)
-    inside = positive.ravel()[flat]
     # every pixel keeps its side, at least _MIN_DISTANCE from Gamma: the sign pattern, and so the
     # cells Gamma crosses, are those of the input (a distance that rounds to 0 would move an
     # inside pixel out), and no crossing lies closer to a pixel centre than the coordinates
     # resolve (marching squares on values ~1e-20 orients its segments by rounding errors)
-    distance = np.maximum(distance, _MIN_DISTANCE)
-    signed = np.where(inside, distance, -distance)
     phi = _clipped(positive, band, dtype) if base is None else base  # base: +-band beyond the band
-    phi.ravel()[flat] = np.clip(signed, -band, band)
-    return _Redistanced(phi, positive, flat, signed, None, None)
+    flat = np.empty(count, dtype=np.intp)
+    _kernels.band_distances(out[:count], owner, visited.view(np.uint8), width,
+                            np.ascontiguousarray(positive).reshape(-1).view(np.uint8), band, _MIN_DISTANCE,
+                            *segments.columns, phi.reshape(-1), flat)
+    return _Redistanced(phi, positive, flat, None, None)
 
 
 def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from activecontour import _kernels
 from activecontour.backends.levelset.redistancing import _redistance, _Scratch
 from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
@@ -263,16 +264,16 @@ class _Problem:
         return out
 
 
-def _swept_area(old, new):
+def _swept_area(old, new, mark=None):
     """Area between the zero sets of two redistanced states, ``sum_px |H_eps(new) - H_eps(old)|``.
 
     With eps = 1 the integer translates of H_eps sum to the exact length of a half-line (module
     docstring), so this is the exact area between two parallel straight fronts at any sub-pixel
-    offset, and second-order accurate for curved ones.  Only pixels in either band can differ.
+    offset, and second-order accurate for curved ones.  Only pixels in either band can differ:
+    each is counted once (compiled: :func:`activecontour._kernels.swept_area`; ``mark``: M N
+    zeros, uint8, returned cleared).
     """
     if old.near_flat.size == 0 or new.near_flat.size == 0:
         return float(np.count_nonzero(old.positive != new.positive))
-    flat = np.concatenate([old.near_flat, new.near_flat])
-    flat.sort()
-    flat = flat[np.concatenate([[True], flat[1:] != flat[:-1]])]  # each pixel once
-    return float(np.sum(np.abs(heaviside(new.phi.ravel()[flat]) - heaviside(old.phi.ravel()[flat]))))
+    mark = np.zeros(old.phi.size, dtype=np.uint8) if mark is None else mark
+    return _kernels.swept_area(old.phi.reshape(-1), new.phi.reshape(-1), old.near_flat, new.near_flat, mark)
