@@ -13,9 +13,10 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
-  :func:`band_distances`, :func:`edge_soup`, :func:`swept_area` -- :mod:`activecontour.backends.levelset`
-  (the front, the marching-squares segments of the zero set, the narrow band's distances, the
-  oriented soup of segments that the common evaluator scores by (6.38), the area swept by Gamma).
+  :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
+  :func:`divide_spectrum` -- :mod:`activecontour.backends.levelset` (the front, the marching-squares
+  segments of the zero set, the narrow band's distances, the oriented soup of segments that the
+  common evaluator scores by (6.38), the area swept by Gamma, the smoothed-force step).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
@@ -1588,3 +1589,52 @@ def swept_area(const real[::1] old, const real[::1] new, const Py_ssize_t[::1] o
         for i in range(new_band.shape[0]):
             mark[new_band[i]] = 0
     return total
+
+
+def force_step(const float[:, ::1] phi, const double[:, :, ::1] values, double constant,
+               const double[::1] linear, const double[::1] square, double wall, double tau,
+               float[:, ::1] out):
+    """``phi - tau f`` over the image, rounded to float32: the right-hand side of the level set's
+    smoothed-force step (:meth:`activecontour.backends.levelset.scheme._Problem.step`).
+
+    ``f = constant + sum_c v_c (linear_c + square_c v_c)`` is the integrand of (6.41), a
+    quadratic form in the channels ``values (M, N, C)`` (``QuadraticForm.density``, term by term
+    in the same order), plus ``wall`` per side of the image that a pixel lies on."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], channels = values.shape[2]
+    cdef Py_ssize_t block, i, j, ch
+    cdef double f, v
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                for j in range(n):
+                    f = constant
+                    for ch in range(channels):
+                        v = values[i, j, ch]
+                        if square[ch] != 0:
+                            f += v * (linear[ch] + square[ch] * v)
+                        else:
+                            f += linear[ch] * v
+                    if wall > 0:  # the wall term, columns first as in the numpy blocks
+                        if j == 0:
+                            f += wall
+                        if j == n - 1:
+                            f += wall
+                        if i == 0:
+                            f += wall
+                        if i == m - 1:
+                            f += wall
+                    out[i, j] = <float> (phi[i, j] - tau * f)
+        PyErr_CheckSignals()
+
+
+def divide_spectrum(float[:, ::1] spectrum, const float[::1] wave_r, const float[::1] wave_c, float weight):
+    """``spectrum /= 1 + weight (wave_r[:, None] + wave_c[None, :])`` in float32: the operator
+    ``(1 - weight Laplace)^{-1}`` in the DCT-II basis (the eigenvalues of -Laplace per axis)."""
+    cdef Py_ssize_t m = spectrum.shape[0], n = spectrum.shape[1], block, i, j
+    cdef float one = 1.0
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                for j in range(n):
+                    spectrum[i, j] /= one + weight * (wave_r[i] + wave_c[j])
+        PyErr_CheckSignals()

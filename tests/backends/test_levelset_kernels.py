@@ -9,6 +9,7 @@ zeros, regions on the border, in float32 and float64.
 import numpy as np
 import pytest
 
+from activecontour import _kernels
 from activecontour.backends.levelset import heaviside
 from activecontour.backends.levelset.redistancing import (
     _front_and_cells,
@@ -16,8 +17,9 @@ from activecontour.backends.levelset.redistancing import (
     _front_segments,
     _redistance,
 )
-from activecontour.backends.levelset.scheme import _swept_area
+from activecontour.backends.levelset.scheme import _force, _swept_area
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _edge_soup
+from activecontour.models import ChanVeseParameters
 
 
 def _crossings(a, b, c, d, r, q):
@@ -195,3 +197,32 @@ def test_swept_area_counts_each_pixel_of_either_band_once():
         # beyond both bands phi is +-band on the same side in both: nothing more is swept there
         everywhere = np.sum(np.abs(heaviside(new.phi) - heaviside(old.phi)))
         assert _swept_area(old, new) == pytest.approx(everywhere, rel=1e-12)
+
+
+@pytest.mark.parametrize("channels, mu, omega", [(1, 0.3, 0.0), (3, 0.2, 0.05), (1, 0.0, -0.1)])
+def test_force_step_is_phi_minus_tau_f_with_the_wall_term(channels, mu, omega):
+    # f: the model's density of (6.41) plus mu per side of the image a pixel lies on
+    rng = np.random.default_rng(16)
+    m, n = 7, 9
+    values = rng.uniform(size=(m, n, channels))
+    phi = rng.normal(size=(m, n)).astype(np.float32)
+    params = ChanVeseParameters(mu=mu, omega=omega, lambda_in=1.3, lambda_out=0.8)
+    c_in, c_out, tau = rng.uniform(size=channels), rng.uniform(size=channels), 0.37
+    rows, cols = np.indices((m, n))
+    wall = (rows == 0).astype(int) + (rows == m - 1) + (cols == 0) + (cols == n - 1)  # corners: 2
+    f = _force(values, c_in, c_out, params) + mu * wall
+    form = params.load_form(c_in, c_out)
+    out = np.empty_like(phi)
+    _kernels.force_step(phi, values, form.constant, form.linear, form.square, mu, tau, out)
+    np.testing.assert_allclose(out, phi - tau * f, rtol=1e-6, atol=1e-6)  # float32
+
+
+def test_divide_spectrum_applies_the_inverse_of_one_minus_weight_laplace():
+    # after the division, multiplying by 1 + weight (lambda_r + lambda_c) gives the spectrum back
+    rng = np.random.default_rng(17)
+    spectrum = rng.normal(size=(6, 5)).astype(np.float32)
+    wave_r = rng.uniform(0, 4, 6).astype(np.float32)
+    wave_c = rng.uniform(0, 4, 5).astype(np.float32)
+    divided = spectrum.copy()
+    _kernels.divide_spectrum(divided, wave_r, wave_c, np.float32(2.5))
+    np.testing.assert_allclose(divided * (1 + 2.5 * (wave_r[:, None] + wave_c[None, :])), spectrum, rtol=1e-6)

@@ -88,7 +88,7 @@ included.
 Cost and memory: phi is float32 (a distance of a few pixels, rounded to ~2e-7 px, far below
 what the energy or the flow resolve; the marching-squares crossings, the distances and the energy
 are computed in float64 from it).  A step (a) is one DCT pair over the image (O(MN log MN),
-float32, its force computed in blocks of rows); a step (b) works on the band only (explicit, or
+float32, its force computed in one compiled pass); a step (b) works on the band only (explicit, or
 conjugate gradients), but for one copy of phi.  The reinitialisation costs two sign passes over
 the image (the front is searched next to the previous one and the pixels that changed side) plus
 O(band), with work arrays kept between iterations; the energy is O(|Gamma|) from the cells the

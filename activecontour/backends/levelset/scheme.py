@@ -33,11 +33,11 @@ class _Problem:
     """Image, parameters and the pieces of the energy, the force f and the operator S.
 
     phi is float32 (a distance of a few pixels, rounded to ~2e-7 px: far below what the energy or
-    the flow resolve) and the image-wide work is done in blocks of rows, so that no float64 copy of
-    the image is made per step; the reinitialisation reuses its work arrays (:class:`_Scratch`).
+    the flow resolve) and the image-wide work is done in compiled passes without temporaries
+    (:func:`activecontour._kernels.force_step`, :func:`~activecontour._kernels.divide_spectrum`), so
+    that no float64 copy of the image is made per step; the reinitialisation reuses its work
+    arrays (:class:`_Scratch`).
     """
-
-    _BLOCK_ROWS = 256  # rows per block of the image-wide passes (bounded temporaries)
 
     def __init__(self, model, params, settings):
         self.model = model
@@ -90,11 +90,12 @@ class _Problem:
 
         f is :func:`_force` plus ``mu`` per side of the image that a pixel lies on: a region that
         covers a border pixel closes along the domain edge there, and the evaluator counts that
-        length (the wall term).  It is evaluated where a step needs it (:meth:`force_at`,
-        :meth:`force_rows`).  The scale is the mean ``|f|`` over the pixels (a regular sample of
-        about 2^16 of them): about ``|c_in - c_out|^2`` once the regions have settled, the size
-        of the force of every pixel before that (a checkerboard start, where ``c_in ~ c_out``).
-        Time steps are measured in pixels of travel at that force.
+        length (the wall term).  It is evaluated where a step needs it (:meth:`force_at`, and
+        :func:`activecontour._kernels.force_step` over the image).  The scale is the mean ``|f|``
+        over the pixels (a regular sample of about 2^16 of them): about ``|c_in - c_out|^2`` once
+        the regions have settled, the size of the force of every pixel before that (a
+        checkerboard start, where ``c_in ~ c_out``).  Time steps are measured in pixels of travel
+        at that force.
         """
         constants = (np.nan_to_num(np.asarray(c_in, dtype=np.float64)),
                      np.nan_to_num(np.asarray(c_out, dtype=np.float64)))
@@ -114,19 +115,6 @@ class _Problem:
         m, n = self.shape
         row, col = np.divmod(flat, n)
         return (row == 0).astype(np.float64) + (row == m - 1) + (col == 0) + (col == n - 1)
-
-    def force_rows(self, start, stop, constants):
-        """f (with the wall term) on the rows ``start:stop``, (stop - start, N)."""
-        m, _ = self.shape
-        f = _force(self.values[start:stop], *constants, self.params)
-        if self.params.mu > 0:
-            f[:, 0] += self.params.mu
-            f[:, -1] += self.params.mu
-            if start == 0:
-                f[0] += self.params.mu
-            if stop == m:
-                f[-1] += self.params.mu
-        return f
 
     def time_step(self, step, scale):
         """tau for a step of ``step`` pixels at the force ``scale``: ``step / scale``.
@@ -152,7 +140,6 @@ class _Problem:
         """
         if not smooth_force and tau * self.params.mu <= 0.25:
             return self._explicit_step(state, force, tau)
-        m, _ = self.shape
         if not smooth_force:
             weight = tau * self.params.mu
             # S on the band by conjugate gradients (about sqrt(1 + 8 weight) sweeps of the band)
@@ -166,10 +153,11 @@ class _Problem:
             near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
             rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
             return rhs
+        # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
         rhs = self.take()
-        for start in range(0, m, self._BLOCK_ROWS):
-            stop = min(start + self._BLOCK_ROWS, m)
-            rhs[start:stop] = state.phi[start:stop] - tau * self.force_rows(start, stop, force)
+        form = self.params.load_form(*force)
+        _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
+                            tau, rhs)
         return self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs
 
     def _band_smooth(self, state, weight):
@@ -237,12 +225,8 @@ class _Problem:
 
     def _smooth(self, rhs, weight):
         """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can."""
-        m, _ = self.shape
         spectrum = scipy.fft.dctn(rhs, norm="ortho", overwrite_x=True)
-        weight = np.float32(weight)
-        for start in range(0, m, self._BLOCK_ROWS):
-            stop = min(start + self._BLOCK_ROWS, m)
-            spectrum[start:stop] /= 1.0 + weight * (self.wave_r[start:stop, None] + self.wave_c[None, :])
+        _kernels.divide_spectrum(spectrum, self.wave_r, self.wave_c, np.float32(weight))
         return scipy.fft.idctn(spectrum, norm="ortho", overwrite_x=True)
 
     def _explicit_step(self, state, force, tau):
