@@ -14,9 +14,10 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
-  :func:`divide_spectrum` -- :mod:`activecontour.backends.levelset` (the front, the marching-squares
-  segments of the zero set, the narrow band's distances, the oriented soup of segments that the
-  common evaluator scores by (6.38), the area swept by Gamma, the smoothed-force step).
+  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings` --
+  :mod:`activecontour.backends.levelset` (the front, the marching-squares segments of the zero
+  set, the narrow band's distances, the oriented soup of segments that the common evaluator scores
+  by (6.38), the area swept by Gamma, the steps (a) and (b)).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
@@ -1523,13 +1524,17 @@ def nearest_segments(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t
     """The nearest zero-set segment to each front pixel among those of the four cells around it
     (:func:`activecontour.backends.levelset.redistancing._front_segments`), in float32.
 
-    ``front``: flat pixel indices of an image of ``n`` columns; ``cells``: the sorted cells with a
-    sign change (``row * (n - 1) + col``), two segment slots each (segment ``2 slot + s``), the
-    segment columns ending with a far sentinel.  The first nearest in the order of the cells
-    top-left, top-right, bottom-left, bottom-right and their slots; -1 where no cell has one."""
+    ``front``: sorted flat pixel indices of an image of ``n`` columns; ``cells``: the sorted cells
+    with a sign change (``row * (n - 1) + col``), two segment slots each (segment ``2 slot + s``),
+    the segment columns ending with a far sentinel.  The first nearest in the order of the cells
+    top-left, top-right, bottom-left, bottom-right and their slots; -1 where no cell has one.
+    Both lists sorted, the cell at each corner of the front pixels only moves forward: four
+    pointers walk the cells once."""
     cdef Py_ssize_t sentinel = start_r.shape[0] - 1, count = cells.shape[0]
-    cdef Py_ssize_t i, j, s, r, c, rr, cc, key, low, high, mid, candidate, k, own
+    cdef Py_ssize_t i, j, s, r, c, rr, cc, key, candidate, k, own
+    cdef Py_ssize_t pointer[4]
     cdef float pr, pc, off_r, off_c, t, gap, best
+    pointer[0], pointer[1], pointer[2], pointer[3] = 0, 0, 0, 0
     with nogil:
         for i in range(front.shape[0]):
             r, c = front[i] // n, front[i] % n
@@ -1539,16 +1544,11 @@ def nearest_segments(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t
                 rr, cc = r - 1 + j // 2, c - 1 + j % 2
                 candidate = -1
                 if rr >= 0 and cc >= 0 and cc < n - 1:
-                    key = rr * (n - 1) + cc
-                    low, high = 0, count  # the first cell >= key
-                    while low < high:
-                        mid = (low + high) // 2
-                        if cells[mid] < key:
-                            low = mid + 1
-                        else:
-                            high = mid
-                    if low < count and cells[low] == key:
-                        candidate = low
+                    key = rr * (n - 1) + cc  # increases with the front pixel
+                    while pointer[j] < count and cells[pointer[j]] < key:
+                        pointer[j] += 1
+                    if pointer[j] < count and cells[pointer[j]] == key:
+                        candidate = pointer[j]
                 for s in range(2):
                     k = sentinel if candidate < 0 else 2 * candidate + s
                     off_r = pr - start_r[k]
@@ -1638,3 +1638,89 @@ def divide_spectrum(float[:, ::1] spectrum, const float[::1] wave_r, const float
                 for j in range(n):
                     spectrum[i, j] /= one + weight * (wave_r[i] + wave_c[j])
         PyErr_CheckSignals()
+
+
+cdef inline double _density(const double[:, ::1] values, Py_ssize_t p, double constant,
+                            const double[::1] linear, const double[::1] square) noexcept nogil:
+    """``constant + sum_c v_c (linear_c + square_c v_c)`` at pixel p, term by term as
+    ``QuadraticForm.density``."""
+    cdef double f = constant, v
+    cdef Py_ssize_t ch
+    for ch in range(values.shape[1]):
+        v = values[p, ch]
+        if square[ch] != 0:
+            f += v * (linear[ch] + square[ch] * v)
+        else:
+            f += linear[ch] * v
+    return f
+
+
+def explicit_step(const float[::1] phi, const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n,
+                  double rate, double band, const double[:, ::1] values, double constant,
+                  const double[::1] linear, const double[::1] square, double mu, double tau,
+                  float[::1] out):
+    """``phi + rate Laplace(phi) - tau f`` at the band's pixels ``flat``, written to ``out``
+    (:meth:`activecontour.backends.levelset.scheme._Problem._explicit_step`).
+
+    The 5-point Laplacian with mirrored pixels at the image border (Neumann), its four neighbours
+    summed in float32; the force f of (6.41) (the quadratic form of ``values (M N, C)`` plus
+    ``mu`` times the number of image sides the pixel lies on) only where ``|phi| < band``."""
+    cdef Py_ssize_t i, p, r, c
+    cdef float around
+    cdef double centre, moved, f
+    with nogil:
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            r, c = p // n, p % n
+            centre = phi[p]
+            around = phi[p - n if r > 0 else p] + phi[p + n if r < m - 1 else p]
+            around = around + phi[p - 1 if c > 0 else p]
+            around = around + phi[p + 1 if c < n - 1 else p]
+            moved = centre + rate * (around - 4.0 * centre)
+            if fabs(centre) < band:
+                f = _density(values, p, constant, linear, square)
+                if mu > 0:
+                    f += mu * <double> ((r == 0) + (r == m - 1) + (c == 0) + (c == n - 1))
+                moved -= tau * f
+            out[p] = <float> moved
+
+
+def band_couplings(const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n, int[::1] index,
+                   Py_ssize_t[:, ::1] couplings, Py_ssize_t[:, ::1] held, double[::1] degree):
+    """The 4-neighbours (up, down, left, right) of the band's pixels ``flat``, for the solve of S on
+    the band (:meth:`activecontour.backends.levelset.scheme._Problem._band_smooth`).
+
+    ``couplings[d, i]``: the band index of pixel i's neighbour d, -1 where it is beyond the band
+    or the image; ``held[d, i]``: its flat index where it is in the image but beyond the band,
+    else -1; ``degree[i]``: the number of neighbours in the image.  ``index``: a framed
+    (M + 2) x (N + 2) array of -1 (row length N + 2), returned so."""
+    cdef Py_ssize_t width = n + 2, i, d, p, q, r, c, k
+    cdef bint exists
+    with nogil:
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            index[(p // n + 1) * width + p % n + 1] = <int> i
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            r, c = p // n, p % n
+            degree[i] = 0.0
+            for d in range(4):
+                if d == 0:
+                    exists, q = r > 0, p - n
+                elif d == 1:
+                    exists, q = r < m - 1, p + n
+                elif d == 2:
+                    exists, q = c > 0, p - 1
+                else:
+                    exists, q = c < n - 1, p + 1
+                couplings[d, i], held[d, i] = -1, -1
+                if exists:
+                    degree[i] += 1.0
+                    k = index[(q // n + 1) * width + q % n + 1]
+                    if k >= 0:
+                        couplings[d, i] = k
+                    else:
+                        held[d, i] = q
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            index[(p // n + 1) * width + p % n + 1] = -1

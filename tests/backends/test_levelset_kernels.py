@@ -226,3 +226,52 @@ def test_divide_spectrum_applies_the_inverse_of_one_minus_weight_laplace():
     divided = spectrum.copy()
     _kernels.divide_spectrum(divided, wave_r, wave_c, np.float32(2.5))
     np.testing.assert_allclose(divided * (1 + 2.5 * (wave_r[:, None] + wave_c[None, :])), spectrum, rtol=1e-6)
+
+
+def test_explicit_step_is_phi_plus_rate_laplace_minus_tau_f_on_the_band():
+    # the 5-point Laplacian with mirrored border pixels (Neumann), f of (6.41) with the wall term
+    # where |phi| < band, on the band's pixels only; every other pixel keeps phi
+    rng = np.random.default_rng(18)
+    m, n, band, mu, tau = 8, 11, 1.0, 0.4, 0.3
+    phi = rng.normal(size=(m, n)).astype(np.float32)
+    values = rng.uniform(size=(m, n, 2))
+    params = ChanVeseParameters(mu=mu)
+    c_in, c_out = rng.uniform(size=2), rng.uniform(size=2)
+    flat = rng.permutation(m * n)[: m * n // 2]
+    mirrored = np.pad(phi.astype(np.float64), 1, mode="edge")
+    laplace = (mirrored[:-2, 1:-1] + mirrored[2:, 1:-1] + mirrored[1:-1, :-2] + mirrored[1:-1, 2:]
+               - 4.0 * phi)
+    rows, cols = np.indices((m, n))
+    wall = (rows == 0).astype(int) + (rows == m - 1) + (cols == 0) + (cols == n - 1)
+    f = _force(values, c_in, c_out, params) + mu * wall
+    expected = phi + tau * mu * laplace - np.where(np.abs(phi) < band, tau * f, 0.0)
+    form = params.load_form(c_in, c_out)
+    out = phi.copy()
+    _kernels.explicit_step(phi.reshape(-1), flat, m, n, tau * mu, band, values.reshape(m * n, -1),
+                           form.constant, form.linear, form.square, mu, tau, out.reshape(-1))
+    np.testing.assert_allclose(out.reshape(-1)[flat], expected.reshape(-1)[flat], rtol=1e-6, atol=1e-6)
+    others = np.setdiff1d(np.arange(m * n), flat)
+    np.testing.assert_array_equal(out.reshape(-1)[others], phi.reshape(-1)[others])
+
+
+def test_band_couplings_name_each_neighbour_in_the_band_or_held_beyond_it():
+    rng = np.random.default_rng(19)
+    for _ in range(50):
+        m, n = rng.integers(1, 9, 2)
+        flat = rng.permutation(m * n)[: rng.integers(1, m * n + 1)]
+        index = np.full((m + 2) * (n + 2), -1, dtype=np.int32)
+        couplings = np.empty((4, flat.size), dtype=np.intp)
+        held = np.empty((4, flat.size), dtype=np.intp)
+        degree = np.empty(flat.size)
+        _kernels.band_couplings(flat, m, n, index, couplings, held, degree)
+        assert np.all(index == -1)  # handed back as it came
+        position = {pixel: i for i, pixel in enumerate(flat)}
+        for i, pixel in enumerate(flat):
+            r, c = divmod(pixel, n)
+            neighbours = [(r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)]
+            inside = [(rr, cc) for rr, cc in neighbours if 0 <= rr < m and 0 <= cc < n]
+            assert degree[i] == len(inside)
+            for d, (rr, cc) in enumerate(neighbours):
+                q = rr * n + cc if (0 <= rr < m and 0 <= cc < n) else None
+                assert couplings[d, i] == (position[q] if q in position else -1)
+                assert held[d, i] == (q if q is not None and q not in position else -1)

@@ -173,20 +173,16 @@ class _Problem:
         m, n = self.shape
         flat = state.near_flat
         phi = state.phi.ravel()
-        order = np.argsort(flat)
-        ordered = flat[order]
-        row, col = np.divmod(flat, n)
+        # per neighbour (up, down, left, right) its band index (-1: none) or, beyond the band, its
+        # pixel (held: its value joins the right-hand side)
+        couplings = np.empty((4, flat.size), dtype=np.intp)
+        held = np.empty((4, flat.size), dtype=np.intp)
+        degree = np.empty(flat.size)
+        _kernels.band_couplings(flat, m, n, self.scratch.owner, couplings, held, degree)
         right = phi[flat].astype(np.float64)
-        degree = np.zeros(flat.size)
-        couplings = []  # (band index of the neighbour) for the neighbours in the band
-        for exists, neighbour in ((row > 0, flat - n), (row < m - 1, flat + n),
-                                  (col > 0, flat - 1), (col < n - 1, flat + 1)):
-            degree += exists
-            slot = np.minimum(np.searchsorted(ordered, neighbour), flat.size - 1)
-            in_band = exists & (ordered[slot] == neighbour)
-            held = exists & ~in_band
-            right[held] += weight * phi[neighbour[held]]
-            couplings.append(np.where(in_band, order[slot], -1))
+        for beyond in held:
+            keep = beyond >= 0
+            right[keep] += weight * phi[beyond[keep]]
         diagonal = 1.0 + weight * degree
         padded = np.zeros(flat.size + 1)  # index -1: a neighbour beyond the band contributes 0
 
@@ -230,21 +226,16 @@ class _Problem:
         return scipy.fft.idctn(spectrum, norm="ortho", overwrite_x=True)
 
     def _explicit_step(self, state, force, tau):
-        """``phi + tau mu Laplace(phi) - tau f`` on the band (5-point, Neumann: a mirrored pixel)."""
+        """``phi + tau mu Laplace(phi) - tau f`` on the band (5-point, Neumann: a mirrored pixel; f of
+        (6.41) within ``|phi| < band`` only), one compiled pass
+        (:func:`activecontour._kernels.explicit_step`)."""
         m, n = self.shape
-        flat = state.near_flat
-        values = state.phi.ravel()
-        centre = values[flat].astype(np.float64)
-        row, col = np.divmod(flat, n)
-        laplace = (values[np.where(row > 0, flat - n, flat)] + values[np.where(row < m - 1, flat + n, flat)]
-                   + values[np.where(col > 0, flat - 1, flat)] + values[np.where(col < n - 1, flat + 1, flat)]
-                   - 4.0 * centre)
-        moved = centre + (tau * self.params.mu) * laplace
-        near = np.abs(centre) < self.band
-        moved[near] -= tau * self.force_at(flat[near], force)
+        form = self.params.load_form(*force)
         out = self.take()
         np.copyto(out, state.phi)
-        out.ravel()[flat] = moved
+        _kernels.explicit_step(state.phi.reshape(-1), state.near_flat, m, n, tau * self.params.mu, self.band,
+                               self.values.reshape(m * n, -1), form.constant, form.linear, form.square,
+                               self.params.mu, tau, out.reshape(-1))
         return out
 
 
