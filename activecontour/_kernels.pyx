@@ -14,8 +14,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
-  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings` --
-  :mod:`activecontour.backends.levelset` (the front, the marching-squares segments of the zero
+  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides` --
+  :mod:`activecontour.backends.levelset` (the sides of phi, the front, the marching-squares segments of the zero
   set, the narrow band's distances, the oriented soup of segments that the common evaluator scores
   by (6.38), the area swept by Gamma, the steps (a) and (b)).
 
@@ -1724,3 +1724,23 @@ def band_couplings(const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n, int[:
         for i in range(flat.shape[0]):
             p = flat[i]
             index[(p // n + 1) * width + p % n + 1] = -1
+
+
+def sides(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,
+          Py_ssize_t[::1] switched):
+    """``positive = phi > 0`` and the pixels whose side differs from ``before``, in one pass over the
+    image (:func:`activecontour.backends.levelset.redistancing._redistance`): ``switched`` (room for
+    every pixel) gets their flat indices in increasing order; returns how many."""
+    cdef Py_ssize_t size = phi.shape[0], block, i, count = 0
+    cdef unsigned char side
+    cdef Py_ssize_t rows = _POLL_ROWS * 1024
+    for block in range(0, size, rows):
+        with nogil:
+            for i in range(block, min(block + rows, size)):
+                side = phi[i] > 0
+                positive[i] = side
+                if side != before[i]:
+                    switched[count] = i
+                    count += 1
+        PyErr_CheckSignals()
+    return count

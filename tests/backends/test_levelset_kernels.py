@@ -275,3 +275,15 @@ def test_band_couplings_name_each_neighbour_in_the_band_or_held_beyond_it():
                 q = rr * n + cc if (0 <= rr < m and 0 <= cc < n) else None
                 assert couplings[d, i] == (position[q] if q in position else -1)
                 assert held[d, i] == (q if q is not None and q not in position else -1)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_sides_are_phi_above_zero_and_the_pixels_that_changed_side(dtype):
+    rng = np.random.default_rng(20)
+    phi = np.round(rng.normal(size=5000)).astype(dtype)  # zeros are outside
+    before = rng.random(5000) < 0.5
+    positive = np.empty(5000, dtype=bool)
+    switched = np.empty(5000, dtype=np.intp)
+    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), switched)
+    np.testing.assert_array_equal(positive, phi > 0)
+    np.testing.assert_array_equal(switched[:count], np.flatnonzero((phi > 0) != before))

@@ -93,11 +93,17 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
     ``previous``, an array of phi's shape and ``dtype`` to write the result into (a copy of the
     previous state with its band and the switched pixels reset, rather than a new array).
     """
-    positive = phi > 0
     if previous is None:
+        positive = phi > 0
         front = np.flatnonzero(_front_pixels(positive))
     else:
-        switched = np.flatnonzero(positive != previous.positive)
+        # the sides and the pixels that changed side, in one pass over the image
+        positive = np.empty(phi.shape, dtype=bool)
+        switched = np.empty(phi.size, dtype=np.intp)  # only the pages written are touched
+        before = np.ascontiguousarray(previous.positive).reshape(-1).view(np.uint8)
+        count = _kernels.sides(np.ascontiguousarray(phi).reshape(-1), before,
+                               positive.reshape(-1).view(np.uint8), switched)
+        switched = switched[:count].copy()
         mark = np.zeros(phi.size, dtype=np.uint8) if scratch is None else scratch.mark
         front, cells = _front_and_cells(positive, np.concatenate([previous.front, switched]), mark)
     if front.size == 0 and positive.all():
