@@ -1488,6 +1488,16 @@ def front_and_cells(const unsigned char[:, ::1] positive, const Py_ssize_t[::1] 
     return n_front, n_cells
 
 
+cdef inline double _signed(double gap, double band, double least, bint inside) noexcept nogil:
+    """The distance ``sqrt(gap)``, at least ``least`` and at most ``band``, signed by the side."""
+    cdef double distance = sqrt(gap)
+    if distance < least:
+        distance = least
+    if distance > band:
+        distance = band
+    return distance if inside else -distance
+
+
 def band_distances(const Py_ssize_t[::1] framed, int[::1] owner, unsigned char[::1] visited,
                    Py_ssize_t width, const unsigned char[::1] positive, double band, double least,
                    const double[::1] start_r, const double[::1] start_c, const double[::1] dir_r,
@@ -1495,27 +1505,37 @@ def band_distances(const Py_ssize_t[::1] framed, int[::1] owner, unsigned char[:
     """The signed distances of the band's pixels from their segments (after :func:`grow_band`).
 
     For each framed pixel ``framed[i]`` (row length ``width``): its distance to segment
-    ``owner[...]`` (-1: the far sentinel, the last one), at least ``least``, signed by its side
-    (``positive``, flat over the M x N image), clipped to ``+-band`` and written to ``phi`` (flat);
-    ``flat[i]`` gets its index in the image.  Clears the pixel's ``visited`` and ``owner``."""
+    ``owner[...]`` (-1: the far sentinel, the last one), at least ``least`` (every pixel keeps
+    its side), clipped to ``band``, signed by its side (``positive``, flat over the M x N image)
+    and written to ``phi`` (flat); ``flat[i]`` gets its index in the image.  Clears the pixel's
+    ``visited`` and ``owner``."""
     cdef Py_ssize_t sentinel = start_r.shape[0] - 1, i, p, k, index
-    cdef double distance
     with nogil:
         for i in range(framed.shape[0]):
             p = framed[i]
             k = owner[p]
-            distance = sqrt(_segment_gap(<double> (p // width - 1), <double> (p % width - 1),
-                                         sentinel if k < 0 else k, start_r, start_c, dir_r, dir_c, inverse))
             owner[p] = -1
             visited[p] = 0
             index = (p // width - 1) * (width - 2) + (p % width - 1)
             flat[i] = index
-            # every pixel keeps its side, at least ``least`` from Gamma
-            if distance < least:
-                distance = least
-            if distance > band:
-                distance = band
-            phi[index] = distance if positive[index] else -distance
+            phi[index] = _signed(_segment_gap(<double> (p // width - 1), <double> (p % width - 1),
+                                              sentinel if k < 0 else k, start_r, start_c, dir_r, dir_c,
+                                              inverse), band, least, positive[index])
+
+
+def front_distances(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t[::1] nearest,
+                    const double[::1] start_r, const double[::1] start_c, const double[::1] dir_r,
+                    const double[::1] dir_c, const double[::1] inverse, double band, double least,
+                    const unsigned char[::1] positive, real[::1] phi):
+    """The signed distances of the front pixels (flat, ``n`` columns) from their nearest segments
+    (-1: the far sentinel), written to ``phi`` as :func:`band_distances` writes them."""
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1, i, p, k
+    with nogil:
+        for i in range(front.shape[0]):
+            p = front[i]
+            k = nearest[i]
+            phi[p] = _signed(_segment_gap(<double> (p // n), <double> (p % n), sentinel if k < 0 else k,
+                                          start_r, start_c, dir_r, dir_c, inverse), band, least, positive[p])
 
 
 def nearest_segments(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t[::1] cells,

@@ -287,3 +287,34 @@ def test_sides_are_phi_above_zero_and_the_pixels_that_changed_side(dtype):
     count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), switched)
     np.testing.assert_array_equal(positive, phi > 0)
     np.testing.assert_array_equal(switched[:count], np.flatnonzero((phi > 0) != before))
+
+
+def test_a_located_step_scores_as_its_reinitialised_state():
+    # the front pixels' distances alone fix the zero set (marching squares reads only them): a
+    # step scored before its band is grown has the energy of the state it becomes
+    from activecontour.backends.levelset.redistancing import _locate, _Located
+    from activecontour.energy import evaluate
+    from activecontour.imaging.tables import ImageModel
+
+    rng = np.random.default_rng(21)
+    rows, cols = np.indices((48, 56), dtype=np.float64)
+    model = ImageModel(rng.uniform(size=(48, 56, 1)))
+    params = ChanVeseParameters(mu=0.4)
+
+    def energy(state):
+        points = _edge_soup(state.phi, state.cells).reshape(-1, 2)
+        return evaluate(model, points, np.repeat(np.arange(1, len(points), 2), 2), params).energy
+
+    for _ in range(10):
+        centre = rng.uniform(15, 35, 2)
+        previous = _redistance((14 - np.hypot(rows - centre[0], cols - centre[1])).astype(np.float32), 4.0,
+                               dtype=np.float32)
+        stepped = (previous.phi + rng.normal(scale=0.8, size=previous.phi.shape)).astype(np.float32)
+        located = _locate(stepped.copy(), 4.0, np.float32, None, previous)
+        assert isinstance(located, _Located)
+        located.front_distances(4.0)
+        final = located.finish(4.0, np.float32, None, previous, np.empty_like(stepped))
+        np.testing.assert_array_equal(located.phi.ravel()[final.front], final.phi.ravel()[final.front])
+        assert energy(located) == energy(final)
+        # and the same as reinitialising the stepped phi from scratch (an image-wide front search)
+        np.testing.assert_array_equal(final.phi, _redistance(stepped, 4.0, dtype=np.float32).phi)

@@ -41,7 +41,10 @@ One iteration
 3. Reinitialisation: phi is replaced by the signed distance to its zero level set, computed in a
    narrow band ``|phi| < band`` only and clipped to ``+-band`` beyond (:func:`signed_distance`).
 4. The step is accepted if (6.38) of the new zero set, by the common evaluator, is not larger;
-   otherwise tau is halved and the step retried (backtracking).
+   otherwise tau is halved and the step retried (backtracking).  The zero set of the
+   reinitialised phi is fixed by the distances of the front pixels alone (marching squares reads
+   no other), so a step is scored once those are known, and the band is grown for an accepted
+   step only.
 
 Steps in pixels
 ---------------
@@ -91,7 +94,8 @@ are computed in float64 from it).  A step (a) is one DCT pair over the image (O(
 float32, its force computed in one compiled pass); a step (b) works on the band only (explicit, or
 conjugate gradients), but for one copy of phi.  The reinitialisation costs two sign passes over
 the image (the front is searched next to the previous one and the pixels that changed side) plus
-O(band), with work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
+O(band) (for an accepted step; a rejected one costs its front), with work arrays kept between
+iterations; the energy is O(|Gamma|) from the cells the
 reinitialisation found.  The image itself stays float64 (the model's tables and the common
 evaluator are exact in float64; the polygon backend shares them).
 

@@ -75,7 +75,7 @@ def signed_distance(phi, band=np.inf):
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
 
-def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=None, keep_front=False):
+def _redistance(phi, band, dtype=np.float64, scratch=None, keep_front=False):
     """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``.
 
     ``keep_front``: the front pixels keep phi's own values and the band the distances from them,
@@ -85,14 +85,72 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
     move; a second reinitialisation would move a curved front by O(h^2 kappa), up to a sixth of
     a pixel, which on a binary image changes (6.38) by percents.
 
-    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  ``previous``: a
+    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  A phi stepped
+    from a state is located (:func:`_locate`), scored and only then finished
+    (:meth:`_Located.finish`) by the level set's driver.
+    """
+    located = _locate(phi, band, dtype, scratch)
+    if isinstance(located, _Redistanced):
+        return located
+    return located.finish(band, dtype, scratch, keep_front=keep_front)
+
+
+class _Located:
+    """phi's zero set located, before the band: its sides, front pixels, cells with a sign change
+    and their segments, each front pixel's nearest segment (and, stepped from a previous state,
+    the pixels that changed side).  The distances of the front pixels alone fix the zero set
+    (marching squares reads only them), so an energy can be scored before the band is grown
+    (:meth:`front_distances`, :meth:`finish`)."""
+
+    def __init__(self, phi, positive, front, cells, segments, nearest, switched):
+        self.phi, self.positive, self.front, self.cells = phi, positive, front, cells
+        self.segments, self.nearest, self.switched = segments, nearest, switched
+
+    def front_distances(self, band):
+        """Write the front pixels' signed distances (those :meth:`finish` gives them) into phi."""
+        _kernels.front_distances(self.front, self.phi.shape[1], self.nearest, *self.segments.columns,
+                                 band, _MIN_DISTANCE, self.positive.reshape(-1).view(np.uint8),
+                                 self.phi.reshape(-1))
+
+    def finish(self, band, dtype, scratch=None, previous=None, out=None, keep_front=False):
+        """The :class:`_Redistanced` state: the band grown from the front (:func:`_redistance`).
+
+        ``previous``: the state that phi was stepped from (as for :func:`_locate`) and ``out`` an
+        array of phi's shape and ``dtype`` to write the result into: a copy of the previous state
+        with its band and the switched pixels reset, rather than a new array.
+        """
+        positive, front = self.positive, self.front
+        rows, cols = np.divmod(front, positive.shape[1])
+        # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
+        # of a narrow band, one sweep and the walk along Gamma are
+        sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
+        base = None
+        if previous is not None and out is not None:
+            # beyond the previous band and the switched pixels phi is +-band on the same side as before
+            base = out
+            np.copyto(base, previous.phi)
+            reset = np.concatenate([previous.near_flat, self.switched])
+            base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
+        state = _propagate(positive, rows, cols, self.segments, self.nearest, band, sweeps,
+                           dtype=dtype, scratch=scratch, base=base)
+        state.cells, state.front = self.cells, front
+        if keep_front:
+            given = np.clip(np.abs(self.phi.ravel()[front]), _MIN_DISTANCE, band)
+            state.phi.ravel()[front] = np.where(positive.ravel()[front], given, -given)
+        return state
+
+
+def _locate(phi, band, dtype=np.float64, scratch=None, previous=None):
+    """The :class:`_Located` zero set of phi, or the final :class:`_Redistanced` state where phi has
+    no front (all inside or all outside).
+
+    ``scratch``: a :class:`_Scratch` of phi's shape to reuse.  ``previous``: a
     :class:`_Redistanced` that phi was stepped from; the front is then searched only next to the
     previous front and the pixels that changed side (a front pixel whose side and whose
     neighbours' sides are unchanged was a front pixel before), which gives the same front and
-    cells as a search over the image at the cost of two passes instead of a dozen.  ``out``: with
-    ``previous``, an array of phi's shape and ``dtype`` to write the result into (a copy of the
-    previous state with its band and the switched pixels reset, rather than a new array).
+    cells as a search over the image at the cost of one pass instead of a dozen.
     """
+    switched = None
     if previous is None:
         positive = phi > 0
         front = np.flatnonzero(_front_pixels(positive))
@@ -113,25 +171,8 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
                             np.zeros(0, dtype=np.intp), front)
     if previous is None:
         cells = _change_cells(positive)
-    rows, cols = np.divmod(front, phi.shape[1])
     segments, nearest = _front_segments(phi, front, cells)
-    # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
-    # of a narrow band, one sweep and the walk along Gamma are
-    sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
-    base = None
-    if previous is not None and out is not None:
-        # beyond the previous band and the switched pixels phi is +-band on the same side as before
-        base = out
-        np.copyto(base, previous.phi)
-        reset = np.concatenate([previous.near_flat, switched])
-        base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
-    state = _propagate(positive, rows, cols, segments, nearest, band, sweeps,
-                       dtype=dtype, scratch=scratch, base=base)
-    state.cells, state.front = cells, front
-    if keep_front:
-        given = np.clip(np.abs(phi.ravel()[front]), _MIN_DISTANCE, band)
-        state.phi.ravel()[front] = np.where(positive.ravel()[front], given, -given)
-    return state
+    return _Located(phi, positive, front, cells, segments, nearest, switched)
 
 
 def _front_and_cells(positive, seeds, mark):

@@ -6,7 +6,7 @@ import numpy as np
 import scipy.fft
 
 from activecontour import _kernels
-from activecontour.backends.levelset.redistancing import _redistance, _Scratch
+from activecontour.backends.levelset.redistancing import _locate, _Located, _redistance, _Scratch
 from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
 
@@ -68,11 +68,26 @@ class _Problem:
                 and len(self._spare) < 2:
             self._spare.append(array)
 
-    def redistance(self, phi, previous=None, keep_front=False):
-        """The reinitialised state of phi (float32); ``previous``: the state phi was stepped from;
-        ``keep_front``: phi's zero set kept exactly (a previous result's, see :func:`_redistance`)."""
-        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, previous=previous,
-                           out=None if previous is None else self.take(), keep_front=keep_front)
+    def redistance(self, phi, keep_front=False):
+        """The reinitialised state of phi (float32); ``keep_front``: phi's zero set kept exactly (a
+        previous result's, see :func:`_redistance`)."""
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front)
+
+    def locate(self, stepped, previous):
+        """The zero set of ``stepped`` (a step from the state ``previous``) located, and the signed
+        distances of its front pixels written into ``stepped``: these alone fix the zero set of the
+        reinitialised state, so :meth:`evaluate` scores it as it will be, and the band is grown
+        (:meth:`finish`) only for a step that is accepted."""
+        located = _locate(stepped, self.band, np.float32, self.scratch, previous)
+        if isinstance(located, _Located):
+            located.front_distances(self.band)
+        return located
+
+    def finish(self, located, previous):
+        """The reinitialised state of a located step from ``previous`` (:meth:`locate`)."""
+        if not isinstance(located, _Located):
+            return located  # no front: final already
+        return located.finish(self.band, np.float32, self.scratch, previous, self.take())
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
