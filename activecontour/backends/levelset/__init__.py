@@ -92,11 +92,10 @@ Cost and memory: phi is float32 (a distance of a few pixels, rounded to ~2e-7 px
 what the energy or the flow resolve; the marching-squares crossings, the distances and the energy
 are computed in float64 from it).  A step (a) is one DCT pair over the image (O(MN log MN),
 float32, its force computed in one compiled pass); a step (b) works on the band only (explicit, or
-conjugate gradients), but for one copy of phi.  The reinitialisation costs two sign passes over
+conjugate gradients), but for one copy of phi.  The reinitialisation costs one sign pass over
 the image (the front is searched next to the previous one and the pixels that changed side) plus
-O(band) (for an accepted step; a rejected one costs its front), with work arrays kept between
-iterations; the energy is O(|Gamma|) from the cells the
-reinitialisation found.  The image itself stays float64 (the model's tables and the common
+O(band) and a copy of phi for an accepted step (a rejected one costs its front), with work arrays
+kept between iterations; the energy is O(|Gamma|) from the cells the reinitialisation found.  The image itself stays float64 (the model's tables and the common
 evaluator are exact in float64; the polygon backend shares them).
 
 The energy
