@@ -773,7 +773,7 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
                         best = 1e300
                         for s in range(steps.shape[0]):
                             k = owner[p + steps[s]]
-                            if k < 0:
+                            if k < 0 or k == own:  # neighbours often share a segment: no better
                                 continue
                             gap = _segment_gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
                             if gap < best:
