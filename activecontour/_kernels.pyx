@@ -14,17 +14,18 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
-  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides` --
-  :mod:`activecontour.backends.levelset` (the sides of phi, the front, the marching-squares segments of the zero
-  set, the narrow band's distances, the oriented soup of segments that the common evaluator scores
-  by (6.38), the area swept by Gamma, the steps (a) and (b)).
+  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
+  :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
+  sides of phi, the front, the marching-squares segments of the zero set and their table, the
+  narrow band's distances, the oriented soup of segments that the common evaluator scores by
+  (6.38), the area swept by Gamma, the steps (a) and (b)).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
 """
 
 from cpython.exc cimport PyErr_CheckSignals
-from libc.math cimport M_PI, fabs, sin, sqrt
+from libc.math cimport M_PI, fabs, isnan, sin, sqrt
 from libc.stdlib cimport calloc, free, malloc, realloc
 
 cdef Py_ssize_t _POLL_ROWS = 256
@@ -1764,3 +1765,31 @@ def sides(const real[::1] phi, const unsigned char[::1] before, unsigned char[::
                     count += 1
         PyErr_CheckSignals()
     return count
+
+
+def segment_table(const double[:, :, ::1] segments, double far, double[:, ::1] columns,
+                  float[:, ::1] columns32):
+    """The columns of the level set's segment table
+    (:class:`activecontour.backends.levelset.redistancing._Segments`): for each segment ``(S, 2
+    ends, 2)`` its start (row, col; ``far`` for an empty, NaN slot), its direction (0 where NaN)
+    and its inverse squared length (0 for a point), in ``columns (5, S + 1)`` and as float32 in
+    ``columns32``; the last column is the far sentinel ``(far, far, 0, 0, 0)``."""
+    cdef Py_ssize_t count = segments.shape[0], i, k
+    cdef double row[5]
+    with nogil:
+        for i in range(count + 1):
+            if i == count:
+                row[0], row[1], row[2], row[3], row[4] = far, far, 0.0, 0.0, 0.0
+            else:
+                row[0], row[1] = segments[i, 0, 0], segments[i, 0, 1]
+                row[2], row[3] = segments[i, 1, 0] - row[0], segments[i, 1, 1] - row[1]
+                for k in range(2):
+                    if isnan(row[k]):
+                        row[k] = far
+                    if isnan(row[2 + k]):
+                        row[2 + k] = 0.0
+                row[4] = row[2] * row[2] + row[3] * row[3]
+                row[4] = 1.0 / row[4] if row[4] > 0 else 0.0
+            for k in range(5):
+                columns[k, i] = row[k]
+                columns32[k, i] = <float> row[k]

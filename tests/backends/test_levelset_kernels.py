@@ -318,3 +318,24 @@ def test_a_located_step_scores_as_its_reinitialised_state():
         assert energy(located) == energy(final)
         # and the same as reinitialising the stepped phi from scratch (an image-wide front search)
         np.testing.assert_array_equal(final.phi, _redistance(stepped, 4.0, dtype=np.float32).phi)
+
+
+def test_segment_table_columns_are_start_direction_and_inverse_squared_length():
+    # empty (NaN) slots start far away with no direction; a point has inverse 0; a far sentinel last
+    from activecontour.backends.levelset.redistancing import _FAR, _Segments
+
+    rng = np.random.default_rng(22)
+    segments = rng.normal(size=(30, 2, 2)) * 5
+    segments[::7] = np.nan
+    segments[3, 1] = segments[3, 0]
+    table = _Segments(segments, np.full((30, 2), -1))
+    direction = np.where(np.isnan(segments[:, 1] - segments[:, 0]), 0.0, segments[:, 1] - segments[:, 0])
+    length_sq = direction[:, 0] ** 2 + direction[:, 1] ** 2
+    start = np.where(np.isnan(segments[:, 0]), _FAR, segments[:, 0])
+    expected = [start[:, 0], start[:, 1], direction[:, 0], direction[:, 1],
+                np.divide(1.0, length_sq, out=np.zeros(30), where=length_sq > 0)]
+    for column, column32, values, sentinel in zip(table.columns, table.columns32, expected,
+                                                  (_FAR, _FAR, 0, 0, 0), strict=True):
+        np.testing.assert_array_equal(column, np.append(values, sentinel))
+        np.testing.assert_array_equal(column32, np.append(values, sentinel).astype(np.float32))
+    assert table.columns[4][3] == 0.0  # the point

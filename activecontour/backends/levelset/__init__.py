@@ -95,8 +95,9 @@ float32, its force computed in one compiled pass); a step (b) works on the band 
 conjugate gradients), but for one copy of phi.  The reinitialisation costs one sign pass over
 the image (the front is searched next to the previous one and the pixels that changed side) plus
 O(band) and a copy of phi for an accepted step (a rejected one costs its front), with work arrays
-kept between iterations; the energy is O(|Gamma|) from the cells the reinitialisation found.  The image itself stays float64 (the model's tables and the common
-evaluator are exact in float64; the polygon backend shares them).
+kept between iterations; the energy is O(|Gamma|) from the cells the reinitialisation found.
+The image itself stays float64 (the model's tables and the common evaluator are exact in
+float64; the polygon backend shares them).
 
 The energy
 ----------

@@ -282,17 +282,15 @@ class _Segments:
     col), direction (row, col) and the inverse squared length, float64, for the distances of the
     band (:func:`activecontour._kernels.grow_band`, :func:`~activecontour._kernels.band_distances`);
     ``columns32`` the same in float32 for ranking the candidates of the front pixels (ample on
-    images up to ~10^4 pixels).
+    images up to ~10^4 pixels); the sentinel is the last (compiled:
+    :func:`activecontour._kernels.segment_table`).
     """
 
     def __init__(self, segments, links):
-        start = np.nan_to_num(segments[:, 0], nan=_FAR)
-        direction = np.nan_to_num(segments[:, 1] - segments[:, 0])
-        length_sq = np.sum(direction * direction, axis=1)
-        inverse = np.divide(1.0, length_sq, out=np.zeros_like(length_sq), where=length_sq > 0)
-        table = np.concatenate([np.column_stack([start, direction, inverse]), [[_FAR, _FAR, 0, 0, 0]]])
-        self.columns = [np.ascontiguousarray(column) for column in table.T]
-        self.columns32 = [column.astype(np.float32) for column in self.columns]
+        table = np.empty((5, len(segments) + 1))
+        table32 = np.empty((5, len(segments) + 1), dtype=np.float32)
+        _kernels.segment_table(np.ascontiguousarray(segments, dtype=np.float64), _FAR, table, table32)
+        self.columns, self.columns32 = list(table), list(table32)
         self.links = np.concatenate([links, [[-1, -1]]])
 
 
