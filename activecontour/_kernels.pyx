@@ -12,14 +12,21 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
-  :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network).
+  :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
+* :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
+  :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
+  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
+  :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
+  sides of phi, the front, the marching-squares segments of the zero set and their table, the
+  narrow band's distances, the oriented soup of segments that the common evaluator scores by
+  (6.38), the area swept by Gamma, the steps (a) and (b)).
 
 Arrays come in as typed memoryviews (the buffer protocol), so the build needs no numpy headers.
 Loops over a whole image poll for Ctrl-C every few hundred rows.
 """
 
 from cpython.exc cimport PyErr_CheckSignals
-from libc.math cimport sqrt
+from libc.math cimport M_PI, fabs, isnan, sin, sqrt
 from libc.stdlib cimport calloc, free, malloc, realloc
 
 cdef Py_ssize_t _POLL_ROWS = 256
@@ -800,7 +807,7 @@ def grow_band(unsigned char[::1] visited, int[::1] owner, Py_ssize_t[::1] out, i
                         best = 1e300
                         for s in range(steps.shape[0]):
                             k = owner[p + steps[s]]
-                            if k < 0:
+                            if k < 0 or k == own:  # neighbours often share a segment: no better
                                 continue
                             gap = _segment_gap(pr, pc, k, start_r, start_c, dir_r, dir_c, inverse)
                             if gap < best:
@@ -1306,3 +1313,516 @@ def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::
         offsets[count] = position
     free(seen)
     return count
+
+
+ctypedef fused real:
+    float
+    double
+
+
+cdef inline Py_ssize_t _marching_cell(double a, double b, double c, double d, double r, double q,
+                                      Py_ssize_t cell, Py_ssize_t width, double *segments,
+                                      Py_ssize_t *keys) noexcept nogil:
+    """The marching-squares segments of the zero set in one cell (corners a, b, c, d clockwise from
+    the top left at row r, column q): ``segments`` gets 2 slots x 2 ends x (row, col), ``keys``
+    2 slots x 2 ends (the grid edge of each end, for ``width`` cells a row).  Slot 1 is for
+    saddles; unused slots are left as they are.  Returns the number of segments (0, 1 or 2)."""
+    cdef bint sa = a > 0, sb = b > 0, sc = c > 0, sd = d > 0
+    cdef bint exists[4]
+    cdef double point[4][2]
+    cdef Py_ssize_t key[4]
+    cdef Py_ssize_t count = 0, e, found = 0
+    cdef Py_ssize_t order[2]
+    exists[0], exists[1], exists[2], exists[3] = sa != sb, sb != sc, sd != sc, sa != sd
+    # crossings on the edges top (a-b), right (b-c), bottom (d-c), left (a-d), named by grid edge
+    if exists[0]:
+        point[0][0], point[0][1] = r, q + a / (a - b)
+    if exists[1]:
+        point[1][0], point[1][1] = r + b / (b - c), q + 1.0
+    if exists[2]:
+        point[2][0], point[2][1] = r + 1.0, q + d / (d - c)
+    if exists[3]:
+        point[3][0], point[3][1] = r + a / (a - d), q
+    key[0], key[1] = 2 * cell, 2 * (cell + 1) + 1
+    key[2], key[3] = 2 * (cell + width), 2 * cell + 1
+    for e in range(4):
+        count += exists[e]
+    if count == 2:  # the two crossings in edge order
+        for e in range(4):
+            if exists[e]:
+                order[found] = e
+                found += 1
+        for e in range(2):
+            segments[2 * e], segments[2 * e + 1] = point[order[e]][0], point[order[e]][1]
+            keys[e] = key[order[e]]
+        return 1
+    if count == 4:  # a saddle isolates its inside corners: a and c (top-left, right-bottom) or b and d
+        if sa:
+            order[0], order[1] = 3, 2
+        else:
+            order[0], order[1] = 1, 2
+        segments[0], segments[1] = point[0][0], point[0][1]
+        segments[2], segments[3] = point[order[0]][0], point[order[0]][1]
+        keys[0], keys[1] = key[0], key[order[0]]
+        e = 1 if sa else 3
+        segments[4], segments[5] = point[e][0], point[e][1]
+        segments[6], segments[7] = point[2][0], point[2][1]
+        keys[2], keys[3] = key[e], key[2]
+        return 2
+    return 0
+
+
+def cell_segments(const real[:, ::1] phi, const Py_ssize_t[::1] cells, double[:, :, :, ::1] segments,
+                  Py_ssize_t[:, :, ::1] keys):
+    """Marching-squares segments of phi's zero set in the grid cells ``cells`` (flat indices
+    ``row * (N - 1) + col``) (:func:`activecontour.backends.levelset.zeroset._cell_segments`).
+
+    ``segments (K, 2, 2, 2)`` (slot, end, row/col) and ``keys (K, 2, 2)`` are written where a
+    cell has segments and left as they are elsewhere (fill them with NaN and -1).  The keys name
+    each end's grid edge, for a grid of N columns."""
+    cdef Py_ssize_t n = phi.shape[1], k, row, col
+    with nogil:
+        for k in range(cells.shape[0]):
+            row = cells[k] // (n - 1)
+            col = cells[k] % (n - 1)
+            _marching_cell(phi[row, col], phi[row, col + 1], phi[row + 1, col + 1], phi[row + 1, col],
+                           <double> row, <double> col, row * n + col, n, &segments[k, 0, 0, 0],
+                           &keys[k, 0, 0])
+
+
+cdef inline double _padded(const real[:, ::1] phi, Py_ssize_t row, Py_ssize_t col) noexcept nogil:
+    """phi padded by one pixel of ``-|phi|`` (zeroset._closed_padding) at (row, col) of the padded grid."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1]
+    cdef double value = phi[_clamp(row - 1, m), _clamp(col - 1, n)]
+    if (row == 0 or row == m + 1 or col == 0 or col == n + 1) and value > 0:
+        value = -value
+    return -1e-300 if value == 0 else value
+
+
+cdef inline Py_ssize_t _oriented(const real[:, ::1] phi, Py_ssize_t row, Py_ssize_t col,
+                                 double[:, :, ::1] out, Py_ssize_t count) noexcept nogil:
+    """The segments of cell (row, col) of the padded grid, each directed with the inside on its left
+    and shifted to the image's coordinates, appended to ``out`` at ``count``; the new count."""
+    cdef double a = _padded(phi, row, col), b = _padded(phi, row, col + 1)
+    cdef double c = _padded(phi, row + 1, col + 1), d = _padded(phi, row + 1, col)
+    cdef double segments[8]
+    cdef Py_ssize_t keys[4]
+    cdef Py_ssize_t made = _marching_cell(a, b, c, d, <double> row, <double> col, 0, 0, segments, keys)
+    cdef Py_ssize_t s, inside = (a > 0) + (b > 0) + (c > 0) + (d > 0)
+    cdef double ref_r, ref_c, tangent_r, tangent_c
+    for s in range(made):
+        # a point on the inside of the segment: the mean of the inside corners of a simple cell;
+        # in a saddle each segment cuts off one inside corner (a and c, or b and d)
+        if made == 2:
+            ref_r = row + (0.0 if s == 0 else 1.0)
+            ref_c = col + ((0.0 if s == 0 else 1.0) if a > 0 else (1.0 if s == 0 else 0.0))
+        else:
+            ref_r = row + ((c > 0) + (d > 0)) / <double> inside
+            ref_c = col + ((b > 0) + (c > 0)) / <double> inside
+        tangent_r = segments[4 * s + 2] - segments[4 * s]
+        tangent_c = segments[4 * s + 3] - segments[4 * s + 1]
+        ref_r -= segments[4 * s]
+        ref_c -= segments[4 * s + 1]
+        # inside on the left: (x - p) . nu < 0 for the inside point x
+        if ref_r * tangent_c - ref_c * tangent_r > 0:
+            out[count, 0, 0], out[count, 0, 1] = segments[4 * s + 2] - 1.0, segments[4 * s + 3] - 1.0
+            out[count, 1, 0], out[count, 1, 1] = segments[4 * s] - 1.0, segments[4 * s + 1] - 1.0
+        else:
+            out[count, 0, 0], out[count, 0, 1] = segments[4 * s] - 1.0, segments[4 * s + 1] - 1.0
+            out[count, 1, 0], out[count, 1, 1] = segments[4 * s + 2] - 1.0, segments[4 * s + 3] - 1.0
+        count += 1
+    return count
+
+
+def edge_soup(const real[:, ::1] phi, const Py_ssize_t[::1] cells, double[:, :, ::1] out):
+    """The oriented zero-set segments of phi padded by ``-|phi|``
+    (:func:`activecontour.backends.levelset.zeroset._edge_soup`): the image's cells ``cells`` with a
+    sign change (flat ``row * (N - 1) + col``), then the frame's cells next to an inside pixel (top,
+    bottom, left, right), two slots a cell, in image coordinates.  ``out`` holds at least
+    ``2 (K + 2 (N + 1) + 2 (M - 1))`` segments; returns how many were written."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], k, col, row, side, pixel, count = 0
+    with nogil:
+        for k in range(cells.shape[0]):
+            count = _oriented(phi, cells[k] // (n - 1) + 1, cells[k] % (n - 1) + 1, out, count)
+        for side in range(2):  # the frame's top and bottom rows of cells
+            row, pixel = side * m, side * (m - 1)
+            for col in range(n + 1):
+                if phi[pixel, _clamp(col - 1, n)] > 0 or phi[pixel, _clamp(col, n)] > 0:
+                    count = _oriented(phi, row, col, out, count)
+        for side in range(2):  # its left and right columns
+            col, pixel = side * n, side * (n - 1)
+            for row in range(1, m):
+                if phi[row - 1, pixel] > 0 or phi[row, pixel] > 0:
+                    count = _oriented(phi, row, col, out, count)
+    return count
+
+
+cdef inline bint _on_front(const unsigned char[:, ::1] positive, Py_ssize_t r, Py_ssize_t c) noexcept nogil:
+    """Whether pixel (r, c) has a 4-neighbour on the other side."""
+    cdef Py_ssize_t m = positive.shape[0], n = positive.shape[1]
+    cdef unsigned char side = positive[r, c]
+    return ((r > 0 and positive[r - 1, c] != side) or (r < m - 1 and positive[r + 1, c] != side)
+            or (c > 0 and positive[r, c - 1] != side) or (c < n - 1 and positive[r, c + 1] != side))
+
+
+def front_and_cells(const unsigned char[:, ::1] positive, const Py_ssize_t[::1] seeds,
+                    unsigned char[::1] mark, Py_ssize_t[::1] front, Py_ssize_t[::1] cells):
+    """The front pixels among ``seeds`` and their 4-neighbours, and the cells with a sign change
+    around them (:func:`activecontour.backends.levelset.redistancing._front_and_cells`).
+
+    ``seeds``: flat pixel indices (repeats allowed); ``mark``: M N zeros, returned cleared.
+    ``front`` (room for 5 seeds each) gets the front pixels (those with a 4-neighbour on the
+    other side), ``cells`` (room for 4 front pixels each) the cells ``row * (N - 1) + col`` around
+    them whose corners are not all on one side, each once, in no particular order.  Returns the
+    two counts."""
+    cdef Py_ssize_t m = positive.shape[0], n = positive.shape[1]
+    cdef Py_ssize_t i, k, s, r, c, p, n_front = 0, n_cells = 0
+    cdef unsigned char corner
+    with nogil:
+        for i in range(seeds.shape[0]):
+            r, c = seeds[i] // n, seeds[i] % n
+            for s in range(5):
+                p = r + (s == 1) - (s == 2)
+                k = c + (s == 3) - (s == 4)
+                if p < 0 or p >= m or k < 0 or k >= n or mark[p * n + k]:
+                    continue
+                mark[p * n + k] = 1
+                if _on_front(positive, p, k):
+                    front[n_front] = p * n + k
+                    n_front += 1
+        for i in range(seeds.shape[0]):  # clear the marks
+            r, c = seeds[i] // n, seeds[i] % n
+            for s in range(5):
+                p = r + (s == 1) - (s == 2)
+                k = c + (s == 3) - (s == 4)
+                if 0 <= p < m and 0 <= k < n:
+                    mark[p * n + k] = 0
+        # every cell with a sign change has an edge with one, whose ends are front pixels; a cell
+        # is marked at its top-left pixel
+        for i in range(n_front):
+            r, c = front[i] // n, front[i] % n
+            for s in range(4):
+                p = r - 1 + s // 2
+                k = c - 1 + s % 2
+                if p < 0 or p >= m - 1 or k < 0 or k >= n - 1 or mark[p * n + k]:
+                    continue
+                mark[p * n + k] = 1
+                corner = positive[p, k]
+                if positive[p, k + 1] != corner or positive[p + 1, k + 1] != corner \
+                        or positive[p + 1, k] != corner:
+                    cells[n_cells] = p * (n - 1) + k
+                    n_cells += 1
+        for i in range(n_front):
+            r, c = front[i] // n, front[i] % n
+            for s in range(4):
+                p = r - 1 + s // 2
+                k = c - 1 + s % 2
+                if 0 <= p < m - 1 and 0 <= k < n - 1:
+                    mark[p * n + k] = 0
+    return n_front, n_cells
+
+
+cdef inline double _signed(double gap, double band, double least, bint inside) noexcept nogil:
+    """The distance ``sqrt(gap)``, at least ``least`` and at most ``band``, signed by the side."""
+    cdef double distance = sqrt(gap)
+    if distance < least:
+        distance = least
+    if distance > band:
+        distance = band
+    return distance if inside else -distance
+
+
+def band_distances(const Py_ssize_t[::1] framed, int[::1] owner, unsigned char[::1] visited,
+                   Py_ssize_t width, const unsigned char[::1] positive, double band, double least,
+                   const double[::1] start_r, const double[::1] start_c, const double[::1] dir_r,
+                   const double[::1] dir_c, const double[::1] inverse, real[::1] phi, Py_ssize_t[::1] flat):
+    """The signed distances of the band's pixels from their segments (after :func:`grow_band`).
+
+    For each framed pixel ``framed[i]`` (row length ``width``): its distance to segment
+    ``owner[...]`` (-1: the far sentinel, the last one), at least ``least`` (every pixel keeps
+    its side), clipped to ``band``, signed by its side (``positive``, flat over the M x N image)
+    and written to ``phi`` (flat); ``flat[i]`` gets its index in the image.  Clears the pixel's
+    ``visited`` and ``owner``."""
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1, i, p, k, index
+    with nogil:
+        for i in range(framed.shape[0]):
+            p = framed[i]
+            k = owner[p]
+            owner[p] = -1
+            visited[p] = 0
+            index = (p // width - 1) * (width - 2) + (p % width - 1)
+            flat[i] = index
+            phi[index] = _signed(_segment_gap(<double> (p // width - 1), <double> (p % width - 1),
+                                              sentinel if k < 0 else k, start_r, start_c, dir_r, dir_c,
+                                              inverse), band, least, positive[index])
+
+
+def front_distances(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t[::1] nearest,
+                    const double[::1] start_r, const double[::1] start_c, const double[::1] dir_r,
+                    const double[::1] dir_c, const double[::1] inverse, double band, double least,
+                    const unsigned char[::1] positive, real[::1] phi):
+    """The signed distances of the front pixels (flat, ``n`` columns) from their nearest segments
+    (-1: the far sentinel), written to ``phi`` as :func:`band_distances` writes them."""
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1, i, p, k
+    with nogil:
+        for i in range(front.shape[0]):
+            p = front[i]
+            k = nearest[i]
+            phi[p] = _signed(_segment_gap(<double> (p // n), <double> (p % n), sentinel if k < 0 else k,
+                                          start_r, start_c, dir_r, dir_c, inverse), band, least, positive[p])
+
+
+def nearest_segments(const Py_ssize_t[::1] front, Py_ssize_t n, const Py_ssize_t[::1] cells,
+                     const float[::1] start_r, const float[::1] start_c, const float[::1] dir_r,
+                     const float[::1] dir_c, const float[::1] inverse, Py_ssize_t[::1] nearest):
+    """The nearest zero-set segment to each front pixel among those of the four cells around it
+    (:func:`activecontour.backends.levelset.redistancing._front_segments`), in float32.
+
+    ``front``: sorted flat pixel indices of an image of ``n`` columns; ``cells``: the sorted cells
+    with a sign change (``row * (n - 1) + col``), two segment slots each (segment ``2 slot + s``),
+    the segment columns ending with a far sentinel.  The first nearest in the order of the cells
+    top-left, top-right, bottom-left, bottom-right and their slots; -1 where no cell has one.
+    Both lists sorted, the cell at each corner of the front pixels only moves forward: four
+    pointers walk the cells once."""
+    cdef Py_ssize_t sentinel = start_r.shape[0] - 1, count = cells.shape[0]
+    cdef Py_ssize_t i, j, s, r, c, rr, cc, key, candidate, k, own
+    cdef Py_ssize_t pointer[4]
+    cdef float pr, pc, off_r, off_c, t, gap, best
+    pointer[0], pointer[1], pointer[2], pointer[3] = 0, 0, 0, 0
+    with nogil:
+        for i in range(front.shape[0]):
+            r, c = front[i] // n, front[i] % n
+            pr, pc = <float> r, <float> c
+            own, best = -1, 0
+            for j in range(4):
+                rr, cc = r - 1 + j // 2, c - 1 + j % 2
+                candidate = -1
+                if rr >= 0 and cc >= 0 and cc < n - 1:
+                    key = rr * (n - 1) + cc  # increases with the front pixel
+                    while pointer[j] < count and cells[pointer[j]] < key:
+                        pointer[j] += 1
+                    if pointer[j] < count and cells[pointer[j]] == key:
+                        candidate = pointer[j]
+                for s in range(2):
+                    k = sentinel if candidate < 0 else 2 * candidate + s
+                    off_r = pr - start_r[k]
+                    off_c = pc - start_c[k]
+                    t = (off_r * dir_r[k] + off_c * dir_c[k]) * inverse[k]
+                    t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+                    off_r = off_r - t * dir_r[k]
+                    off_c = off_c - t * dir_c[k]
+                    gap = off_r * off_r + off_c * off_c
+                    if (j == 0 and s == 0) or gap < best:
+                        own, best = (-1 if candidate < 0 else 2 * candidate + s), gap
+            nearest[i] = own
+
+
+cdef inline double _heaviside(double s) noexcept nogil:
+    """The cosine-regularised Heaviside of width 1 (scheme.heaviside)."""
+    if s >= 1.0:
+        return 1.0
+    if s <= -1.0:
+        return 0.0
+    return 0.5 * (1.0 + s + sin(M_PI * s) / M_PI)
+
+
+def swept_area(const real[::1] old, const real[::1] new, const Py_ssize_t[::1] old_band,
+               const Py_ssize_t[::1] new_band, unsigned char[::1] mark):
+    """``sum |H(new) - H(old)|`` over the pixels of either band, each once
+    (:func:`activecontour.backends.levelset.scheme._swept_area`); ``mark``: zeros, returned cleared."""
+    cdef double total = 0.0
+    cdef Py_ssize_t i, p
+    with nogil:
+        for i in range(old_band.shape[0] + new_band.shape[0]):
+            p = old_band[i] if i < old_band.shape[0] else new_band[i - old_band.shape[0]]
+            if not mark[p]:
+                mark[p] = 1
+                total += fabs(_heaviside(new[p]) - _heaviside(old[p]))
+        for i in range(old_band.shape[0]):
+            mark[old_band[i]] = 0
+        for i in range(new_band.shape[0]):
+            mark[new_band[i]] = 0
+    return total
+
+
+def force_step(const float[:, ::1] phi, const double[:, :, ::1] values, double constant,
+               const double[::1] linear, const double[::1] square, double wall, double tau,
+               float[:, ::1] out):
+    """``phi - tau f`` over the image, rounded to float32: the right-hand side of the level set's
+    smoothed-force step (:meth:`activecontour.backends.levelset.scheme._Problem.step`).
+
+    ``f = constant + sum_c v_c (linear_c + square_c v_c)`` is the integrand of (6.41), a
+    quadratic form in the channels ``values (M, N, C)`` (``QuadraticForm.density``, term by term
+    in the same order), plus ``wall`` per side of the image that a pixel lies on."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], channels = values.shape[2]
+    cdef Py_ssize_t block, i, j, ch
+    cdef double f, v
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                for j in range(n):
+                    f = constant
+                    for ch in range(channels):
+                        v = values[i, j, ch]
+                        if square[ch] != 0:
+                            f += v * (linear[ch] + square[ch] * v)
+                        else:
+                            f += linear[ch] * v
+                    if wall > 0:  # the wall term, columns first as in the numpy blocks
+                        if j == 0:
+                            f += wall
+                        if j == n - 1:
+                            f += wall
+                        if i == 0:
+                            f += wall
+                        if i == m - 1:
+                            f += wall
+                    out[i, j] = <float> (phi[i, j] - tau * f)
+        PyErr_CheckSignals()
+
+
+def divide_spectrum(float[:, ::1] spectrum, const float[::1] wave_r, const float[::1] wave_c, float weight):
+    """``spectrum /= 1 + weight (wave_r[:, None] + wave_c[None, :])`` in float32: the operator
+    ``(1 - weight Laplace)^{-1}`` in the DCT-II basis (the eigenvalues of -Laplace per axis)."""
+    cdef Py_ssize_t m = spectrum.shape[0], n = spectrum.shape[1], block, i, j
+    cdef float one = 1.0
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                for j in range(n):
+                    spectrum[i, j] /= one + weight * (wave_r[i] + wave_c[j])
+        PyErr_CheckSignals()
+
+
+cdef inline double _density(const double[:, ::1] values, Py_ssize_t p, double constant,
+                            const double[::1] linear, const double[::1] square) noexcept nogil:
+    """``constant + sum_c v_c (linear_c + square_c v_c)`` at pixel p, term by term as
+    ``QuadraticForm.density``."""
+    cdef double f = constant, v
+    cdef Py_ssize_t ch
+    for ch in range(values.shape[1]):
+        v = values[p, ch]
+        if square[ch] != 0:
+            f += v * (linear[ch] + square[ch] * v)
+        else:
+            f += linear[ch] * v
+    return f
+
+
+def explicit_step(const float[::1] phi, const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n,
+                  double rate, double band, const double[:, ::1] values, double constant,
+                  const double[::1] linear, const double[::1] square, double mu, double tau,
+                  float[::1] out):
+    """``phi + rate Laplace(phi) - tau f`` at the band's pixels ``flat``, written to ``out``
+    (:meth:`activecontour.backends.levelset.scheme._Problem._explicit_step`).
+
+    The 5-point Laplacian with mirrored pixels at the image border (Neumann), its four neighbours
+    summed in float32; the force f of (6.41) (the quadratic form of ``values (M N, C)`` plus
+    ``mu`` times the number of image sides the pixel lies on) only where ``|phi| < band``."""
+    cdef Py_ssize_t i, p, r, c
+    cdef float around
+    cdef double centre, moved, f
+    with nogil:
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            r, c = p // n, p % n
+            centre = phi[p]
+            around = phi[p - n if r > 0 else p] + phi[p + n if r < m - 1 else p]
+            around = around + phi[p - 1 if c > 0 else p]
+            around = around + phi[p + 1 if c < n - 1 else p]
+            moved = centre + rate * (around - 4.0 * centre)
+            if fabs(centre) < band:
+                f = _density(values, p, constant, linear, square)
+                if mu > 0:
+                    f += mu * <double> ((r == 0) + (r == m - 1) + (c == 0) + (c == n - 1))
+                moved -= tau * f
+            out[p] = <float> moved
+
+
+def band_couplings(const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n, int[::1] index,
+                   Py_ssize_t[:, ::1] couplings, Py_ssize_t[:, ::1] held, double[::1] degree):
+    """The 4-neighbours (up, down, left, right) of the band's pixels ``flat``, for the solve of S on
+    the band (:meth:`activecontour.backends.levelset.scheme._Problem._band_smooth`).
+
+    ``couplings[d, i]``: the band index of pixel i's neighbour d, -1 where it is beyond the band
+    or the image; ``held[d, i]``: its flat index where it is in the image but beyond the band,
+    else -1; ``degree[i]``: the number of neighbours in the image.  ``index``: a framed
+    (M + 2) x (N + 2) array of -1 (row length N + 2), returned so."""
+    cdef Py_ssize_t width = n + 2, i, d, p, q, r, c, k
+    cdef bint exists
+    with nogil:
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            index[(p // n + 1) * width + p % n + 1] = <int> i
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            r, c = p // n, p % n
+            degree[i] = 0.0
+            for d in range(4):
+                if d == 0:
+                    exists, q = r > 0, p - n
+                elif d == 1:
+                    exists, q = r < m - 1, p + n
+                elif d == 2:
+                    exists, q = c > 0, p - 1
+                else:
+                    exists, q = c < n - 1, p + 1
+                couplings[d, i], held[d, i] = -1, -1
+                if exists:
+                    degree[i] += 1.0
+                    k = index[(q // n + 1) * width + q % n + 1]
+                    if k >= 0:
+                        couplings[d, i] = k
+                    else:
+                        held[d, i] = q
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            index[(p // n + 1) * width + p % n + 1] = -1
+
+
+def sides(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,
+          Py_ssize_t[::1] switched):
+    """``positive = phi > 0`` and the pixels whose side differs from ``before``, in one pass over the
+    image (:func:`activecontour.backends.levelset.redistancing._redistance`): ``switched`` (room for
+    every pixel) gets their flat indices in increasing order; returns how many."""
+    cdef Py_ssize_t size = phi.shape[0], block, i, count = 0
+    cdef unsigned char side
+    cdef Py_ssize_t rows = _POLL_ROWS * 1024
+    for block in range(0, size, rows):
+        with nogil:
+            for i in range(block, min(block + rows, size)):
+                side = phi[i] > 0
+                positive[i] = side
+                if side != before[i]:
+                    switched[count] = i
+                    count += 1
+        PyErr_CheckSignals()
+    return count
+
+
+def segment_table(const double[:, :, ::1] segments, double far, double[:, ::1] columns,
+                  float[:, ::1] columns32):
+    """The columns of the level set's segment table
+    (:class:`activecontour.backends.levelset.redistancing._Segments`): for each segment ``(S, 2
+    ends, 2)`` its start (row, col; ``far`` for an empty, NaN slot), its direction (0 where NaN)
+    and its inverse squared length (0 for a point), in ``columns (5, S + 1)`` and as float32 in
+    ``columns32``; the last column is the far sentinel ``(far, far, 0, 0, 0)``."""
+    cdef Py_ssize_t count = segments.shape[0], i, k
+    cdef double row[5]
+    with nogil:
+        for i in range(count + 1):
+            if i == count:
+                row[0], row[1], row[2], row[3], row[4] = far, far, 0.0, 0.0, 0.0
+            else:
+                row[0], row[1] = segments[i, 0, 0], segments[i, 0, 1]
+                row[2], row[3] = segments[i, 1, 0] - row[0], segments[i, 1, 1] - row[1]
+                for k in range(2):
+                    if isnan(row[k]):
+                        row[k] = far
+                    if isnan(row[2 + k]):
+                        row[2 + k] = 0.0
+                row[4] = row[2] * row[2] + row[3] * row[3]
+                row[4] = 1.0 / row[4] if row[4] > 0 else 0.0
+            for k in range(5):
+                columns[k, i] = row[k]
+                columns32[k, i] = <float> row[k]

@@ -9,6 +9,7 @@ common evaluator.  Dropping a term from any consumer fails one of these.
 import numpy as np
 import pytest
 
+from activecontour import _kernels
 from activecontour.energy import evaluate, region_moments
 from activecontour.geometry import topology
 from activecontour.geometry.curve import stack_curves
@@ -129,7 +130,16 @@ def test_level_set_force_follows_the_common_evaluator(change):
     model = _model(image)
     problem = _Problem(model, params, DEFAULT_OPTIONS)
     constants, _ = problem.force(params.c_in, params.c_out)
-    force = problem.force_rows(0, 20, constants)
+    centre, border = 10 * 20 + 10, 0 * 20 + 10
+    force = problem.force_at(np.array([centre, border]), constants)
     # away from the border (which adds mu per side) the force is g_i - g_o of the pixel
-    assert force[10, 10] == pytest.approx(g, rel=1e-9, abs=1e-12)
-    assert force[0, 10] == pytest.approx(_density_by_the_evaluator(params, 0.5) + params.mu, rel=1e-9)
+    assert force[0] == pytest.approx(g, rel=1e-9, abs=1e-12)
+    assert force[1] == pytest.approx(_density_by_the_evaluator(params, 0.5) + params.mu, rel=1e-9)
+    # the smoothed-force step's right-hand side phi - tau f (float32, as phi) holds the same f:
+    # with phi = 0 and tau = -1 it is f itself, rounded to float32
+    stepped = np.empty((20, 20), dtype=np.float32)
+    form = params.load_form(*constants)
+    _kernels.force_step(np.zeros((20, 20), dtype=np.float32), model.values, form.constant, form.linear,
+                        form.square, params.mu, -1.0, stepped)
+    assert stepped[10, 10] == pytest.approx(g, rel=1e-6, abs=1e-7)
+    assert stepped[0, 10] == pytest.approx(force[1], rel=1e-6, abs=1e-7)

@@ -41,7 +41,10 @@ One iteration
 3. Reinitialisation: phi is replaced by the signed distance to its zero level set, computed in a
    narrow band ``|phi| < band`` only and clipped to ``+-band`` beyond (:func:`signed_distance`).
 4. The step is accepted if (6.38) of the new zero set, by the common evaluator, is not larger;
-   otherwise tau is halved and the step retried (backtracking).
+   otherwise tau is halved and the step retried (backtracking).  The zero set of the
+   reinitialised phi is fixed by the distances of the front pixels alone (marching squares reads
+   no other), so a step is scored once those are known, and the band is grown for an accepted
+   step only.
 
 Steps in pixels
 ---------------
@@ -88,12 +91,13 @@ included.
 Cost and memory: phi is float32 (a distance of a few pixels, rounded to ~2e-7 px, far below
 what the energy or the flow resolve; the marching-squares crossings, the distances and the energy
 are computed in float64 from it).  A step (a) is one DCT pair over the image (O(MN log MN),
-float32, its force computed in blocks of rows); a step (b) works on the band only (explicit, or
-conjugate gradients), but for one copy of phi.  The reinitialisation costs two sign passes over
+float32, its force computed in one compiled pass); a step (b) works on the band only (explicit, or
+conjugate gradients), but for one copy of phi.  The reinitialisation costs one sign pass over
 the image (the front is searched next to the previous one and the pixels that changed side) plus
-O(band), with work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
-reinitialisation found.  The image itself stays float64 (the model's tables and the common
-evaluator are exact in float64; the polygon backend shares them).
+O(band) and a copy of phi for an accepted step (a rejected one costs its front), with work arrays
+kept between iterations; the energy is O(|Gamma|) from the cells the reinitialisation found.
+The image itself stays float64 (the model's tables and the common evaluator are exact in
+float64; the polygon backend shares them).
 
 The energy
 ----------

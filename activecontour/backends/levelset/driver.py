@@ -121,15 +121,18 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
         for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
             stepped = problem.step(state, force, tau, smooth_force)
-            trial = problem.redistance(stepped, previous=state)
-            problem.recycle(stepped)
-            evaluation = problem.evaluate(trial)
+            located = problem.locate(stepped, state)  # scored before its band is grown
+            evaluation = problem.evaluate(located)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
             # does it has flattened phi rather than followed the force.
-            degenerate = smooth_force and (not trial.positive.any() or trial.positive.all())
+            degenerate = smooth_force and (not located.positive.any() or located.positive.all())
             if evaluation.energy <= current.energy and not degenerate:
+                trial = problem.finish(located, state)
+                problem.recycle(stepped)
                 break
-            problem.recycle(trial.phi)
+            problem.recycle(stepped)
+            if located.phi is not stepped:  # a state without a front
+                problem.recycle(located.phi)
             step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
             if smooth_force and pending is not None and len(moves) == stage_start:
@@ -139,7 +142,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
         if evaluation is not None:
             n_iter += 1
             # mean normal displacement of Gamma in this iteration, pixels: swept area over length
-            moves.append(_swept_area(state, trial) / max(evaluation.length, current.length, 1.0))
+            moves.append(_swept_area(state, trial, problem.scratch.mark)
+                         / max(evaluation.length, current.length, 1.0))
             problem.recycle(state.phi)
             state, current = trial, evaluation
             energies.append(current.energy)

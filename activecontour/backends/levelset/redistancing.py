@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _corners
+from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells
 from activecontour.geometry.curve import subdivide
 from activecontour.geometry.raster import rasterize
 
@@ -18,11 +18,10 @@ _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1,
 class _Redistanced:
     """A band-clipped signed distance, the pixels of its band and the cells Gamma crosses."""
 
-    def __init__(self, phi, positive, near_flat, near_distance, cells, front):
+    def __init__(self, phi, positive, near_flat, cells, front):
         self.phi = phi  # (M, N), exact within the band, +-band beyond
         self.positive = positive  # phi > 0
         self.near_flat = near_flat  # flat indices of the pixels whose distance was computed
-        self.near_distance = near_distance  # their signed distances (float64)
         self.cells = cells  # the cells with a sign change (zeroset._change_cells), the same after
         self.front = front  # flat indices of the pixels with a 4-neighbour on the other side
 
@@ -31,8 +30,9 @@ class _Scratch:
     """Work arrays of the band growth kept between calls, cleared on the band's pixels only.
 
     A framed (M + 2) x (N + 2) grid: ``visited`` (the frame marked, sparing every bounds check)
-    and ``owner`` (segment ids, -1: none).  Filling them anew for every reinitialisation would
-    touch every pixel; clearing what one band touched is O(band).
+    and ``owner`` (segment ids, -1: none); ``mark``, M x N, for the search of the front next to
+    the previous one.  Filling them anew for every reinitialisation would touch every pixel;
+    clearing what one band touched is O(band).
     """
 
     def __init__(self, shape):
@@ -42,10 +42,7 @@ class _Scratch:
         visited[0], visited[-1], visited[:, 0], visited[:, -1] = True, True, True, True
         self.visited = visited.ravel()
         self.owner = np.full((m + 2) * self.width, -1, dtype=np.int32)
-
-    def clear(self, touched):
-        self.visited[touched] = False
-        self.owner[touched] = -1
+        self.mark = np.zeros(m * n, dtype=np.uint8)
 
 
 def signed_distance(phi, band=np.inf):
@@ -78,7 +75,7 @@ def signed_distance(phi, band=np.inf):
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
 
-def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=None, keep_front=False):
+def _redistance(phi, band, dtype=np.float64, scratch=None, keep_front=False):
     """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``.
 
     ``keep_front``: the front pixels keep phi's own values and the band the distances from them,
@@ -88,86 +85,110 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, previous=None, out=No
     move; a second reinitialisation would move a curved front by O(h^2 kappa), up to a sixth of
     a pixel, which on a binary image changes (6.38) by percents.
 
-    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  ``previous``: a
+    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  A phi stepped
+    from a state is located (:func:`_locate`), scored and only then finished
+    (:meth:`_Located.finish`) by the level set's driver.
+    """
+    located = _locate(phi, band, dtype, scratch)
+    if isinstance(located, _Redistanced):
+        return located
+    return located.finish(band, dtype, scratch, keep_front=keep_front)
+
+
+class _Located:
+    """phi's zero set located, before the band: its sides, front pixels, cells with a sign change
+    and their segments, each front pixel's nearest segment (and, stepped from a previous state,
+    the pixels that changed side).  The distances of the front pixels alone fix the zero set
+    (marching squares reads only them), so an energy can be scored before the band is grown
+    (:meth:`front_distances`, :meth:`finish`)."""
+
+    def __init__(self, phi, positive, front, cells, segments, nearest, switched):
+        self.phi, self.positive, self.front, self.cells = phi, positive, front, cells
+        self.segments, self.nearest, self.switched = segments, nearest, switched
+
+    def front_distances(self, band):
+        """Write the front pixels' signed distances (those :meth:`finish` gives them) into phi."""
+        _kernels.front_distances(self.front, self.phi.shape[1], self.nearest, *self.segments.columns,
+                                 band, _MIN_DISTANCE, self.positive.reshape(-1).view(np.uint8),
+                                 self.phi.reshape(-1))
+
+    def finish(self, band, dtype, scratch=None, previous=None, out=None, keep_front=False):
+        """The :class:`_Redistanced` state: the band grown from the front (:func:`_redistance`).
+
+        ``previous``: the state that phi was stepped from (as for :func:`_locate`) and ``out`` an
+        array of phi's shape and ``dtype`` to write the result into: a copy of the previous state
+        with its band and the switched pixels reset, rather than a new array.
+        """
+        positive, front = self.positive, self.front
+        rows, cols = np.divmod(front, positive.shape[1])
+        # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
+        # of a narrow band, one sweep and the walk along Gamma are
+        sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
+        base = None
+        if previous is not None and out is not None:
+            # beyond the previous band and the switched pixels phi is +-band on the same side as before
+            base = out
+            np.copyto(base, previous.phi)
+            reset = np.concatenate([previous.near_flat, self.switched])
+            base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
+        state = _propagate(positive, rows, cols, self.segments, self.nearest, band, sweeps,
+                           dtype=dtype, scratch=scratch, base=base)
+        state.cells, state.front = self.cells, front
+        if keep_front:
+            given = np.clip(np.abs(self.phi.ravel()[front]), _MIN_DISTANCE, band)
+            state.phi.ravel()[front] = np.where(positive.ravel()[front], given, -given)
+        return state
+
+
+def _locate(phi, band, dtype=np.float64, scratch=None, previous=None):
+    """The :class:`_Located` zero set of phi, or the final :class:`_Redistanced` state where phi has
+    no front (all inside or all outside).
+
+    ``scratch``: a :class:`_Scratch` of phi's shape to reuse.  ``previous``: a
     :class:`_Redistanced` that phi was stepped from; the front is then searched only next to the
     previous front and the pixels that changed side (a front pixel whose side and whose
     neighbours' sides are unchanged was a front pixel before), which gives the same front and
-    cells as a search over the image at the cost of two passes instead of a dozen.  ``out``: with
-    ``previous``, an array of phi's shape and ``dtype`` to write the result into (a copy of the
-    previous state with its band and the switched pixels reset, rather than a new array).
+    cells as a search over the image at the cost of one pass instead of a dozen.
     """
-    positive = phi > 0
+    switched = None
     if previous is None:
+        positive = phi > 0
         front = np.flatnonzero(_front_pixels(positive))
     else:
-        switched = np.flatnonzero(positive != previous.positive)
-        front = _front_among(positive, np.concatenate([previous.front, switched]))
+        # the sides and the pixels that changed side, in one pass over the image
+        positive = np.empty(phi.shape, dtype=bool)
+        switched = np.empty(phi.size, dtype=np.intp)  # only the pages written are touched
+        before = np.ascontiguousarray(previous.positive).reshape(-1).view(np.uint8)
+        count = _kernels.sides(np.ascontiguousarray(phi).reshape(-1), before,
+                               positive.reshape(-1).view(np.uint8), switched)
+        switched = switched[:count].copy()
+        mark = np.zeros(phi.size, dtype=np.uint8) if scratch is None else scratch.mark
+        front, cells = _front_and_cells(positive, np.concatenate([previous.front, switched]), mark)
     if front.size == 0 and positive.all():
         return _domain_edge_distance(phi.shape, band, dtype)
     if front.size == 0:
         return _Redistanced(_clipped(positive, band, dtype), positive, np.zeros(0, dtype=np.intp),
-                            np.zeros(0), np.zeros(0, dtype=np.intp), front)
-    cells = _change_cells(positive) if previous is None else _cells_around(positive, front)
-    rows, cols = np.divmod(front, phi.shape[1])
-    segments, nearest = _front_segments(phi, positive, rows, cols, cells)
-    # far from Gamma a second sweep per ring keeps the propagation exact; within the few rings
-    # of a narrow band, one sweep and the walk along Gamma are
-    sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
-    base = None
-    if previous is not None and out is not None:
-        # beyond the previous band and the switched pixels phi is +-band on the same side as before
-        base = out
-        np.copyto(base, previous.phi)
-        reset = np.concatenate([previous.near_flat, switched])
-        base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
-    state = _propagate(positive, rows, cols, segments, nearest, band, sweeps,
-                       dtype=dtype, scratch=scratch, base=base)
-    state.cells, state.front = cells, front
-    if keep_front:
-        given = np.clip(np.abs(phi.ravel()[front]), _MIN_DISTANCE, band)
-        state.phi.ravel()[front] = np.where(positive.ravel()[front], given, -given)
-    return state
+                            np.zeros(0, dtype=np.intp), front)
+    if previous is None:
+        cells = _change_cells(positive)
+    segments, nearest = _front_segments(phi, front, cells)
+    return _Located(phi, positive, front, cells, segments, nearest, switched)
 
 
-def _unique(flat):
-    """The distinct values of an integer array, sorted."""
-    flat = np.sort(flat)
-    return flat[np.concatenate([[True], flat[1:] != flat[:-1]])] if flat.size else flat
+def _front_and_cells(positive, seeds, mark):
+    """The front pixels among ``seeds`` (flat indices) and their 4-neighbours, and the cells with a
+    sign change (as :func:`zeroset._change_cells`) around them, both sorted.
 
-
-def _front_among(positive, seeds):
-    """The front pixels among ``seeds`` (flat indices) and their 4-neighbours, sorted."""
-    m, n = positive.shape
-    rows, cols = np.divmod(seeds, n)
-    rows = np.concatenate([rows, rows - 1, rows + 1, rows, rows])
-    cols = np.concatenate([cols, cols, cols, cols - 1, cols + 1])
-    keep = (rows >= 0) & (rows < m) & (cols >= 0) & (cols < n)
-    candidates = _unique(rows[keep] * n + cols[keep])
-    rows, cols = np.divmod(candidates, n)
-    side = positive[rows, cols]
-    front = np.zeros(candidates.size, dtype=bool)
-    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-        r, c = rows + dr, cols + dc
-        inside = (r >= 0) & (r < m) & (c >= 0) & (c < n)
-        front[inside] |= positive[r[inside], c[inside]] != side[inside]
-    return candidates[front]
-
-
-def _cells_around(positive, front):
-    """The cells with a sign change (as :func:`zeroset._change_cells`) from the front pixels: every
-    such cell has an edge with a sign change, whose two ends are front pixels."""
-    m, n = positive.shape
-    rows, cols = np.divmod(front, n)
-    rows = np.concatenate([rows - 1, rows - 1, rows, rows])
-    cols = np.concatenate([cols - 1, cols, cols - 1, cols])
-    keep = (rows >= 0) & (rows < m - 1) & (cols >= 0) & (cols < n - 1)
-    cells = _unique(rows[keep] * (n - 1) + cols[keep])
-    r, c = np.divmod(cells, n - 1)
-    corner = positive[r, c]
-    change = corner != positive[r, c + 1]
-    change |= corner != positive[r + 1, c + 1]
-    change |= corner != positive[r + 1, c]
-    return cells[change]
+    Every cell with a sign change has an edge with one, whose two ends are front pixels, so the
+    cells around the front are all of them.  ``mark``: M N zeros (uint8), returned cleared.
+    Compiled: :func:`activecontour._kernels.front_and_cells`, O(seeds).
+    """
+    seeds = np.ascontiguousarray(seeds, dtype=np.intp)
+    front = np.empty(5 * seeds.size, dtype=np.intp)
+    cells = np.empty(4 * front.size, dtype=np.intp)
+    n_front, n_cells = _kernels.front_and_cells(np.ascontiguousarray(positive).view(np.uint8), seeds, mark,
+                                                front, cells)
+    return np.sort(front[:n_front]), np.sort(cells[:n_cells])
 
 
 def _domain_edge_distance(shape, band, dtype=np.float64):
@@ -183,7 +204,7 @@ def _domain_edge_distance(shape, band, dtype=np.float64):
     distance = np.minimum(to_rows[:, None], to_cols[None, :])
     near = np.flatnonzero(distance < band)
     return _Redistanced(np.minimum(distance, band).astype(dtype), np.ones(shape, dtype=bool), near,
-                        distance.ravel()[near], np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp))
+                        np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp))
 
 
 def _clipped(positive, band, dtype=np.float64):
@@ -219,31 +240,22 @@ def _segment_distance(points, starts, ends):
     return np.where(np.isnan(gap), np.inf, gap)
 
 
-def _front_segments(phi, positive, rows, cols, cells):
+def _front_segments(phi, front, cells):
     """The zero-set segments (every cell with a sign change) and the nearest one to each front pixel.
 
-    ``cells``: the cells with a sign change.  Returns a :class:`_Segments` (every segment of
-    Gamma once, and empty saddle slots) and ``nearest (F,)``, an index into it.
+    ``front``: the front pixels (flat indices); ``cells``: the cells with a sign change, sorted.
+    A front pixel is within one pixel of Gamma, so its nearest segment lies in one of the four
+    cells around it: the first nearest among their segments, in float32 (ample to rank them),
+    found by a search in the list of cells, not a lookup table over the image (compiled:
+    :func:`activecontour._kernels.nearest_segments`).  Returns a :class:`_Segments` (every
+    segment of Gamma once, and empty saddle slots) and ``nearest (F,)``, an index into it (-1:
+    none).
     """
-    m, n = phi.shape
-    cell_r, cell_c = np.divmod(cells, n - 1)
-    segments, keys = _cell_segments(*_corners(phi, cell_r, cell_c), cell_r, cell_c, n)
-    segments, keys = segments.reshape(-1, 2, 2), keys.reshape(-1, 2)
-    # the cells around every front pixel, as slots into ``cells`` (sorted; -1: none, or no sign
-    # change): a search in the list of cells, not a lookup table over the image
-    around = []
-    for dr, dc in ((-1, -1), (-1, 0), (0, -1), (0, 0)):
-        r, c = rows + dr, cols + dc
-        inside = (r >= 0) & (r < m - 1) & (c >= 0) & (c < n - 1)
-        key = np.where(inside, r * (n - 1) + c, -1)
-        slot = np.minimum(np.searchsorted(cells, key), cells.size - 1)
-        around.append(np.where(inside & (cells[slot] == key), slot, -1))
-    around = np.column_stack(around)
-    candidates = np.where(around[:, :, None] >= 0, 2 * around[:, :, None] + np.arange(2), -1)
-    candidates = candidates.reshape(len(rows), 8)
-    table = _Segments(segments, _links(keys))
-    gap = table.squared_gap(rows.astype(np.float32)[:, None], cols.astype(np.float32)[:, None], candidates)
-    nearest = candidates[np.arange(len(rows)), np.argmin(gap, axis=1)]
+    segments, keys = _cell_segments(phi, cells)
+    table = _Segments(segments.reshape(-1, 2, 2), _links(keys.reshape(-1, 2)))
+    nearest = np.empty(front.size, dtype=np.intp)
+    _kernels.nearest_segments(np.ascontiguousarray(front, dtype=np.intp), phi.shape[1],
+                              np.ascontiguousarray(cells, dtype=np.intp), *table.columns32, nearest)
     return table, nearest
 
 
@@ -266,42 +278,29 @@ class _Segments:
     """Segments of Gamma set up for nearest-segment queries; id -1 is a far sentinel.
 
     ``segments (S, 2, 2)`` holds start and end in (row, col), NaN for an empty slot (also far);
-    ``links (S, 2)`` the neighbours of each along Gamma (-1: none).  The queries run in float32
-    (a quarter of the memory traffic, ample to rank candidates on images up to ~10^4 pixels);
-    ``exact=True`` gives float64 for the final distances.
+    ``links (S, 2)`` the neighbours of each along Gamma (-1: none).  ``columns``: start (row,
+    col), direction (row, col) and the inverse squared length, float64, for the distances of the
+    band (:func:`activecontour._kernels.grow_band`, :func:`~activecontour._kernels.band_distances`);
+    ``columns32`` the same in float32 for ranking the candidates of the front pixels (ample on
+    images up to ~10^4 pixels); the sentinel is the last (compiled:
+    :func:`activecontour._kernels.segment_table`).
     """
 
     def __init__(self, segments, links):
-        start = np.nan_to_num(segments[:, 0], nan=_FAR)
-        direction = np.nan_to_num(segments[:, 1] - segments[:, 0])
-        length_sq = np.sum(direction * direction, axis=1)
-        inverse = np.divide(1.0, length_sq, out=np.zeros_like(length_sq), where=length_sq > 0)
-        table = np.concatenate([np.column_stack([start, direction, inverse]), [[_FAR, _FAR, 0, 0, 0]]])
-        self.columns = [np.ascontiguousarray(column) for column in table.T]
-        self.columns32 = [column.astype(np.float32) for column in self.columns]
+        table = np.empty((5, len(segments) + 1))
+        table32 = np.empty((5, len(segments) + 1), dtype=np.float32)
+        _kernels.segment_table(np.ascontiguousarray(segments, dtype=np.float64), _FAR, table, table32)
+        self.columns, self.columns32 = list(table), list(table32)
         self.links = np.concatenate([links, [[-1, -1]]])
-
-    def squared_gap(self, point_r, point_c, ids, exact=False):
-        """Squared distance from points to the segments ``ids`` (broadcast together)."""
-        columns = self.columns if exact else self.columns32
-        start_r, start_c, dir_r, dir_c, inverse = (column[ids] for column in columns)
-        off_r = point_r - start_r
-        off_c = point_c - start_c
-        t = (off_r * dir_r + off_c * dir_c) * inverse
-        np.clip(t, 0.0, 1.0, out=t)
-        off_r -= t * dir_r
-        off_c -= t * dir_c
-        off_r *= off_r
-        off_c *= off_c
-        off_r += off_c
-        return off_r
 
 
 def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np.float64,
                scratch=None, base=None):
     """Grow the band ring by ring from the front pixels; each new pixel takes the nearest of its
-    eight neighbours' segments, then walks along Gamma while that gets nearer (a compiled loop,
-    :func:`activecontour._kernels.grow_band`, O(pixels in the band))."""
+    eight neighbours' segments, then walks along Gamma while that gets nearer; then each takes its
+    distance to its segment (compiled loops, :func:`activecontour._kernels.grow_band` and
+    :func:`~activecontour._kernels.band_distances`, O(pixels in the band), the work arrays of
+    ``scratch`` cleared on the band's pixels)."""
     m, n = positive.shape
     scratch = _Scratch((m, n)) if scratch is None else scratch
     width, visited, owner = scratch.width, scratch.visited, scratch.owner
@@ -317,22 +316,16 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     count = _kernels.grow_band(visited.view(np.uint8), owner, out, np.empty(visited.size, np.int32),
                                ring.size, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
                                dir_c, inverse, np.ascontiguousarray(segments.links, dtype=np.intp))
-    framed = out[:count]
-    r, c = np.divmod(framed, width)
-    distance = np.sqrt(segments.squared_gap((r - 1).astype(np.float64), (c - 1).astype(np.float64),
-                                            owner[framed], exact=True))
-    scratch.clear(framed)
-    flat = (r - 1) * n + (c - 1)
-    inside = positive.ravel()[flat]
     # every pixel keeps its side, at least _MIN_DISTANCE from Gamma: the sign pattern, and so the
     # cells Gamma crosses, are those of the input (a distance that rounds to 0 would move an
     # inside pixel out), and no crossing lies closer to a pixel centre than the coordinates
     # resolve (marching squares on values ~1e-20 orients its segments by rounding errors)
-    distance = np.maximum(distance, _MIN_DISTANCE)
-    signed = np.where(inside, distance, -distance)
     phi = _clipped(positive, band, dtype) if base is None else base  # base: +-band beyond the band
-    phi.ravel()[flat] = np.clip(signed, -band, band)
-    return _Redistanced(phi, positive, flat, signed, None, None)
+    flat = np.empty(count, dtype=np.intp)
+    _kernels.band_distances(out[:count], owner, visited.view(np.uint8), width,
+                            np.ascontiguousarray(positive).reshape(-1).view(np.uint8), band, _MIN_DISTANCE,
+                            *segments.columns, phi.reshape(-1), flat)
+    return _Redistanced(phi, positive, flat, None, None)
 
 
 def curves_level_set(curves, shape, band=np.inf, *, dtype=np.float64):

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
-from activecontour.backends.levelset.redistancing import _redistance, _Scratch
+from activecontour import _kernels
+from activecontour.backends.levelset.redistancing import _locate, _Located, _redistance, _Scratch
 from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
 
@@ -32,11 +33,11 @@ class _Problem:
     """Image, parameters and the pieces of the energy, the force f and the operator S.
 
     phi is float32 (a distance of a few pixels, rounded to ~2e-7 px: far below what the energy or
-    the flow resolve) and the image-wide work is done in blocks of rows, so that no float64 copy of
-    the image is made per step; the reinitialisation reuses its work arrays (:class:`_Scratch`).
+    the flow resolve) and the image-wide work is done in compiled passes without temporaries
+    (:func:`activecontour._kernels.force_step`, :func:`~activecontour._kernels.divide_spectrum`), so
+    that no float64 copy of the image is made per step; the reinitialisation reuses its work
+    arrays (:class:`_Scratch`).
     """
-
-    _BLOCK_ROWS = 256  # rows per block of the image-wide passes (bounded temporaries)
 
     def __init__(self, model, params, settings):
         self.model = model
@@ -67,11 +68,26 @@ class _Problem:
                 and len(self._spare) < 2:
             self._spare.append(array)
 
-    def redistance(self, phi, previous=None, keep_front=False):
-        """The reinitialised state of phi (float32); ``previous``: the state phi was stepped from;
-        ``keep_front``: phi's zero set kept exactly (a previous result's, see :func:`_redistance`)."""
-        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, previous=previous,
-                           out=None if previous is None else self.take(), keep_front=keep_front)
+    def redistance(self, phi, keep_front=False):
+        """The reinitialised state of phi (float32); ``keep_front``: phi's zero set kept exactly (a
+        previous result's, see :func:`_redistance`)."""
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front)
+
+    def locate(self, stepped, previous):
+        """The zero set of ``stepped`` (a step from the state ``previous``) located, and the signed
+        distances of its front pixels written into ``stepped``: these alone fix the zero set of the
+        reinitialised state, so :meth:`evaluate` scores it as it will be, and the band is grown
+        (:meth:`finish`) only for a step that is accepted."""
+        located = _locate(stepped, self.band, np.float32, self.scratch, previous)
+        if isinstance(located, _Located):
+            located.front_distances(self.band)
+        return located
+
+    def finish(self, located, previous):
+        """The reinitialised state of a located step from ``previous`` (:meth:`locate`)."""
+        if not isinstance(located, _Located):
+            return located  # no front: final already
+        return located.finish(self.band, np.float32, self.scratch, previous, self.take())
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
@@ -80,7 +96,7 @@ class _Problem:
         along the domain edge.  An empty region has the evaluator's value for the empty set.
         """
         cells = state.cells if state.cells is not None else _change_cells(state.positive)
-        points = _edge_soup(state.phi, state.positive, cells).reshape(-1, 2)
+        points = _edge_soup(state.phi, cells).reshape(-1, 2)
         next_index = np.repeat(np.arange(1, len(points), 2), 2)  # start -> end -> itself
         return evaluate(self.model, points, next_index, self.params, empty_ok=True)
 
@@ -89,11 +105,12 @@ class _Problem:
 
         f is :func:`_force` plus ``mu`` per side of the image that a pixel lies on: a region that
         covers a border pixel closes along the domain edge there, and the evaluator counts that
-        length (the wall term).  It is evaluated where a step needs it (:meth:`force_at`,
-        :meth:`force_rows`).  The scale is the mean ``|f|`` over the pixels (a regular sample of
-        about 2^16 of them): about ``|c_in - c_out|^2`` once the regions have settled, the size
-        of the force of every pixel before that (a checkerboard start, where ``c_in ~ c_out``).
-        Time steps are measured in pixels of travel at that force.
+        length (the wall term).  It is evaluated where a step needs it (:meth:`force_at`, and
+        :func:`activecontour._kernels.force_step` over the image).  The scale is the mean ``|f|``
+        over the pixels (a regular sample of about 2^16 of them): about ``|c_in - c_out|^2`` once
+        the regions have settled, the size of the force of every pixel before that (a
+        checkerboard start, where ``c_in ~ c_out``).  Time steps are measured in pixels of travel
+        at that force.
         """
         constants = (np.nan_to_num(np.asarray(c_in, dtype=np.float64)),
                      np.nan_to_num(np.asarray(c_out, dtype=np.float64)))
@@ -113,19 +130,6 @@ class _Problem:
         m, n = self.shape
         row, col = np.divmod(flat, n)
         return (row == 0).astype(np.float64) + (row == m - 1) + (col == 0) + (col == n - 1)
-
-    def force_rows(self, start, stop, constants):
-        """f (with the wall term) on the rows ``start:stop``, (stop - start, N)."""
-        m, _ = self.shape
-        f = _force(self.values[start:stop], *constants, self.params)
-        if self.params.mu > 0:
-            f[:, 0] += self.params.mu
-            f[:, -1] += self.params.mu
-            if start == 0:
-                f[0] += self.params.mu
-            if stop == m:
-                f[-1] += self.params.mu
-        return f
 
     def time_step(self, step, scale):
         """tau for a step of ``step`` pixels at the force ``scale``: ``step / scale``.
@@ -151,7 +155,6 @@ class _Problem:
         """
         if not smooth_force and tau * self.params.mu <= 0.25:
             return self._explicit_step(state, force, tau)
-        m, _ = self.shape
         if not smooth_force:
             weight = tau * self.params.mu
             # S on the band by conjugate gradients (about sqrt(1 + 8 weight) sweeps of the band)
@@ -165,10 +168,11 @@ class _Problem:
             near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
             rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
             return rhs
+        # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
         rhs = self.take()
-        for start in range(0, m, self._BLOCK_ROWS):
-            stop = min(start + self._BLOCK_ROWS, m)
-            rhs[start:stop] = state.phi[start:stop] - tau * self.force_rows(start, stop, force)
+        form = self.params.load_form(*force)
+        _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
+                            tau, rhs)
         return self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs
 
     def _band_smooth(self, state, weight):
@@ -184,20 +188,16 @@ class _Problem:
         m, n = self.shape
         flat = state.near_flat
         phi = state.phi.ravel()
-        order = np.argsort(flat)
-        ordered = flat[order]
-        row, col = np.divmod(flat, n)
+        # per neighbour (up, down, left, right) its band index (-1: none) or, beyond the band, its
+        # pixel (held: its value joins the right-hand side)
+        couplings = np.empty((4, flat.size), dtype=np.intp)
+        held = np.empty((4, flat.size), dtype=np.intp)
+        degree = np.empty(flat.size)
+        _kernels.band_couplings(flat, m, n, self.scratch.owner, couplings, held, degree)
         right = phi[flat].astype(np.float64)
-        degree = np.zeros(flat.size)
-        couplings = []  # (band index of the neighbour) for the neighbours in the band
-        for exists, neighbour in ((row > 0, flat - n), (row < m - 1, flat + n),
-                                  (col > 0, flat - 1), (col < n - 1, flat + 1)):
-            degree += exists
-            slot = np.minimum(np.searchsorted(ordered, neighbour), flat.size - 1)
-            in_band = exists & (ordered[slot] == neighbour)
-            held = exists & ~in_band
-            right[held] += weight * phi[neighbour[held]]
-            couplings.append(np.where(in_band, order[slot], -1))
+        for beyond in held:
+            keep = beyond >= 0
+            right[keep] += weight * phi[beyond[keep]]
         diagonal = 1.0 + weight * degree
         padded = np.zeros(flat.size + 1)  # index -1: a neighbour beyond the band contributes 0
 
@@ -236,43 +236,34 @@ class _Problem:
 
     def _smooth(self, rhs, weight):
         """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can."""
-        m, _ = self.shape
         spectrum = scipy.fft.dctn(rhs, norm="ortho", overwrite_x=True)
-        weight = np.float32(weight)
-        for start in range(0, m, self._BLOCK_ROWS):
-            stop = min(start + self._BLOCK_ROWS, m)
-            spectrum[start:stop] /= 1.0 + weight * (self.wave_r[start:stop, None] + self.wave_c[None, :])
+        _kernels.divide_spectrum(spectrum, self.wave_r, self.wave_c, np.float32(weight))
         return scipy.fft.idctn(spectrum, norm="ortho", overwrite_x=True)
 
     def _explicit_step(self, state, force, tau):
-        """``phi + tau mu Laplace(phi) - tau f`` on the band (5-point, Neumann: a mirrored pixel)."""
+        """``phi + tau mu Laplace(phi) - tau f`` on the band (5-point, Neumann: a mirrored pixel; f of
+        (6.41) within ``|phi| < band`` only), one compiled pass
+        (:func:`activecontour._kernels.explicit_step`)."""
         m, n = self.shape
-        flat = state.near_flat
-        values = state.phi.ravel()
-        centre = values[flat].astype(np.float64)
-        row, col = np.divmod(flat, n)
-        laplace = (values[np.where(row > 0, flat - n, flat)] + values[np.where(row < m - 1, flat + n, flat)]
-                   + values[np.where(col > 0, flat - 1, flat)] + values[np.where(col < n - 1, flat + 1, flat)]
-                   - 4.0 * centre)
-        moved = centre + (tau * self.params.mu) * laplace
-        near = np.abs(centre) < self.band
-        moved[near] -= tau * self.force_at(flat[near], force)
+        form = self.params.load_form(*force)
         out = self.take()
         np.copyto(out, state.phi)
-        out.ravel()[flat] = moved
+        _kernels.explicit_step(state.phi.reshape(-1), state.near_flat, m, n, tau * self.params.mu, self.band,
+                               self.values.reshape(m * n, -1), form.constant, form.linear, form.square,
+                               self.params.mu, tau, out.reshape(-1))
         return out
 
 
-def _swept_area(old, new):
+def _swept_area(old, new, mark=None):
     """Area between the zero sets of two redistanced states, ``sum_px |H_eps(new) - H_eps(old)|``.
 
     With eps = 1 the integer translates of H_eps sum to the exact length of a half-line (module
     docstring), so this is the exact area between two parallel straight fronts at any sub-pixel
-    offset, and second-order accurate for curved ones.  Only pixels in either band can differ.
+    offset, and second-order accurate for curved ones.  Only pixels in either band can differ:
+    each is counted once (compiled: :func:`activecontour._kernels.swept_area`; ``mark``: M N
+    zeros, uint8, returned cleared).
     """
     if old.near_flat.size == 0 or new.near_flat.size == 0:
         return float(np.count_nonzero(old.positive != new.positive))
-    flat = np.concatenate([old.near_flat, new.near_flat])
-    flat.sort()
-    flat = flat[np.concatenate([[True], flat[1:] != flat[:-1]])]  # each pixel once
-    return float(np.sum(np.abs(heaviside(new.phi.ravel()[flat]) - heaviside(old.phi.ravel()[flat]))))
+    mark = np.zeros(old.phi.size, dtype=np.uint8) if mark is None else mark
+    return _kernels.swept_area(old.phi.reshape(-1), new.phi.reshape(-1), old.near_flat, new.near_flat, mark)
