@@ -853,6 +853,12 @@ def _corner_parts(outline):
     is_corner[corners] = True
 
     def split(cycle, fit):
+        area, good = fit
+        # a part that is an ellipse is never cut (its parts would have to explain more than all of
+        # it), and one under twice the smallest part has no cut whose two sides both reach it
+        # (the sides' areas add up to the part's): neither looks for cuts
+        if (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2:
+            return [(cycle, fit)]
         options = []
         for _, a, b in _cuts(outline, cycle, is_corner, flat, normals):
             first, second = cycle[a:b + 1], np.r_[cycle[b:], cycle[:a + 1]]
@@ -866,11 +872,19 @@ def _corner_parts(outline):
         if not options:
             return [(cycle, fit)]
         _, first, second, fits = min(options, key=lambda option: option[0])
-        parts = (split(first, _explained(outline[first], fits[0], region))
-                 + split(second, _explained(outline[second], fits[1], region)))
+        sides = [(first, _explained(outline[first], fits[0], region)),
+                 (second, _explained(outline[second], fits[1], region))]
+        allowed = (0.0 if good else area) - EXPLAINED_GAIN * area
+        # the area a side leaves unexplained only adds up: once one side (the larger first) leaves
+        # more than the cut may, the cut is undone whatever the other side's parts
+        found = [None, None]
+        for i in sorted((0, 1), key=lambda i: -sides[i][1][0]):
+            found[i] = split(*sides[i])
+            if sum(area for _, (area, good) in found[i] if not good) > allowed + 1e-9 * abs(area):
+                return [(cycle, fit)]
+        parts = found[0] + found[1]
         unexplained = sum(area for _, (area, good) in parts if not good)
-        area, good = fit
-        if unexplained <= (0.0 if good else area) - EXPLAINED_GAIN * area:
+        if unexplained <= allowed:
             return parts
         return [(cycle, fit)]
 
