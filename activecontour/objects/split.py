@@ -938,12 +938,12 @@ def _cuts(outline, cycle, is_corner, flat, normals):
     ``CUT_ALIGN``, is a neck (``CUT_NECK``) and lies inside the part.
     """
     part = outline[cycle]
+    edges = part, np.roll(part, -1, axis=0)  # edge i of the part: from edges[0][i] to edges[1][i]
     positions = np.flatnonzero(is_corner[cycle])
     candidates = {(int(a), int(b)) for i, a in enumerate(positions) for b in positions[i + 1:]}
-    for a in positions:
-        for b in _ray_hits(outline, cycle, a, normals):
-            if flat[cycle[b]]:
-                candidates.add((min(a, b), max(a, b)))
+    for a, b in _ray_hits(outline, cycle, edges, positions, normals):
+        if flat[cycle[b]]:
+            candidates.add((min(a, b), max(a, b)))
     least = np.cos(np.radians(CUT_ALIGN))
     centred = part - part.mean(axis=0)
     cuts = []
@@ -958,46 +958,54 @@ def _cuts(outline, cycle, is_corner, flat, normals):
         along = centred @ direction
         extent = min(np.ptp(along[a:b + 1]), np.ptp(np.r_[along[b:], along[:a + 1]]))
         ratio = length / max(extent, 1e-12)
-        if ratio <= CUT_NECK and _segment_inside(part, a, b):
+        if ratio <= CUT_NECK and _segment_inside(edges, a, b):
             cuts.append((ratio, a, b))
     return sorted(cuts)
 
 
-def _ray_hits(outline, cycle, a, normals):
-    """Positions in ``cycle`` where rays from vertex ``cycle[a]`` along its inward normal (turned
-    by ``CUT_RAYS``) first meet the part's outline, on an edge of the object's outline (not a
-    cut): the nearer end of that edge."""
-    part = outline[cycle]
-    start, edge = part, np.roll(part, -1, axis=0) - part
+def _ray_hits(outline, cycle, edges, positions, normals):
+    """The pairs (a, b) of positions in ``cycle``: rays from each corner ``cycle[a]`` (``a`` in
+    ``positions``) along its inward normal (turned by ``CUT_RAYS``) first meet the part's outline
+    ``edges`` on an edge of the object's outline (not a cut), at its nearer end ``b``.  All rays
+    of all corners at once: one pass over the edges."""
+    count = len(cycle)
+    if count == 0 or len(positions) == 0:
+        return []
+    start, edge = edges[0], edges[1] - edges[0]
     original = np.roll(cycle, -1) == (cycle + 1) % len(outline)
-    count = len(part)
-    hits = []
-    for angle in np.radians(CUT_RAYS):
-        cos, sin = np.cos(angle), np.sin(angle)
-        ray = -np.array([[cos, -sin], [sin, cos]]) @ normals[cycle[a]]
-        offset = start - part[a]
-        denominator = ray[0] * edge[:, 1] - ray[1] * edge[:, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            along_ray = (offset[:, 0] * edge[:, 1] - offset[:, 1] * edge[:, 0]) / denominator
-            along_edge = (offset[:, 0] * ray[1] - offset[:, 1] * ray[0]) / denominator
-        index = np.arange(count)
-        hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
-               & (index != a) & ((index + 1) % count != a))
-        if hit.any():
-            j = np.flatnonzero(hit)[np.argmin(along_ray[hit])]
-            if original[j]:
-                b = j if along_edge[j] < 0.5 else (j + 1) % count
+    turns = [np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+             for angle in np.radians(CUT_RAYS)]
+    # ray (corner, angle), as (2,) vectors stacked: (corners, angles, 2)
+    rays = np.array([[-turn @ normals[cycle[a]] for turn in turns] for a in positions])
+    offset = start[None, :, :] - start[positions][:, None, :]  # (corners, edges, 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denominator = rays[:, :, 0, None] * edge[None, None, :, 1] - rays[:, :, 1, None] * edge[None, None, :, 0]
+        along_ray = ((offset[:, :, 0] * edge[:, 1] - offset[:, :, 1] * edge[:, 0])[:, None, :]
+                     / denominator)
+        along_edge = (offset[:, None, :, 0] * rays[:, :, 1, None]
+                      - offset[:, None, :, 1] * rays[:, :, 0, None]) / denominator
+    index = np.arange(count)
+    away = (index[None, :] != positions[:, None]) & ((index[None, :] + 1) % count != positions[:, None])
+    hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
+           & away[:, None, :])
+    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)
+    pairs = []
+    for i, a in enumerate(positions):
+        for k in range(len(turns)):
+            j = nearest[i, k]
+            if hit[i, k, j] and original[j]:
+                b = j if along_edge[i, k, j] < 0.5 else (j + 1) % count
                 if b != a:
-                    hits.append(int(b))
-    return hits
+                    pairs.append((int(a), int(b)))
+    return pairs
 
 
-def _segment_inside(polygon, a, b):
-    """Whether the segment between vertices a and b of a simple polygon lies inside it: it
-    crosses no edge (those at a and b aside) and its midpoint is inside."""
-    count = len(polygon)
-    start, end = polygon, np.roll(polygon, -1, axis=0)
-    p, q = polygon[a], polygon[b]
+def _segment_inside(edges, a, b):
+    """Whether the segment between vertices a and b of a simple polygon (its ``edges``: starts and
+    ends) lies inside it: it crosses no edge (those at a and b aside) and its midpoint is inside."""
+    start, end = edges
+    count = len(start)
+    p, q = start[a], start[b]
 
     def side(u, v, w):
         return ((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
