@@ -235,13 +235,23 @@ def _boundary_distance(curves, region, low):
     outside): the Euclidean distance transform of the polygon rasterised ``DISTANCE_SUPERSAMPLE``
     times finer, within half a fine pixel.  On the pixel grid itself its half-pixel steps, 8 % of
     the radius of a 12 px object, would make necks out of nothing."""
-    import scipy.ndimage
+    import scipy.spatial
 
     m, n = region.shape
     fine = int(np.clip(np.sqrt(DISTANCE_MAX_SAMPLES / (m * n)), 1, DISTANCE_SUPERSAMPLE))
     # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one
     inside = rasterize([(c - low) * fine for c in curves], (fine * (m - 1) + 1, fine * (n - 1) + 1))
-    distance = (scipy.ndimage.distance_transform_edt(inside)[::fine, ::fine] - 0.5) / fine
+    # the Euclidean distance transform of the fine raster, at the pixel centres only: the nearest
+    # fine pixel outside has a 4-neighbour inside (one step from it toward the centre would be
+    # nearer otherwise), so a nearest-point query among those gives the transform's exact values
+    grown = np.pad(inside, 1)
+    rim = ~inside & (grown[:-2, 1:-1] | grown[2:, 1:-1] | grown[1:-1, :-2] | grown[1:-1, 2:])
+    queried = region & inside[::fine, ::fine]
+    distance = np.zeros(region.shape)
+    if queried.any():
+        centres = np.argwhere(queried) * fine
+        distance[queried] = scipy.spatial.cKDTree(np.argwhere(rim)).query(centres)[0]
+    distance = (distance - 0.5) / fine
     return np.where(region, np.maximum(distance, 0.0), 0.0)
 
 
