@@ -23,13 +23,12 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from bench_objects import SAMPLES
 
 import activecontour as ac
 import activecontour._segment as segment_module
 from activecontour import synthetic
 from activecontour.objects.measure import find_objects
-
-from bench_objects import SAMPLES
 
 
 def scenes(seeds):
@@ -113,7 +112,7 @@ def main(argv=None):
     parser.add_argument("mode", choices=("capture", "check"))
     parser.add_argument("folder", type=Path)
     parser.add_argument("--seeds", type=int, default=5, help="seeds per family (capture)")
-    parser.add_argument("--repeat", type=int, default=1, help="runs of find_objects; the least counts (check)")
+    parser.add_argument("--repeat", type=int, default=1, help="find_objects runs; the least counts (check)")
     args = parser.parse_args(argv)
     if args.mode == "capture":
         capture(args.folder, args.seeds)

@@ -173,7 +173,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         parts = window.astype(np.int32)
         if concave:
             concavity = _concavity(window, curves[0] - low)
-            if _may_have_necks(window, concavity):
+            if _may_have_necks(window, concavity, curves[0] - low, min_radius):
                 parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
                                     neck_ratio, min_radius)
         if contrast:
@@ -203,19 +203,21 @@ def _hull_depth(outline):
     return np.abs(cross) / np.maximum(np.hypot(edge[:, 0], edge[:, 1]), 1e-12)
 
 
-def _may_have_necks(region, concavity):
-    """Whether the outline has two edge pixels ``MIN_WAIST_DEPTH`` inside its convex hull (every
-    split line ends in two such waists, :meth:`_PartGraph.is_waist`; pixels touching only at a
-    corner are parts without one) and the pixel distance
-    transform has two maxima of dynamic above half a pixel: without them no neck is
-    ``MIN_NECK_DEPTH`` deep even after its half-pixel errors (cheap tests that spare most single
-    objects the exact distance).  The h-maxima (plateaus of regional maxima) lie in the pixels
-    not below any 8-neighbour, each of whose 4-connected pieces holds at most one of them, so
+def _may_have_necks(region, concavity, outline, min_radius):
+    """Whether the outline (in window coordinates) has two edge pixels ``MIN_WAIST_DEPTH`` inside
+    its convex hull (every split line ends in two such waists, :meth:`_PartGraph.is_waist`;
+    pixels touching only at a corner are parts without one), a part that may reach ``min_radius``
+    (:func:`_thinner_than`) and the pixel distance transform has two maxima of dynamic above half
+    a pixel: without them no neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors
+    (cheap tests that spare most single objects the exact distance).  The h-maxima (plateaus of
+    regional maxima) lie in the pixels not below any 8-neighbour, each of whose 4-connected
+    pieces holds at most one of them, so
     one such piece means no two h-maxima."""
     import scipy.ndimage
     import skimage.morphology
 
-    if np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2 and scipy.ndimage.label(region)[1] == 1:
+    if scipy.ndimage.label(region)[1] == 1 and (np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2
+                                                or _thinner_than(region, outline, min_radius)):
         return False
     distance = scipy.ndimage.distance_transform_edt(region)
     peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
@@ -230,6 +232,30 @@ DISTANCE_SUPERSAMPLE = 8
 DISTANCE_MAX_SAMPLES = 1 << 20
 
 
+def _supersample(shape):
+    """The factor of :func:`_boundary_distance`'s finer raster for a window of this shape."""
+    return int(np.clip(np.sqrt(DISTANCE_MAX_SAMPLES / (shape[0] * shape[1])), 1, DISTANCE_SUPERSAMPLE))
+
+
+def _thinner_than(region, outline, min_radius):
+    """Whether :func:`_boundary_distance` stays below ``min_radius`` on the region, shown without
+    computing it: then every part of :func:`_neck_parts` is too small to be an object and they
+    all merge (a region of one 4-connected piece stays whole).
+
+    The bound: with a finer raster ``2^k`` times finer, the fine raster read at the pixel centres
+    is the raster of the outline itself (every coordinate and every step of
+    :func:`activecontour.geometry.raster.rasterize` scales by ``2^k`` exactly), so every pixel
+    centre outside it is a fine pixel outside, and the fine distance, in pixels, is at most the
+    distance transform of the pixel raster (less half a fine pixel)."""
+    import scipy.ndimage
+
+    fine = _supersample(region.shape)
+    if fine & (fine - 1):  # not a power of two: no exact bound
+        return False
+    inside = rasterize([outline], region.shape)
+    return scipy.ndimage.distance_transform_edt(inside)[region].max() < min_radius
+
+
 def _boundary_distance(curves, region, low):
     """The distance from each pixel centre of ``region`` to the object's sub-pixel boundary (0
     outside): the Euclidean distance transform of the polygon rasterised ``DISTANCE_SUPERSAMPLE``
@@ -238,7 +264,7 @@ def _boundary_distance(curves, region, low):
     import scipy.spatial
 
     m, n = region.shape
-    fine = int(np.clip(np.sqrt(DISTANCE_MAX_SAMPLES / (m * n)), 1, DISTANCE_SUPERSAMPLE))
+    fine = _supersample(region.shape)
     # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one
     inside = rasterize([(c - low) * fine for c in curves], (fine * (m - 1) + 1, fine * (n - 1) + 1))
     # the Euclidean distance transform of the fine raster, at the pixel centres only: the nearest
@@ -989,7 +1015,8 @@ def _ray_hits(outline, cycle, edges, positions, normals):
     rays = np.array([[-turn @ normals[cycle[a]] for turn in turns] for a in positions])
     offset = start[None, :, :] - start[positions][:, None, :]  # (corners, edges, 2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        denominator = rays[:, :, 0, None] * edge[None, None, :, 1] - rays[:, :, 1, None] * edge[None, None, :, 0]
+        denominator = (rays[:, :, 0, None] * edge[None, None, :, 1]
+                       - rays[:, :, 1, None] * edge[None, None, :, 0])
         along_ray = ((offset[:, :, 0] * edge[:, 1] - offset[:, :, 1] * edge[:, 0])[:, None, :]
                      / denominator)
         along_edge = (offset[:, None, :, 0] * rays[:, :, 1, None]
