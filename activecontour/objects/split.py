@@ -211,8 +211,7 @@ def _may_have_necks(region, concavity, outline, min_radius):
     a pixel: without them no neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors
     (cheap tests that spare most single objects the exact distance).  The h-maxima (plateaus of
     regional maxima) lie in the pixels not below any 8-neighbour, each of whose 4-connected
-    pieces holds at most one of them, so
-    one such piece means no two h-maxima."""
+    pieces holds at most one of them, so one such piece means no two h-maxima."""
     import scipy.ndimage
     import skimage.morphology
 
@@ -890,10 +889,7 @@ def _corner_parts(outline):
 
     def split(cycle, fit):
         area, good = fit
-        # a part that is an ellipse is never cut (its parts would have to explain more than all of
-        # it), and one under twice the smallest part has no cut whose two sides both reach it
-        # (the sides' areas add up to the part's): neither looks for cuts
-        if (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2:
+        if _uncuttable(area, good):
             return [(cycle, fit)]
         options = []
         for _, a, b in _cuts(outline, cycle, is_corner, flat, normals):
@@ -927,6 +923,14 @@ def _corner_parts(outline):
     whole = np.arange(len(outline))
     parts = split(whole, _explained(outline, _ellipse_fit(outline), region))
     return [outline[cycle] for cycle, _ in parts]
+
+
+def _uncuttable(area, good):
+    """Whether :func:`_corner_parts` keeps a part of this area, explained by an ellipse or not,
+    whatever its cuts: one that is an ellipse (its parts would have to leave less than nothing
+    unexplained, ``EXPLAINED_GAIN``), or one under twice the smallest part (the two sides of a
+    cut inside it add up to its area, so one is under ``pi MIN_SPLIT_RADIUS^2``)."""
+    return (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2
 
 
 def _concave_corners(outline):
