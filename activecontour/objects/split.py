@@ -299,7 +299,13 @@ def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32)
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    graph = _PartGraph(parts, distance, count, concavity, min_radius)
+    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+    # at most one part as thick as an object: every neck has a thinner side too small to be one,
+    # so every pair merges (:meth:`_PartGraph.merit`) and a region of one 4-connected piece,
+    # which the watershed covers, is one part
+    if np.count_nonzero(peak >= min_radius) <= 1 and scipy.ndimage.label(region)[1] == 1:
+        return region.astype(np.int32)
+    graph = _PartGraph(parts, distance, peak, concavity, min_radius)
     graph.merge_necks(neck_ratio)
     graph.merge_non_blobs()
     return graph.labels()
@@ -526,11 +532,9 @@ class _PartGraph:
     merging costs O(B log B) for B border pixels, not a scan of every border per merge.
     """
 
-    def __init__(self, parts, distance, count, concavity, min_radius):
-        import scipy.ndimage
-
+    def __init__(self, parts, distance, peak, concavity, min_radius):
         self.parts, self.concavity, self.min_radius = parts, concavity, min_radius
-        self.peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+        self.peak, count = peak, len(peak) - 1
         self.members = {k: [k] for k in range(1, count + 1)}
         self.adjacent = {k: {} for k in range(1, count + 1)}  # part: {neighbour: _Border}
         # every 4-neighbour pair of pixels in two parts: rows first, then columns, in raster order

@@ -113,3 +113,28 @@ def test_the_two_sides_of_every_admissible_cut_add_up_to_the_part(seed):
         sides = signed_area(outline[cycle[a:b + 1]]), signed_area(outline[np.r_[cycle[b:], cycle[:a + 1]]])
         assert min(sides) > 0
         assert sum(sides) == pytest.approx(signed_area(outline), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_neck_parts_with_one_part_thick_enough_merge_into_one(seed):
+    # the merging itself (the graph of the watershed's parts), run where _neck_parts stops early
+    import skimage.morphology
+    import skimage.segmentation
+
+    outline = random_outline(seed)
+    region = window_of(outline)
+    distance = split._boundary_distance([outline], region, np.zeros(2))
+    markers, count = scipy.ndimage.label(skimage.morphology.local_maxima(distance) & region)
+    if count <= 1 or scipy.ndimage.label(region)[1] != 1:
+        return
+    parts = skimage.segmentation.watershed(-distance, markers, mask=region)
+    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+    graph = split._PartGraph(parts, distance, peak.copy(), split._concavity(region, outline),
+                             split.MIN_SPLIT_RADIUS)
+    graph.merge_necks(split.NECK_RATIO)
+    graph.merge_non_blobs()
+    merged = graph.labels()
+    if np.count_nonzero(peak >= split.MIN_SPLIT_RADIUS) <= 1:
+        np.testing.assert_array_equal(merged, region.astype(np.int32))
+    np.testing.assert_array_equal(split._neck_parts(region, split._concavity(region, outline), distance,
+                                                    split.NECK_RATIO, split.MIN_SPLIT_RADIUS), merged)
