@@ -878,6 +878,8 @@ def _corner_parts(outline):
     """
     import shapely
 
+    if _uncuttable(signed_area(outline), False):
+        return [outline]
     corners, kappa, normals = _concave_corners(outline)
     if len(corners) == 0:
         return [outline]
