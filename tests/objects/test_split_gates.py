@@ -50,9 +50,10 @@ def window_of(outline):
     return rasterize([outline], shape)
 
 
-@pytest.mark.parametrize("seed", range(40))
-def test_the_boundary_distance_is_the_fine_distance_transform_at_the_pixel_centres(seed):
-    outline = random_outline(seed)
+@pytest.mark.parametrize("seed, zoom", [(seed, 1.0) for seed in range(40)] + [(0, 12.0), (3, 9.0), (7, 5.0)])
+def test_the_boundary_distance_is_the_fine_distance_transform_at_the_pixel_centres(seed, zoom):
+    # (zoomed: giant windows, a coarser raster with few fine pixels per centre)
+    outline = random_outline(seed) * zoom
     region = window_of(outline)
     fine = split._supersample(region.shape)
     shape = (fine * (region.shape[0] - 1) + 1, fine * (region.shape[1] - 1) + 1)
