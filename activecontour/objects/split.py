@@ -155,7 +155,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if inside is None or not inside.any():
             result.append(curves)
             continue
-        concave = _hull_depth(curves[0]).max() >= MIN_WAIST_DEPTH
+        depth = _hull_depth(curves[0])
+        concave = depth.max() >= MIN_WAIST_DEPTH
         contrast = False
         if image is not None:
             spread = _block_spread(inside, image[box], min_radius)
@@ -180,8 +181,10 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
             parts = _contrast_parts(parts, _window(image, box), least, min_radius)
         pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
         if concave:
+            # (an object its necks did not cut: its hull depth is known)
             pieces = [cut for piece in pieces for cut in
-                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(piece[0])])]
+                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
+                          piece[0], depth if piece[0] is curves[0] else None)])]
         result.extend(pieces)
     return result
 
@@ -875,7 +878,7 @@ ELLIPSE_SOLIDITY = 0.9
 EXPLAINED_GAIN = 0.5
 
 
-def _corner_parts(outline):
+def _corner_parts(outline, depth=None):
     """The parts of a polygon (an outer boundary without holes) cut at its concave corners, as
     polygons that share their cut lines (each cut joins two vertices of the outline).
 
@@ -883,13 +886,14 @@ def _corner_parts(outline):
     other, or one corner and the outline across, :func:`_cuts`) that are necks (``CUT_NECK``) and
     lie inside the part are ordered by their neck ratio; of the first ``CUT_OPTIONS``, the one
     whose two sides are fitted best by an ellipse each is made and its sides cut in turn.  A cut
-    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).
+    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth``: the
+    outline's :func:`_hull_depth`, when it is known.
     """
     import shapely
 
     if _uncuttable(signed_area(outline), False):
         return [outline]
-    corners, kappa, normals = _concave_corners(outline)
+    corners, kappa, normals = _concave_corners(outline, depth)
     if len(corners) == 0:
         return [outline]
     region = shapely.Polygon(outline)
@@ -948,15 +952,16 @@ def _uncuttable(area, good):
     return (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2
 
 
-def _concave_corners(outline):
+def _concave_corners(outline, depth=None):
     """The vertices at the concave corners of a polygon, its smoothed curvature and its smoothed
     outward unit normals.
 
     The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
     curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
     maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
-    ``CORNER_TURN`` and it dips ``MIN_WAIST_DEPTH`` inside the convex hull; the corner is its
-    vertex of most negative curvature.
+    ``CORNER_TURN`` and it dips ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``:
+    :func:`_hull_depth`, measured here unless given, and only once a stretch turns enough); the
+    corner is its vertex of most negative curvature.
     """
     import scipy.ndimage
 
@@ -970,7 +975,6 @@ def _concave_corners(outline):
     concave = kappa < 0
     if concave.all() or not concave.any():
         return np.zeros(0, dtype=int), kappa, normals
-    depth = _hull_depth(outline)
     # the stretches of negative curvature, starting the count at a vertex that is not in one
     order = np.roll(np.arange(len(outline)), -int(np.argmin(concave)))
     steps = np.diff(np.r_[0, concave[order].astype(int), 0])
@@ -978,7 +982,10 @@ def _concave_corners(outline):
     for start, stop in zip(np.flatnonzero(steps == 1), np.flatnonzero(steps == -1), strict=True):
         stretch = order[start:stop]
         turn = -np.sum(kappa[stretch] * ds[stretch])
-        if np.degrees(turn) >= CORNER_TURN and depth[stretch].max() >= MIN_WAIST_DEPTH:
+        if np.degrees(turn) < CORNER_TURN:
+            continue
+        depth = _hull_depth(outline) if depth is None else depth
+        if depth[stretch].max() >= MIN_WAIST_DEPTH:
             corners.append(stretch[np.argmin(kappa[stretch])])
     return np.sort(np.array(corners, dtype=int)), kappa, normals
 
