@@ -40,7 +40,8 @@ neck is looked for where the pixel raster bounds the boundary distance below ``m
 (:func:`_thinner_than`), nor past a watershed with one part thick enough to be an object; no
 corner cut in a part that is an ellipse or under twice the smallest part (:func:`_uncuttable`),
 nor on the second side of a cut whose first side already leaves too much unexplained.  The
-boundary distance reads the fine raster's distance transform at the pixel centres only.
+boundary distance computes the fine raster's distance transform at the pixel centres only
+(:func:`activecontour._kernels.sampled_distance`).
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
 ``res.labels``, ``benchmarks/bench_objects.py``; worst seed / mean):
@@ -71,6 +72,7 @@ from itertools import pairwise
 
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.geometry.curve import curvature, edge_lengths, signed_area, vertex_normals
 from activecontour.geometry.raster import rasterize
 from activecontour.geometry.regions import _from_shapely, _to_shapely
@@ -240,10 +242,6 @@ def _may_have_necks(region, concavity, outline, min_radius):
 DISTANCE_SUPERSAMPLE = 8
 #: ... or coarser, so that the finer raster has at most this many pixels (giant objects).
 DISTANCE_MAX_SAMPLES = 1 << 20
-#: ... by a nearest-point query per pixel centre where the finer raster has at least this many
-#: pixels per centre queried, else by its whole distance transform (the same values; which is
-#: cheaper, measured on the scenes of ``benchmarks/split_same.py``)
-DISTANCE_QUERY_SAMPLES = 32
 
 
 def _supersample(shape):
@@ -275,27 +273,13 @@ def _boundary_distance(curves, region, low):
     outside): the Euclidean distance transform of the polygon rasterised ``DISTANCE_SUPERSAMPLE``
     times finer, within half a fine pixel.  On the pixel grid itself its half-pixel steps, 8 % of
     the radius of a 12 px object, would make necks out of nothing."""
-    import scipy.ndimage
-    import scipy.spatial
-
     m, n = region.shape
     fine = _supersample(region.shape)
     # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one
     inside = rasterize([(c - low) * fine for c in curves], (fine * (m - 1) + 1, fine * (n - 1) + 1))
-    # the Euclidean distance transform of the fine raster, at the pixel centres only: the nearest
-    # fine pixel outside has a 4-neighbour inside (one step from it toward the centre would be
-    # nearer otherwise), so a nearest-point query among those gives the transform's exact values;
-    # where the fine raster has few pixels per centre (a giant object), the transform is cheaper
-    queried = region & inside[::fine, ::fine]
-    count = np.count_nonzero(queried)
-    if inside.size < DISTANCE_QUERY_SAMPLES * count:
-        distance = scipy.ndimage.distance_transform_edt(inside)[::fine, ::fine]
-    else:
-        grown = np.pad(inside, 1)
-        rim = ~inside & (grown[:-2, 1:-1] | grown[2:, 1:-1] | grown[1:-1, :-2] | grown[1:-1, 2:])
-        distance = np.zeros(region.shape)
-        if count:
-            distance[queried] = scipy.spatial.cKDTree(np.argwhere(rim)).query(np.argwhere(queried) * fine)[0]
+    # the fine raster's Euclidean distance transform, computed at the pixel centres only
+    distance = np.empty(region.shape)
+    _kernels.sampled_distance(inside.view(np.uint8), fine, distance)
     distance = (distance - 0.5) / fine
     return np.where(region, np.maximum(distance, 0.0), 0.0)
 

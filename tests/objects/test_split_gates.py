@@ -139,3 +139,20 @@ def test_neck_parts_with_one_part_thick_enough_merge_into_one(seed):
         np.testing.assert_array_equal(merged, region.astype(np.int32))
     np.testing.assert_array_equal(split._neck_parts(region, split._concavity(region, outline), distance,
                                                     split.NECK_RATIO, split.MIN_SPLIT_RADIUS), merged)
+
+
+@pytest.mark.parametrize("step", [1, 2, 3, 8])
+def test_the_sampled_distance_kernel_is_the_distance_transform_read_every_step_pixels(step):
+    from activecontour import _kernels
+
+    rng = np.random.default_rng(step)
+    for _ in range(40):
+        m, n = rng.integers(2, 40, 2)
+        shape = (step * (m - 1) + 1, step * (n - 1) + 1)
+        # blobs, specks and rows or columns without an outside pixel
+        smooth = scipy.ndimage.gaussian_filter(rng.random(shape), rng.uniform(0.5, 5))
+        inside = smooth > rng.uniform(0.46, 0.5)
+        inside[rng.integers(shape[0])] = False
+        out = np.empty((m, n))
+        _kernels.sampled_distance(inside.view(np.uint8), step, out)
+        np.testing.assert_array_equal(out, scipy.ndimage.distance_transform_edt(inside)[::step, ::step])
