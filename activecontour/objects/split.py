@@ -620,6 +620,8 @@ class _PartGraph:
         """A part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were
         a shape's own: it takes its neighbours back, the least solid first, until every part is a
         blob or has no neighbour (pixels touching only at a corner are no neighbours)."""
+        if not any(self.adjacent.values()):  # no part has a neighbour to take back: no shapes needed
+            return
         self.shapes = _PartShapes(self.parts, self.members)
         queue = []
         for root in self.members:
