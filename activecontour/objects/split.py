@@ -925,10 +925,10 @@ def _corner_parts(outline, depth=None):
         found = [None, None]
         for i in sorted((0, 1), key=lambda i: -sides[i][1][0]):
             found[i] = split(*sides[i])
-            if sum(area for _, (area, good) in found[i] if not good) > allowed + 1e-9 * abs(area):
+            if sum(size for _, (size, kept) in found[i] if not kept) > allowed + 1e-9 * abs(area):
                 return [(cycle, fit)]
         parts = found[0] + found[1]
-        unexplained = sum(area for _, (area, good) in parts if not good)
+        unexplained = sum(size for _, (size, kept) in parts if not kept)
         if unexplained <= allowed:
             return parts
         return [(cycle, fit)]
