@@ -986,7 +986,8 @@ def _concave_corners(outline, depth=None):
 
 def _cuts(outline, cycle, is_corner, flat, normals):
     """The admissible cuts of the part ``outline[cycle]``: (neck ratio, a, b) with a < b positions
-    in ``cycle``, narrowest first.
+    in ``cycle``, narrowest first, one by one (a cut is tested for lying inside the part only when
+    it is asked for).
 
     Candidates join two corners of the part, or a corner and the first vertex of the part's
     outline hit by a ray along the corner's inward normal (turned by ``CUT_RAYS``) where the
@@ -1014,9 +1015,11 @@ def _cuts(outline, cycle, is_corner, flat, normals):
         along = centred @ direction
         extent = min(np.ptp(along[a:b + 1]), np.ptp(np.r_[along[b:], along[:a + 1]]))
         ratio = length / max(extent, 1e-12)
-        if ratio <= CUT_NECK and _segment_inside(edges, a, b):
+        if ratio <= CUT_NECK:
             cuts.append((ratio, a, b))
-    return sorted(cuts)
+    for ratio, a, b in sorted(cuts):
+        if _segment_inside(edges, a, b):
+            yield ratio, a, b
 
 
 def _ray_hits(outline, cycle, edges, positions, normals):
