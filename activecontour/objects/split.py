@@ -1087,8 +1087,9 @@ def _segment_inside(edges, a, b):
 def _ellipse_fit(points):
     """The direct least-squares ellipse of points (P, 2) (Halir and Flusser's stable form of
     Fitzgibbon, Pilu and Fisher) and the sum of squared Sampson distances (pixels^2) of the
-    points to it: (ellipse or None, residual).  The ellipse is (centre, semi-axes, axes as
-    columns)."""
+    points to it: (conic or None, residual).  The conic is its coefficients in the points'
+    normalised frame; :func:`_ellipse_axes` gives its centre and axes (only the chosen cut's
+    parts need them)."""
     mean = points.mean(axis=0)
     scale = np.sqrt(np.mean(np.sum((points - mean) ** 2, axis=1))) or 1.0
     x, y = ((points - mean) / scale).T
@@ -1110,17 +1111,24 @@ def _ellipse_fit(points):
     value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
     gradient = np.hypot(2 * a * x + b * y + d, b * x + 2 * c * y + e)
     residual = float(np.sum((scale * value / np.maximum(gradient, 1e-12)) ** 2))
+    return (a, b, c, d, e, f, mean, scale), residual
+
+
+def _ellipse_axes(conic):
+    """The ellipse of a conic of :func:`_ellipse_fit`: (centre, semi-axes, axes as columns), or
+    None when it is no real ellipse."""
+    a, b, c, d, e, f, mean, scale = conic
     # centre and axes: value = (z - z0)^T Q (z - z0) - k
     q = np.array([[a, b / 2], [b / 2, c]])
     try:
         centre = np.linalg.solve(2 * q, [-d, -e])
     except np.linalg.LinAlgError:
-        return None, residual
+        return None
     k = centre @ q @ centre - f
     values, axes = np.linalg.eigh(q)
     if np.any(k / values <= 0):
-        return None, residual
-    return (mean + scale * centre, scale * np.sqrt(k / values), axes), residual
+        return None
+    return mean + scale * centre, scale * np.sqrt(k / values), axes
 
 
 def _explained(part, fit, region):
@@ -1131,10 +1139,13 @@ def _explained(part, fit, region):
     import shapely
 
     area = signed_area(part)
-    ellipse, residual = fit
+    conic, residual = fit
     radius = np.sqrt(max(area, 0.0) / np.pi)
-    if (ellipse is None or radius < MIN_SPLIT_RADIUS
+    if (conic is None or radius < MIN_SPLIT_RADIUS
             or np.sqrt(residual / len(part)) > ELLIPSE_RMS[0] + ELLIPSE_RMS[1] * radius):
+        return area, False
+    ellipse = _ellipse_axes(conic)
+    if ellipse is None:
         return area, False
     centre, semi_axes, axes = ellipse
     if semi_axes.max() > MAX_PART_ASPECT * semi_axes.min():
