@@ -642,8 +642,7 @@ class _PartGraph:
     def is_waist(self, border):
         """Whether a border ends in a concavity of the outline at two places: its pixels on the
         outline fall in two pieces (8-neighbours) or more, two of them ``MIN_WAIST_DEPTH`` deep."""
-        import scipy.sparse
-        import scipy.sparse.csgraph
+        import scipy.ndimage
 
         if border.waist is not None:
             return border.waist
@@ -652,19 +651,13 @@ class _PartGraph:
         pixels, depth = pixels[depth >= 0], depth[depth >= 0]
         border.waist = False
         if pixels.size >= 2:
-            width = self.parts.shape[1]
-            rows, cols = np.divmod(pixels, width)
-            # 8-neighbour pieces of a sparse set of pixels: join each to its neighbours ahead
-            links = []
-            for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
-                target = (rows + dr) * width + cols + dc
-                found = np.minimum(np.searchsorted(pixels, target), pixels.size - 1)
-                hit = (pixels[found] == target) & (cols + dc >= 0) & (cols + dc < width)
-                links.append(np.column_stack([np.flatnonzero(hit), found[hit]]))
-            links = np.concatenate(links)
-            graph = scipy.sparse.coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])),
-                                            shape=(pixels.size, pixels.size))
-            count, piece = scipy.sparse.csgraph.connected_components(graph, directed=False)
+            rows, cols = np.divmod(pixels, self.parts.shape[1])
+            # 8-neighbour pieces of a sparse set of pixels, labelled on their bounding box
+            rows, cols = rows - rows.min(), cols - cols.min()
+            drawn = np.zeros((rows.max() + 1, cols.max() + 1), dtype=bool)
+            drawn[rows, cols] = True
+            pieces, count = scipy.ndimage.label(drawn, structure=np.ones((3, 3)))
+            piece = pieces[rows, cols] - 1
             if count >= 2:
                 deepest = np.full(count, -1.0)
                 np.maximum.at(deepest, piece, depth)
