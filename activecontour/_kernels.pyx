@@ -1280,17 +1280,23 @@ def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::
 def sampled_distance(const unsigned char[:, ::1] inside, Py_ssize_t step, double[:, ::1] out):
     """The Euclidean distance transform of a fine mask (as ``scipy.ndimage.distance_transform_edt``:
     from each pixel to the nearest pixel outside, 0 outside) read every ``step`` pixels:
-    ``out[i, j]`` at fine pixel ``(step i, step j)``.
+    ``out[i, j]`` at fine pixel ``(step i, step j)``.  The mask must have a pixel outside.
 
-    Separable and exact: per fine row, the distance along the row to the nearest outside pixel at
-    each sampled column; per sampled pixel, the least ``k^2 + h^2`` over the rows ``k`` away,
-    scanned outward until ``k^2`` alone reaches the best (integers, then one square root: the
-    transform's own values).  O(fine pixels + sampled pixels times their distance times step)."""
+    Separable and exact: per fine row, the distance h along the row to the nearest outside
+    pixel at each sampled column; per sampled column, the lower envelope of the parabolas
+    ``(x - r)^2 + h_r^2`` over the rows r (Felzenszwalb and Huttenlocher), its breakpoints
+    compared as fractions of integers, read at the sampled rows: the least squared distance as
+    an integer, then one square root (the transform's own values).  O(fine pixels)."""
     cdef Py_ssize_t rows = inside.shape[0], cols = inside.shape[1]
-    cdef Py_ssize_t m = out.shape[0], n = out.shape[1], r, c, i, j, k, last, centre
-    cdef long long far = (rows + cols) * (rows + cols) + 1, best, h, kk
+    cdef Py_ssize_t m = out.shape[0], n = out.shape[1], r, c, i, j, k, last, x, p, u
+    cdef long long far = (rows + cols) * (rows + cols) + 1, h, best
     cdef long long *across = <long long *> malloc(max(rows * n, 1) * sizeof(long long))
-    if across == NULL:
+    cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(rows, 1) * sizeof(Py_ssize_t))
+    cdef long long *height = <long long *> malloc(max(rows, 1) * sizeof(long long))
+    if across == NULL or vertex == NULL or height == NULL:
+        free(across)
+        free(vertex)
+        free(height)
         raise MemoryError()
     with nogil:
         for r in range(rows):
@@ -1314,21 +1320,39 @@ def sampled_distance(const unsigned char[:, ::1] inside, Py_ssize_t step, double
                     if last - c < across[r * n + j]:
                         across[r * n + j] = last - c
         for j in range(n):
+            # the envelope: parabola vertex[k] (row) with height[k] = h^2 + row^2 is lowest from
+            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
+            # breakpoint of rows u < p lies at (height_p - height_u) / (2 (p - u))
+            k = -1
+            for r in range(rows):
+                h = across[r * n + j]
+                if h >= far:
+                    continue
+                h = h * h + <long long> r * r
+                while k >= 1:
+                    p, u = vertex[k], vertex[k - 1]
+                    # drop p when r's breakpoint with it comes no later than p's with u
+                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (r - p):
+                        k -= 1
+                    else:
+                        break
+                if k == 0 and h - height[0] <= 0:
+                    k = -1  # r lies below vertex[0] everywhere right of both (r > vertex[0])
+                k += 1
+                vertex[k] = r
+                height[k] = h
+            if k < 0:
+                for i in range(m):
+                    out[i, j] = sqrt(<double> far)
+                continue
+            last = 0
             for i in range(m):
-                centre = i * step
-                h = across[centre * n + j]
-                best = h * h if h < far else far
-                k = 1
-                while k * k < best:
-                    kk = k * k
-                    if centre - k >= 0:
-                        h = across[(centre - k) * n + j]
-                        if h < far and kk + h * h < best:
-                            best = kk + h * h
-                    if centre + k < rows:
-                        h = across[(centre + k) * n + j]
-                        if h < far and kk + h * h < best:
-                            best = kk + h * h
-                    k += 1
+                x = i * step
+                # move right while the next parabola takes over at or before x
+                while last < k and height[last + 1] - height[last] <= 2 * x * (vertex[last + 1] - vertex[last]):
+                    last += 1
+                best = <long long> (x - vertex[last]) * (x - vertex[last]) + height[last] - <long long> vertex[last] * vertex[last]
                 out[i, j] = sqrt(<double> best)
     free(across)
+    free(vertex)
+    free(height)
