@@ -74,7 +74,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import curvature, edge_lengths, signed_area, vertex_normals
-from activecontour.geometry.raster import rasterize
+from activecontour.geometry.raster import rasterize, sorted_crossings
 from activecontour.geometry.regions import _from_shapely, _to_shapely
 
 __all__ = ["split_touching"]
@@ -275,11 +275,12 @@ def _boundary_distance(curves, region, low):
     the radius of a 12 px object, would make necks out of nothing."""
     m, n = region.shape
     fine = _supersample(region.shape)
-    # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one
-    inside = rasterize([(c - low) * fine for c in curves], (fine * (m - 1) + 1, fine * (n - 1) + 1))
-    # the fine raster's Euclidean distance transform, computed at the pixel centres only
+    # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one;
+    # the fine raster's Euclidean distance transform, at the pixel centres only, from its crossings
+    shape = (fine * (m - 1) + 1, fine * (n - 1) + 1)
     distance = np.empty(region.shape)
-    _kernels.sampled_distance(inside.view(np.uint8), fine, distance)
+    _kernels.sampled_distance(*sorted_crossings([(c - low) * fine for c in curves], shape), *shape, fine,
+                              distance)
     distance = (distance - 0.5) / fine
     return np.where(region, np.maximum(distance, 0.0), 0.0)
 

@@ -153,6 +153,19 @@ def test_the_sampled_distance_kernel_is_the_distance_transform_read_every_step_p
         smooth = scipy.ndimage.gaussian_filter(rng.random(shape), rng.uniform(0.5, 5))
         inside = smooth > rng.uniform(0.46, 0.5)
         inside[rng.integers(shape[0])] = False
+        # the mask's crossings as rasterize draws them: +1 where a run of inside pixels starts,
+        # -1 where it stops (at the row's end too); some rows twice over (winding 2 inside), and
+        # pairs +1, -1 at one column that cancel
+        change = np.diff(np.pad(inside.astype(np.int32), ((0, 0), (1, 1))), axis=1)
+        rows, cols = np.nonzero(change)
+        direction = change[rows, cols]
+        twice = np.isin(rows, np.flatnonzero(rng.random(shape[0]) < 0.3))
+        pairs = rng.integers(0, shape[0], 5), rng.integers(0, shape[1], 5)
+        rows = np.concatenate([rows, rows[twice], pairs[0], pairs[0]])
+        cols = np.concatenate([cols, cols[twice], pairs[1], pairs[1]])
+        direction = np.concatenate([direction, direction[twice], np.ones(5, int), -np.ones(5, int)])
+        order = np.lexsort((cols, rows))
         out = np.empty((m, n))
-        _kernels.sampled_distance(inside.view(np.uint8), step, out)
+        _kernels.sampled_distance(rows[order].astype(np.intp), cols[order].astype(np.intp),
+                                  direction[order].astype(np.int32), *shape, step, out)
         np.testing.assert_array_equal(out, scipy.ndimage.distance_transform_edt(inside)[::step, ::step])
