@@ -1,7 +1,8 @@
 """The split's cost: ``segment(image)`` (``separate=True``) over ``separate=False``, with the split of
 this tree and of an earlier revision side by side, in CPU seconds, in one run.
 
-Run ``python benchmarks/bench_splitcost.py [--before REV] [--repeat 2] [--scenes grass dsb ...]``.
+Run ``python benchmarks/bench_splitcost.py [--before REV] [--repeat 2] [--scenes grass dsb ...]``
+(``--samples``: the 25 sample images of ``benchmarks/bench_objects.py``).
 
 Per scene, the least CPU time (``time.process_time``: the machine may be shared) over
 ``--repeat`` rounds of :func:`activecontour.segment` with ``separate=False``, with the defaults,
@@ -25,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import skimage.segmentation
+from bench_objects import SAMPLES
 from bench_texture import IMAGES as TEXTURED
 from bench_texture import gray01
 
@@ -40,6 +42,8 @@ def scene(name):
 
     if name == "dsb":
         return ac.load_image(Path(__file__).resolve().parents[1] / "sample_images/nuclei.png")
+    if name == "binary_blobs":
+        return data.binary_blobs(rng=1)
     if name == "disk4096":
         disk = synthetic.disk_image(4096, (2048.3, 2047.6), 1500.0)[0]
         return synthetic.add_noise(disk, 0.2, seed=0)
@@ -67,10 +71,16 @@ def main(argv=None):
     parser.add_argument("--before", default="main", help="git revision of the split to compare with")
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--scenes", nargs="+", default=list(SCENES))
+    parser.add_argument("--samples", action="store_true",
+                        help="the 25 sample images of benchmarks/bench_objects.py instead of --scenes")
     args = parser.parse_args(argv)
+    if args.samples:
+        args.scenes = list(SAMPLES)
     measure = importlib.import_module("activecontour.objects.measure")
     ours, before = measure.split_touching, split_at(args.before)
-    images = {name: scene(name) for name in args.scenes}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        images = {name: scene(name) for name in args.scenes}
     ac.segment(synthetic.touching_disks(0)[0])  # imports and compiled kernels warm
     variants = ("alone", "ours", "before")
     best = {(name, variant): np.inf for name in images for variant in variants + ("chan_vese",)}
