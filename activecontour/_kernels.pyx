@@ -12,6 +12,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
   boundary at its pixel centres, from a finer raster);
+* :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network).
 
@@ -718,6 +719,38 @@ def winding(const double[:, ::1] points, const Py_ssize_t[::1] next_index,
                     # larger-column side: a downward crossing to the right counts +1
                     count += -1 if upward else 1
             out[i] = count
+
+
+def convex_hull(const double[:, ::1] points, const Py_ssize_t[::1] order, Py_ssize_t[::1] out):
+    """The convex hull's vertices (Andrew's monotone chain): ``order`` sorts ``points``
+    lexicographically (row, then column); the indices of the extreme points go to ``out`` (length
+    at least n + 1) in one turning direction, without collinear or repeated points.  Returns their
+    count (under 3: the points lie on a line)."""
+    cdef Py_ssize_t n = order.shape[0], k = 0, i, lower, p
+    cdef double ar, ac
+    with nogil:
+        for i in range(n):  # the lower chain, then the upper one back
+            p = order[i]
+            while k >= 2:
+                ar, ac = points[out[k - 2], 0], points[out[k - 2], 1]
+                if ((points[out[k - 1], 0] - ar) * (points[p, 1] - ac)
+                        - (points[out[k - 1], 1] - ac) * (points[p, 0] - ar)) > 0.0:
+                    break
+                k -= 1
+            out[k] = p
+            k += 1
+        lower = k + 1
+        for i in range(n - 2, -1, -1):
+            p = order[i]
+            while k >= lower:
+                ar, ac = points[out[k - 2], 0], points[out[k - 2], 1]
+                if ((points[out[k - 1], 0] - ar) * (points[p, 1] - ac)
+                        - (points[out[k - 1], 1] - ac) * (points[p, 0] - ar)) > 0.0:
+                    break
+                k -= 1
+            out[k] = p
+            k += 1
+    return k - 1 if k > 1 else k  # the last point closes the chain at the first
 
 
 cdef inline double _segment_gap(double pr, double pc, Py_ssize_t k, const double[::1] start_r,

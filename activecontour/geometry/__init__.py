@@ -6,4 +6,5 @@ topology    crossings and their repair, winding numbers, nucleation sites
 raster      curves <-> masks
 partition   boundaries between the classes of a label image (N regions)
 regions     hole grouping and shapely region operations
+hull        the convex hull of a point set (compiled, no scipy.spatial)
 """

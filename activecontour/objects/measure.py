@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour.geometry.curve import signed_area
+from activecontour.geometry.hull import hull_area
 from activecontour.geometry.raster import rasterize
 from activecontour.geometry.regions import group_curves, top_left
 from activecontour.objects.split import split_touching
@@ -295,7 +296,7 @@ def measure(objects, labels, image=None):
         # regionprops' inertia tensor: the moment about each axis is the other coordinate's
         tensor[k] = np.array([[central[1, 1], -central[0, 1]], [-central[0, 1], central[0, 0]]]) / area[k]
         perimeter[k] = sum(np.sum(np.hypot(*np.diff(np.vstack([c, c[:1]]), axis=0).T)) for c in curves)
-        convex[k] = _hull_area(np.vstack([c for c in curves if signed_area(c) > 0]))
+        convex[k] = hull_area(np.vstack([c for c in curves if signed_area(c) > 0]))
     eigen = np.linalg.eigvalsh(tensor)[:, ::-1].clip(min=0)  # descending
     table["area"] = area
     table["perimeter"] = perimeter
@@ -326,12 +327,3 @@ def measure(objects, labels, image=None):
             with np.errstate(divide="ignore", invalid="ignore"):
                 table[name] = sums[1:n + 1] / table["num_pixels"]
     return table
-
-
-def _hull_area(points):
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        return float(ConvexHull(points).volume)  # a 2-D hull's "volume" is its area
-    except QhullError:  # all vertices on a line: no area
-        return 0.0
