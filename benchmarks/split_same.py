@@ -10,8 +10,9 @@ of ``benchmarks/bench_objects.py``, the DSB 2018 nuclei image, ``--seeds`` seeds
 :func:`activecontour.objects.measure.find_objects` was called with and the objects it returned
 (label image, measurement table, curves).  ``check`` calls ``find_objects`` again on the stored
 arguments (the flow is not re-run: the split is what changed) and reports every scene whose label
-image, table or curves differ, with the CPU seconds of ``find_objects`` with ``separate=True`` and
-``separate=False`` (the least of ``--repeat`` runs): the split's share of the run.
+image or curves differ (and how far their tables' columns moved), with the CPU seconds of
+``find_objects`` with ``separate=True`` and ``separate=False`` (the least of ``--repeat`` runs):
+the split's share of the run.
 """
 
 from __future__ import annotations
@@ -71,13 +72,21 @@ def capture(folder, seeds):
 
 
 def same(before, after):
-    """Whether two results of ``find_objects`` are equal: curves, label image and table."""
+    """Whether two results of ``find_objects`` hold the same objects (curves and label image), and
+    the largest relative difference of any column of their tables (a measurement's rounding may
+    move with a change outside the split)."""
     (objects, labels, table), (objects2, labels2, table2) = before, after
-    return (len(objects) == len(objects2)
-            and all(len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
-                    for a, b in zip(objects, objects2, strict=True))
-            and np.array_equal(labels, labels2) and table.keys() == table2.keys()
-            and all(np.array_equal(table[key], table2[key], equal_nan=True) for key in table))
+    equal = (len(objects) == len(objects2)
+             and all(len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+                     for a, b in zip(objects, objects2, strict=True))
+             and np.array_equal(labels, labels2))
+    if not equal or table.keys() != table2.keys():
+        return False, np.inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gaps = [np.nanmax(np.abs(np.asarray(table[key], float) - table2[key])
+                          / np.maximum(np.abs(np.asarray(table[key], float)), 1e-300), initial=0.0)
+                for key in table]
+    return True, float(max(gaps, default=0.0))
 
 
 def cpu(repeat, *args, **kwargs):
@@ -90,8 +99,8 @@ def cpu(repeat, *args, **kwargs):
 
 
 def check(folder, repeat):
-    changed, total = [], {True: 0.0, False: 0.0}
-    print(f"{'scene':22s} | {'objects':>7s} | {'split s':>7s} | {'no split s':>10s} | same")
+    changed, total, gap = [], {True: 0.0, False: 0.0}, 0.0
+    print(f"{'scene':22s} | {'objects':>7s} | {'split s':>7s} | {'no split s':>10s} | same | table rel. diff")
     for path in sorted(folder.glob("*.pkl")):
         with open(path, "rb") as file:
             args, kwargs, found = pickle.load(file)
@@ -99,11 +108,14 @@ def check(folder, repeat):
         alone, _ = cpu(repeat, *args, **{**kwargs, "separate": False})
         total[True] += seconds
         total[False] += alone
-        equal = same(found, now)
+        equal, difference = same(found, now)
         if not equal:
             changed.append(path.stem)
-        print(f"{path.stem:22s} | {len(now[0]):7d} | {seconds:7.3f} | {alone:10.3f} | {equal}", flush=True)
-    print(f"total: split {total[True]:.2f} s, no split {total[False]:.2f} s; changed: {changed or 'none'}")
+        gap = max(gap, difference)
+        print(f"{path.stem:22s} | {len(now[0]):7d} | {seconds:7.3f} | {alone:10.3f} | {str(equal):4s} | "
+              f"{difference:.1e}", flush=True)
+    print(f"total: split {total[True]:.2f} s, no split {total[False]:.2f} s; objects changed: "
+          f"{changed or 'none'}; largest relative difference in a table: {gap:.1e}")
     return not changed
 
 

@@ -74,6 +74,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import curvature, edge_lengths, signed_area, vertex_normals
+from activecontour.geometry.hull import hull_vertices
 from activecontour.geometry.raster import rasterize, sorted_crossings
 from activecontour.geometry.regions import _from_shapely, _to_shapely
 
@@ -202,11 +203,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
 def _hull_depth(outline):
     """How far (pixels) each vertex of a closed polygon lies inside its convex hull: its distance
     to the hull edge that bridges the stretch it is on (0 on the hull)."""
-    import scipy.spatial
-
-    try:
-        hull = np.sort(scipy.spatial.ConvexHull(outline).vertices)
-    except scipy.spatial.QhullError:  # all vertices on a line
+    hull = np.sort(hull_vertices(outline))
+    if len(hull) < 3:  # all vertices on a line
         return np.zeros(len(outline))
     # vertex i lies on the stretch from hull vertex hull[m] to hull[m + 1] (cyclically)
     m = np.searchsorted(hull, np.arange(len(outline)), side="right") - 1
