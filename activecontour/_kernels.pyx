@@ -10,6 +10,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.topology`, :mod:`activecontour.curve` (crossing curves) and
   :mod:`activecontour.backends.network` (a network's segments that meet);
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
+* :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
+  boundary at its pixel centres, from a finer raster);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
@@ -1826,3 +1828,112 @@ def segment_table(const double[:, :, ::1] segments, double far, double[:, ::1] c
             for k in range(5):
                 columns[k, i] = row[k]
                 columns32[k, i] = <float> row[k]
+
+
+def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, const int[::1] direction,
+                     Py_ssize_t rows, Py_ssize_t cols, Py_ssize_t step, double[:, ::1] out):
+    """The Euclidean distance transform (as ``scipy.ndimage.distance_transform_edt``: from each
+    pixel to the nearest pixel outside, 0 outside) of the ``rows x cols`` mask that
+    :func:`activecontour.geometry.raster.rasterize` draws from its row crossings (``row``,
+    ``first`` column right of the crossing, ``direction``; sorted by row, then column: a pixel is
+    inside when the directions of the crossings at or left of it do not add up to 0), read every
+    ``step`` pixels: ``out[i, j]`` at pixel ``(step i, step j)``.  The mask must have a pixel
+    outside.
+
+    Separable and exact, without drawing the mask: per row, the runs of inside pixels from its
+    crossings, and the distance h along the row from each sampled column to the nearest pixel
+    outside; per sampled column, the lower envelope of the parabolas ``(x - r)^2 + h_r^2`` over
+    the rows r (Felzenszwalb and Huttenlocher), its breakpoints compared as fractions of
+    integers, read at the sampled rows: the least squared distance as an integer, then one square
+    root (the transform's own values).  O(rows x sampled columns + crossings)."""
+    cdef Py_ssize_t m = out.shape[0], n = out.shape[1], count = row.shape[0]
+    cdef Py_ssize_t r, c, i, j, k, x, p, u, at = 0, start, stop, winding, before, last
+    cdef long long far = (rows + cols) * (rows + cols) + 1, h, best
+    cdef long long *across = <long long *> malloc(max(rows * n, 1) * sizeof(long long))
+    cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(rows, 1) * sizeof(Py_ssize_t))
+    cdef long long *height = <long long *> malloc(max(rows, 1) * sizeof(long long))
+    if across == NULL or vertex == NULL or height == NULL:
+        free(across)
+        free(vertex)
+        free(height)
+        raise MemoryError()
+    with nogil:
+        for r in range(rows):
+            for j in range(n):
+                across[r * n + j] = 0
+            while at < count and row[at] < r:
+                at += 1
+            # the runs [start, stop) where the winding is not 0; the sampled columns in each
+            winding = 0
+            start = -1
+            while at < count and row[at] == r:
+                c = first[at]
+                before = winding
+                while at < count and row[at] == r and first[at] == c:
+                    winding += direction[at]
+                    at += 1
+                if before == 0 and winding != 0:
+                    start = c
+                elif before != 0 and winding == 0:
+                    _run_distances(across, r, n, step, start, c, cols, far)
+            if winding != 0:
+                _run_distances(across, r, n, step, start, cols, cols, far)
+        for j in range(n):
+            # the envelope: parabola vertex[k] (row) with height[k] = h^2 + row^2 is lowest from
+            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
+            # breakpoint of rows u < p lies at (height_p - height_u) / (2 (p - u))
+            k = -1
+            for r in range(rows):
+                h = across[r * n + j]
+                if h >= far:
+                    continue
+                h = h * h + <long long> r * r
+                while k >= 1:
+                    p, u = vertex[k], vertex[k - 1]
+                    # drop p when r's breakpoint with it comes no later than p's with u
+                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (r - p):
+                        k -= 1
+                    else:
+                        break
+                if k == 0 and h - height[0] <= 0:
+                    k = -1  # r is as low as vertex[0] from x = 0 on
+                k += 1
+                vertex[k] = r
+                height[k] = h
+            if k < 0:
+                for i in range(m):
+                    out[i, j] = sqrt(<double> far)
+                continue
+            last = 0
+            for i in range(m):
+                x = i * step
+                # move right while the next parabola takes over at or before x
+                while last < k and height[last + 1] - height[last] <= 2 * x * (vertex[last + 1] - vertex[last]):
+                    last += 1
+                best = (<long long> (x - vertex[last]) * (x - vertex[last]) + height[last]
+                        - <long long> vertex[last] * vertex[last])
+                out[i, j] = sqrt(<double> best)
+    free(across)
+    free(vertex)
+    free(height)
+
+
+cdef inline void _run_distances(long long *across, Py_ssize_t r, Py_ssize_t n, Py_ssize_t step,
+                                Py_ssize_t start, Py_ssize_t stop, Py_ssize_t cols,
+                                long long far) noexcept nogil:
+    """Row r's sampled columns in the run of inside pixels [start, stop) (clipped to the row):
+    their distance to the nearest pixel outside, on the left (start - 1) or the right (stop),
+    those outside the row's ends not counting."""
+    cdef Py_ssize_t j, c
+    cdef long long left, right
+    if start < 0:
+        start = 0
+    if stop > cols:
+        stop = cols
+    j = (start + step - 1) // step
+    while j < n and j * step < stop:
+        c = j * step
+        left = c - start + 1 if start > 0 else far
+        right = stop - c if stop < cols else far
+        across[r * n + j] = left if left < right else right
+        j += 1

@@ -12,7 +12,7 @@ import numpy as np
 from activecontour import _kernels
 from activecontour.geometry.curve import curve_areas, split_curves, stack_curves, take_curves, take_vertices
 
-__all__ = ["level_curves", "mask_to_curves", "rasterize"]
+__all__ = ["level_curves", "mask_to_curves", "rasterize", "sorted_crossings"]
 
 #: pixels per band of rows in :func:`rasterize` (16 MB of int32 winding numbers)
 _BAND_CELLS = 1 << 22
@@ -48,6 +48,16 @@ def rasterize(curves, shape):
         np.cumsum(winding, axis=1, dtype=np.int32, out=winding)
         mask[start: start + len(winding)] = winding[:, :n] != 0
     return mask
+
+
+def sorted_crossings(curves, shape):
+    """The crossings :func:`rasterize` adds up, sorted by row, then by column: ``(row, first,
+    direction)``, the pixel at ``(row, c)`` inside when the directions of its row's crossings with
+    ``first <= c`` do not add up to 0.  For a compiled reader of the mask that never draws it
+    (:func:`activecontour._kernels.sampled_distance`)."""
+    row, first, direction = _row_crossings(curves, *shape)
+    order = np.lexsort((first, row))
+    return row[order], first[order], direction[order]
 
 
 def _row_crossings(curves, m, n):

@@ -33,6 +33,15 @@ Cost: an object whose outline lies within :data:`MIN_WAIST_DEPTH` of its convex 
 waist, no neck and no concave corner: it skips stages 1 and 2 after one convex hull of its polygon
 (O(K log K) for K vertices), and stage 3 after a block-averaged look at its intensities
 (:func:`_block_spread`), so an image of convex objects pays almost nothing for the split.
+Past that gate, each stage stops as soon as a consequence of its own criterion shows that it
+will not cut, so the shortcuts change no decision (``benchmarks/split_same.py`` compares the
+objects before and after a change; ``tests/objects/test_split_gates.py`` the shortcuts): no
+neck is looked for where the pixel raster bounds the boundary distance below ``min_radius``
+(:func:`_thinner_than`), nor past a watershed with one part thick enough to be an object; no
+corner cut in a part that is an ellipse or under twice the smallest part (:func:`_uncuttable`),
+nor on the second side of a cut whose first side already leaves too much unexplained.  The
+boundary distance computes the fine raster's distance transform at the pixel centres only
+(:func:`activecontour._kernels.sampled_distance`).
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
 ``res.labels``, ``benchmarks/bench_objects.py``; worst seed / mean):
@@ -63,8 +72,10 @@ from itertools import pairwise
 
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.geometry.curve import curvature, edge_lengths, signed_area, vertex_normals
-from activecontour.geometry.raster import rasterize
+from activecontour.geometry.hull import hull_vertices
+from activecontour.geometry.raster import rasterize, sorted_crossings
 from activecontour.geometry.regions import _from_shapely, _to_shapely
 
 __all__ = ["split_touching"]
@@ -155,7 +166,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if inside is None or not inside.any():
             result.append(curves)
             continue
-        concave = _hull_depth(curves[0]).max() >= MIN_WAIST_DEPTH
+        depth = _hull_depth(curves[0])
+        concave = depth.max() >= MIN_WAIST_DEPTH
         contrast = False
         if image is not None:
             spread = _block_spread(inside, image[box], min_radius)
@@ -173,15 +185,17 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         parts = window.astype(np.int32)
         if concave:
             concavity = _concavity(window, curves[0] - low)
-            if _may_have_necks(window, concavity):
+            if _may_have_necks(window, concavity, curves[0] - low, min_radius):
                 parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
                                     neck_ratio, min_radius)
         if contrast:
             parts = _contrast_parts(parts, _window(image, box), least, min_radius)
         pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
         if concave:
+            # (an object its necks did not cut: its hull depth is known)
             pieces = [cut for piece in pieces for cut in
-                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(piece[0])])]
+                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
+                          piece[0], depth if piece[0] is curves[0] else None)])]
         result.extend(pieces)
     return result
 
@@ -189,11 +203,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
 def _hull_depth(outline):
     """How far (pixels) each vertex of a closed polygon lies inside its convex hull: its distance
     to the hull edge that bridges the stretch it is on (0 on the hull)."""
-    import scipy.spatial
-
-    try:
-        hull = np.sort(scipy.spatial.ConvexHull(outline).vertices)
-    except scipy.spatial.QhullError:  # all vertices on a line
+    hull = np.sort(hull_vertices(outline))
+    if len(hull) < 3:  # all vertices on a line
         return np.zeros(len(outline))
     # vertex i lies on the stretch from hull vertex hull[m] to hull[m + 1] (cyclically)
     m = np.searchsorted(hull, np.arange(len(outline)), side="right") - 1
@@ -203,19 +214,20 @@ def _hull_depth(outline):
     return np.abs(cross) / np.maximum(np.hypot(edge[:, 0], edge[:, 1]), 1e-12)
 
 
-def _may_have_necks(region, concavity):
-    """Whether the outline has two edge pixels ``MIN_WAIST_DEPTH`` inside its convex hull (every
-    split line ends in two such waists, :meth:`_PartGraph.is_waist`; pixels touching only at a
-    corner are parts without one) and the pixel distance
-    transform has two maxima of dynamic above half a pixel: without them no neck is
-    ``MIN_NECK_DEPTH`` deep even after its half-pixel errors (cheap tests that spare most single
-    objects the exact distance).  The h-maxima (plateaus of regional maxima) lie in the pixels
-    not below any 8-neighbour, each of whose 4-connected pieces holds at most one of them, so
-    one such piece means no two h-maxima."""
+def _may_have_necks(region, concavity, outline, min_radius):
+    """Whether the outline (in window coordinates) has two edge pixels ``MIN_WAIST_DEPTH`` inside
+    its convex hull (every split line ends in two such waists, :meth:`_PartGraph.is_waist`;
+    pixels touching only at a corner are parts without one), a part that may reach ``min_radius``
+    (:func:`_thinner_than`) and the pixel distance transform has two maxima of dynamic above half
+    a pixel: without them no neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors
+    (cheap tests that spare most single objects the exact distance).  The h-maxima (plateaus of
+    regional maxima) lie in the pixels not below any 8-neighbour, each of whose 4-connected
+    pieces holds at most one of them, so one such piece means no two h-maxima."""
     import scipy.ndimage
     import skimage.morphology
 
-    if np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2 and scipy.ndimage.label(region)[1] == 1:
+    if scipy.ndimage.label(region)[1] == 1 and (np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2
+                                                or _thinner_than(region, outline, min_radius)):
         return False
     distance = scipy.ndimage.distance_transform_edt(region)
     peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
@@ -230,18 +242,44 @@ DISTANCE_SUPERSAMPLE = 8
 DISTANCE_MAX_SAMPLES = 1 << 20
 
 
+def _supersample(shape):
+    """The factor of :func:`_boundary_distance`'s finer raster for a window of this shape."""
+    return int(np.clip(np.sqrt(DISTANCE_MAX_SAMPLES / (shape[0] * shape[1])), 1, DISTANCE_SUPERSAMPLE))
+
+
+def _thinner_than(region, outline, min_radius):
+    """Whether :func:`_boundary_distance` stays below ``min_radius`` on the region, shown without
+    computing it: then every part of :func:`_neck_parts` is too small to be an object and they
+    all merge (a region of one 4-connected piece stays whole).
+
+    The bound: with a finer raster ``2^k`` times finer, the fine raster read at the pixel centres
+    is the raster of the outline itself (every coordinate and every step of
+    :func:`activecontour.geometry.raster.rasterize` scales by ``2^k`` exactly), so every pixel
+    centre outside it is a fine pixel outside, and the fine distance, in pixels, is at most the
+    distance transform of the pixel raster (less half a fine pixel)."""
+    import scipy.ndimage
+
+    fine = _supersample(region.shape)
+    if fine & (fine - 1):  # not a power of two: no exact bound
+        return False
+    inside = rasterize([outline], region.shape)
+    return scipy.ndimage.distance_transform_edt(inside)[region].max() < min_radius
+
+
 def _boundary_distance(curves, region, low):
     """The distance from each pixel centre of ``region`` to the object's sub-pixel boundary (0
     outside): the Euclidean distance transform of the polygon rasterised ``DISTANCE_SUPERSAMPLE``
     times finer, within half a fine pixel.  On the pixel grid itself its half-pixel steps, 8 % of
     the radius of a 12 px object, would make necks out of nothing."""
-    import scipy.ndimage
-
     m, n = region.shape
-    fine = int(np.clip(np.sqrt(DISTANCE_MAX_SAMPLES / (m * n)), 1, DISTANCE_SUPERSAMPLE))
-    # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one
-    inside = rasterize([(c - low) * fine for c in curves], (fine * (m - 1) + 1, fine * (n - 1) + 1))
-    distance = (scipy.ndimage.distance_transform_edt(inside)[::fine, ::fine] - 0.5) / fine
+    fine = _supersample(region.shape)
+    # fine pixel centre (i, j) is window point (i, j) / fine: every pixel centre is a fine one;
+    # the fine raster's Euclidean distance transform, at the pixel centres only, from its crossings
+    shape = (fine * (m - 1) + 1, fine * (n - 1) + 1)
+    distance = np.empty(region.shape)
+    _kernels.sampled_distance(*sorted_crossings([(c - low) * fine for c in curves], shape), *shape, fine,
+                              distance)
+    distance = (distance - 0.5) / fine
     return np.where(region, np.maximum(distance, 0.0), 0.0)
 
 
@@ -264,7 +302,13 @@ def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32)
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    graph = _PartGraph(parts, distance, count, concavity, min_radius)
+    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+    # at most one part as thick as an object: every neck has a thinner side too small to be one,
+    # so every pair merges (:meth:`_PartGraph.merit`) and a region of one 4-connected piece,
+    # which the watershed covers, is one part
+    if np.count_nonzero(peak >= min_radius) <= 1 and scipy.ndimage.label(region)[1] == 1:
+        return region.astype(np.int32)
+    graph = _PartGraph(parts, distance, peak, concavity, min_radius)
     graph.merge_necks(neck_ratio)
     graph.merge_non_blobs()
     return graph.labels()
@@ -491,11 +535,9 @@ class _PartGraph:
     merging costs O(B log B) for B border pixels, not a scan of every border per merge.
     """
 
-    def __init__(self, parts, distance, count, concavity, min_radius):
-        import scipy.ndimage
-
+    def __init__(self, parts, distance, peak, concavity, min_radius):
         self.parts, self.concavity, self.min_radius = parts, concavity, min_radius
-        self.peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+        self.peak, count = peak, len(peak) - 1
         self.members = {k: [k] for k in range(1, count + 1)}
         self.adjacent = {k: {} for k in range(1, count + 1)}  # part: {neighbour: _Border}
         # every 4-neighbour pair of pixels in two parts: rows first, then columns, in raster order
@@ -577,6 +619,8 @@ class _PartGraph:
         """A part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were
         a shape's own: it takes its neighbours back, the least solid first, until every part is a
         blob or has no neighbour (pixels touching only at a corner are no neighbours)."""
+        if not any(self.adjacent.values()):  # no part has a neighbour to take back: no shapes needed
+            return
         self.shapes = _PartShapes(self.parts, self.members)
         queue = []
         for root in self.members:
@@ -597,8 +641,7 @@ class _PartGraph:
     def is_waist(self, border):
         """Whether a border ends in a concavity of the outline at two places: its pixels on the
         outline fall in two pieces (8-neighbours) or more, two of them ``MIN_WAIST_DEPTH`` deep."""
-        import scipy.sparse
-        import scipy.sparse.csgraph
+        import scipy.ndimage
 
         if border.waist is not None:
             return border.waist
@@ -607,19 +650,13 @@ class _PartGraph:
         pixels, depth = pixels[depth >= 0], depth[depth >= 0]
         border.waist = False
         if pixels.size >= 2:
-            width = self.parts.shape[1]
-            rows, cols = np.divmod(pixels, width)
-            # 8-neighbour pieces of a sparse set of pixels: join each to its neighbours ahead
-            links = []
-            for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
-                target = (rows + dr) * width + cols + dc
-                found = np.minimum(np.searchsorted(pixels, target), pixels.size - 1)
-                hit = (pixels[found] == target) & (cols + dc >= 0) & (cols + dc < width)
-                links.append(np.column_stack([np.flatnonzero(hit), found[hit]]))
-            links = np.concatenate(links)
-            graph = scipy.sparse.coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])),
-                                            shape=(pixels.size, pixels.size))
-            count, piece = scipy.sparse.csgraph.connected_components(graph, directed=False)
+            rows, cols = np.divmod(pixels, self.parts.shape[1])
+            # 8-neighbour pieces of a sparse set of pixels, labelled on their bounding box
+            rows, cols = rows - rows.min(), cols - cols.min()
+            drawn = np.zeros((rows.max() + 1, cols.max() + 1), dtype=bool)
+            drawn[rows, cols] = True
+            pieces, count = scipy.ndimage.label(drawn, structure=np.ones((3, 3)))
+            piece = pieces[rows, cols] - 1
             if count >= 2:
                 deepest = np.full(count, -1.0)
                 np.maximum.at(deepest, piece, depth)
@@ -827,7 +864,7 @@ ELLIPSE_SOLIDITY = 0.9
 EXPLAINED_GAIN = 0.5
 
 
-def _corner_parts(outline):
+def _corner_parts(outline, depth=None):
     """The parts of a polygon (an outer boundary without holes) cut at its concave corners, as
     polygons that share their cut lines (each cut joins two vertices of the outline).
 
@@ -835,11 +872,14 @@ def _corner_parts(outline):
     other, or one corner and the outline across, :func:`_cuts`) that are necks (``CUT_NECK``) and
     lie inside the part are ordered by their neck ratio; of the first ``CUT_OPTIONS``, the one
     whose two sides are fitted best by an ellipse each is made and its sides cut in turn.  A cut
-    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).
+    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth``: the
+    outline's :func:`_hull_depth`, when it is known.
     """
     import shapely
 
-    corners, kappa, normals = _concave_corners(outline)
+    if _uncuttable(signed_area(outline), False):
+        return [outline]
+    corners, kappa, normals = _concave_corners(outline, depth)
     if len(corners) == 0:
         return [outline]
     region = shapely.Polygon(outline)
@@ -853,6 +893,9 @@ def _corner_parts(outline):
     is_corner[corners] = True
 
     def split(cycle, fit):
+        area, good = fit
+        if _uncuttable(area, good):
+            return [(cycle, fit)]
         options = []
         for _, a, b in _cuts(outline, cycle, is_corner, flat, normals):
             first, second = cycle[a:b + 1], np.r_[cycle[b:], cycle[:a + 1]]
@@ -866,11 +909,19 @@ def _corner_parts(outline):
         if not options:
             return [(cycle, fit)]
         _, first, second, fits = min(options, key=lambda option: option[0])
-        parts = (split(first, _explained(outline[first], fits[0], region))
-                 + split(second, _explained(outline[second], fits[1], region)))
-        unexplained = sum(area for _, (area, good) in parts if not good)
-        area, good = fit
-        if unexplained <= (0.0 if good else area) - EXPLAINED_GAIN * area:
+        sides = [(first, _explained(outline[first], fits[0], region)),
+                 (second, _explained(outline[second], fits[1], region))]
+        allowed = (0.0 if good else area) - EXPLAINED_GAIN * area
+        # the area a side leaves unexplained only adds up: once one side (the larger first) leaves
+        # more than the cut may, the cut is undone whatever the other side's parts
+        found = [None, None]
+        for i in sorted((0, 1), key=lambda i: -sides[i][1][0]):
+            found[i] = split(*sides[i])
+            if sum(size for _, (size, kept) in found[i] if not kept) > allowed + 1e-9 * abs(area):
+                return [(cycle, fit)]
+        parts = found[0] + found[1]
+        unexplained = sum(size for _, (size, kept) in parts if not kept)
+        if unexplained <= allowed:
             return parts
         return [(cycle, fit)]
 
@@ -879,15 +930,24 @@ def _corner_parts(outline):
     return [outline[cycle] for cycle, _ in parts]
 
 
-def _concave_corners(outline):
+def _uncuttable(area, good):
+    """Whether :func:`_corner_parts` keeps a part of this area, explained by an ellipse or not,
+    whatever its cuts: one that is an ellipse (its parts would have to leave less than nothing
+    unexplained, ``EXPLAINED_GAIN``), or one under twice the smallest part (the two sides of a
+    cut inside it add up to its area, so one is under ``pi MIN_SPLIT_RADIUS^2``)."""
+    return (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2
+
+
+def _concave_corners(outline, depth=None):
     """The vertices at the concave corners of a polygon, its smoothed curvature and its smoothed
     outward unit normals.
 
     The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
     curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
     maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
-    ``CORNER_TURN`` and it dips ``MIN_WAIST_DEPTH`` inside the convex hull; the corner is its
-    vertex of most negative curvature.
+    ``CORNER_TURN`` and it dips ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``:
+    :func:`_hull_depth`, measured here unless given, and only once a stretch turns enough); the
+    corner is its vertex of most negative curvature.
     """
     import scipy.ndimage
 
@@ -901,7 +961,6 @@ def _concave_corners(outline):
     concave = kappa < 0
     if concave.all() or not concave.any():
         return np.zeros(0, dtype=int), kappa, normals
-    depth = _hull_depth(outline)
     # the stretches of negative curvature, starting the count at a vertex that is not in one
     order = np.roll(np.arange(len(outline)), -int(np.argmin(concave)))
     steps = np.diff(np.r_[0, concave[order].astype(int), 0])
@@ -909,14 +968,18 @@ def _concave_corners(outline):
     for start, stop in zip(np.flatnonzero(steps == 1), np.flatnonzero(steps == -1), strict=True):
         stretch = order[start:stop]
         turn = -np.sum(kappa[stretch] * ds[stretch])
-        if np.degrees(turn) >= CORNER_TURN and depth[stretch].max() >= MIN_WAIST_DEPTH:
+        if np.degrees(turn) < CORNER_TURN:
+            continue
+        depth = _hull_depth(outline) if depth is None else depth
+        if depth[stretch].max() >= MIN_WAIST_DEPTH:
             corners.append(stretch[np.argmin(kappa[stretch])])
     return np.sort(np.array(corners, dtype=int)), kappa, normals
 
 
 def _cuts(outline, cycle, is_corner, flat, normals):
     """The admissible cuts of the part ``outline[cycle]``: (neck ratio, a, b) with a < b positions
-    in ``cycle``, narrowest first.
+    in ``cycle``, narrowest first, one by one (a cut is tested for lying inside the part only when
+    it is asked for).
 
     Candidates join two corners of the part, or a corner and the first vertex of the part's
     outline hit by a ray along the corner's inward normal (turned by ``CUT_RAYS``) where the
@@ -924,12 +987,12 @@ def _cuts(outline, cycle, is_corner, flat, normals):
     ``CUT_ALIGN``, is a neck (``CUT_NECK``) and lies inside the part.
     """
     part = outline[cycle]
+    edges = part, np.roll(part, -1, axis=0)  # edge i of the part: from edges[0][i] to edges[1][i]
     positions = np.flatnonzero(is_corner[cycle])
     candidates = {(int(a), int(b)) for i, a in enumerate(positions) for b in positions[i + 1:]}
-    for a in positions:
-        for b in _ray_hits(outline, cycle, a, normals):
-            if flat[cycle[b]]:
-                candidates.add((min(a, b), max(a, b)))
+    for a, b in _ray_hits(outline, cycle, edges, positions, normals):
+        if flat[cycle[b]]:
+            candidates.add((min(a, b), max(a, b)))
     least = np.cos(np.radians(CUT_ALIGN))
     centred = part - part.mean(axis=0)
     cuts = []
@@ -944,46 +1007,57 @@ def _cuts(outline, cycle, is_corner, flat, normals):
         along = centred @ direction
         extent = min(np.ptp(along[a:b + 1]), np.ptp(np.r_[along[b:], along[:a + 1]]))
         ratio = length / max(extent, 1e-12)
-        if ratio <= CUT_NECK and _segment_inside(part, a, b):
+        if ratio <= CUT_NECK:
             cuts.append((ratio, a, b))
-    return sorted(cuts)
+    for ratio, a, b in sorted(cuts):
+        if _segment_inside(edges, a, b):
+            yield ratio, a, b
 
 
-def _ray_hits(outline, cycle, a, normals):
-    """Positions in ``cycle`` where rays from vertex ``cycle[a]`` along its inward normal (turned
-    by ``CUT_RAYS``) first meet the part's outline, on an edge of the object's outline (not a
-    cut): the nearer end of that edge."""
-    part = outline[cycle]
-    start, edge = part, np.roll(part, -1, axis=0) - part
+def _ray_hits(outline, cycle, edges, positions, normals):
+    """The pairs (a, b) of positions in ``cycle``: rays from each corner ``cycle[a]`` (``a`` in
+    ``positions``) along its inward normal (turned by ``CUT_RAYS``) first meet the part's outline
+    ``edges`` on an edge of the object's outline (not a cut), at its nearer end ``b``.  All rays
+    of all corners at once: one pass over the edges."""
+    count = len(cycle)
+    if count == 0 or len(positions) == 0:
+        return []
+    start, edge = edges[0], edges[1] - edges[0]
     original = np.roll(cycle, -1) == (cycle + 1) % len(outline)
-    count = len(part)
-    hits = []
-    for angle in np.radians(CUT_RAYS):
-        cos, sin = np.cos(angle), np.sin(angle)
-        ray = -np.array([[cos, -sin], [sin, cos]]) @ normals[cycle[a]]
-        offset = start - part[a]
-        denominator = ray[0] * edge[:, 1] - ray[1] * edge[:, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            along_ray = (offset[:, 0] * edge[:, 1] - offset[:, 1] * edge[:, 0]) / denominator
-            along_edge = (offset[:, 0] * ray[1] - offset[:, 1] * ray[0]) / denominator
-        index = np.arange(count)
-        hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
-               & (index != a) & ((index + 1) % count != a))
-        if hit.any():
-            j = np.flatnonzero(hit)[np.argmin(along_ray[hit])]
-            if original[j]:
-                b = j if along_edge[j] < 0.5 else (j + 1) % count
+    turns = [np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+             for angle in np.radians(CUT_RAYS)]
+    # ray (corner, angle), as (2,) vectors stacked: (corners, angles, 2)
+    rays = np.array([[-turn @ normals[cycle[a]] for turn in turns] for a in positions])
+    offset = start[None, :, :] - start[positions][:, None, :]  # (corners, edges, 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denominator = (rays[:, :, 0, None] * edge[None, None, :, 1]
+                       - rays[:, :, 1, None] * edge[None, None, :, 0])
+        along_ray = ((offset[:, :, 0] * edge[:, 1] - offset[:, :, 1] * edge[:, 0])[:, None, :]
+                     / denominator)
+        along_edge = (offset[:, None, :, 0] * rays[:, :, 1, None]
+                      - offset[:, None, :, 1] * rays[:, :, 0, None]) / denominator
+    index = np.arange(count)
+    away = (index[None, :] != positions[:, None]) & ((index[None, :] + 1) % count != positions[:, None])
+    hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
+           & away[:, None, :])
+    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)
+    pairs = []
+    for i, a in enumerate(positions):
+        for k in range(len(turns)):
+            j = nearest[i, k]
+            if hit[i, k, j] and original[j]:
+                b = j if along_edge[i, k, j] < 0.5 else (j + 1) % count
                 if b != a:
-                    hits.append(int(b))
-    return hits
+                    pairs.append((int(a), int(b)))
+    return pairs
 
 
-def _segment_inside(polygon, a, b):
-    """Whether the segment between vertices a and b of a simple polygon lies inside it: it
-    crosses no edge (those at a and b aside) and its midpoint is inside."""
-    count = len(polygon)
-    start, end = polygon, np.roll(polygon, -1, axis=0)
-    p, q = polygon[a], polygon[b]
+def _segment_inside(edges, a, b):
+    """Whether the segment between vertices a and b of a simple polygon (its ``edges``: starts and
+    ends) lies inside it: it crosses no edge (those at a and b aside) and its midpoint is inside."""
+    start, end = edges
+    count = len(start)
+    p, q = start[a], start[b]
 
     def side(u, v, w):
         return ((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
@@ -1005,8 +1079,9 @@ def _segment_inside(polygon, a, b):
 def _ellipse_fit(points):
     """The direct least-squares ellipse of points (P, 2) (Halir and Flusser's stable form of
     Fitzgibbon, Pilu and Fisher) and the sum of squared Sampson distances (pixels^2) of the
-    points to it: (ellipse or None, residual).  The ellipse is (centre, semi-axes, axes as
-    columns)."""
+    points to it: (conic or None, residual).  The conic is its coefficients in the points'
+    normalised frame; :func:`_ellipse_axes` gives its centre and axes (only the chosen cut's
+    parts need them)."""
     mean = points.mean(axis=0)
     scale = np.sqrt(np.mean(np.sum((points - mean) ** 2, axis=1))) or 1.0
     x, y = ((points - mean) / scale).T
@@ -1028,17 +1103,24 @@ def _ellipse_fit(points):
     value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
     gradient = np.hypot(2 * a * x + b * y + d, b * x + 2 * c * y + e)
     residual = float(np.sum((scale * value / np.maximum(gradient, 1e-12)) ** 2))
+    return (a, b, c, d, e, f, mean, scale), residual
+
+
+def _ellipse_axes(conic):
+    """The ellipse of a conic of :func:`_ellipse_fit`: (centre, semi-axes, axes as columns), or
+    None when it is no real ellipse."""
+    a, b, c, d, e, f, mean, scale = conic
     # centre and axes: value = (z - z0)^T Q (z - z0) - k
     q = np.array([[a, b / 2], [b / 2, c]])
     try:
         centre = np.linalg.solve(2 * q, [-d, -e])
     except np.linalg.LinAlgError:
-        return None, residual
+        return None
     k = centre @ q @ centre - f
     values, axes = np.linalg.eigh(q)
     if np.any(k / values <= 0):
-        return None, residual
-    return (mean + scale * centre, scale * np.sqrt(k / values), axes), residual
+        return None
+    return mean + scale * centre, scale * np.sqrt(k / values), axes
 
 
 def _explained(part, fit, region):
@@ -1049,10 +1131,13 @@ def _explained(part, fit, region):
     import shapely
 
     area = signed_area(part)
-    ellipse, residual = fit
+    conic, residual = fit
     radius = np.sqrt(max(area, 0.0) / np.pi)
-    if (ellipse is None or radius < MIN_SPLIT_RADIUS
+    if (conic is None or radius < MIN_SPLIT_RADIUS
             or np.sqrt(residual / len(part)) > ELLIPSE_RMS[0] + ELLIPSE_RMS[1] * radius):
+        return area, False
+    ellipse = _ellipse_axes(conic)
+    if ellipse is None:
         return area, False
     centre, semi_axes, axes = ellipse
     if semi_axes.max() > MAX_PART_ASPECT * semi_axes.min():

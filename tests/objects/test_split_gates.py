@@ -1,0 +1,171 @@
+"""The split's shortcuts change no decision: each is a consequence of the criterion applied later.
+
+Random outlines (seeded): clumps of two or three ellipses (concave corners, necks) and bumpy
+stars, at sizes from below the smallest part to large windows.
+"""
+
+import numpy as np
+import pytest
+import scipy.ndimage
+import shapely
+
+import activecontour.objects.split as split
+from activecontour.geometry.curve import orient, signed_area
+from activecontour.geometry.raster import rasterize
+
+
+def _ellipse(rng, centre, scale):
+    t = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    a, b = scale * rng.uniform(0.5, 1.0), scale * rng.uniform(0.3, 1.0)
+    angle = rng.uniform(0, np.pi)
+    u, v = a * np.cos(t), b * np.sin(t)
+    return shapely.Polygon(np.column_stack([centre[0] + u * np.cos(angle) - v * np.sin(angle),
+                                            centre[1] + u * np.sin(angle) + v * np.cos(angle)]))
+
+
+def random_outline(seed):
+    """A simple closed positive outline in (row, col), away from the origin (a star's radius
+    stays positive: its harmonics add up to less than 1)."""
+    rng = np.random.default_rng(seed)
+    scale = rng.choice([2.5, 5.0, 10.0, 25.0])
+    if rng.random() < 0.7:  # a clump: each ellipse overlaps the one before
+        shapes, centre = [], np.array([3 * scale, 3 * scale])
+        for _ in range(rng.integers(2, 4)):
+            shapes.append(_ellipse(rng, centre, scale))
+            centre = centre + rng.normal(0, 1, 2) * scale * 0.9
+        region = shapely.union_all(shapes)
+        if not isinstance(region, shapely.Polygon):
+            region = max(region.geoms, key=lambda g: g.area)
+        outline = np.asarray(region.exterior.coords)[:-1]
+    else:  # a bumpy star
+        t = np.linspace(0, 2 * np.pi, 300, endpoint=False)
+        rho = scale * (1 + sum(rng.uniform(0, 0.15) * np.cos(k * t + rng.uniform(0, 6)) for k in range(2, 7)))
+        outline = np.column_stack([rho * np.cos(t), rho * np.sin(t)])
+    outline = outline - outline.min(axis=0) + rng.uniform(1.2, 2.0, 2)  # window coordinates
+    return orient(outline)
+
+
+def window_of(outline):
+    shape = tuple(np.floor(outline.max(axis=0)).astype(int) + 2)
+    return rasterize([outline], shape)
+
+
+@pytest.mark.parametrize("seed, zoom", [(seed, 1.0) for seed in range(40)] + [(0, 12.0), (3, 9.0), (7, 5.0)])
+def test_the_boundary_distance_is_the_fine_distance_transform_at_the_pixel_centres(seed, zoom):
+    # (zoomed: giant windows, a coarser raster with few fine pixels per centre)
+    outline = random_outline(seed) * zoom
+    region = window_of(outline)
+    fine = split._supersample(region.shape)
+    shape = (fine * (region.shape[0] - 1) + 1, fine * (region.shape[1] - 1) + 1)
+    # the definition: the whole fine raster's Euclidean distance transform, read every fine pixels
+    transform = scipy.ndimage.distance_transform_edt(rasterize([outline * fine], shape))[::fine, ::fine]
+    expected = np.where(region, np.maximum((transform - 0.5) / fine, 0.0), 0.0)
+    np.testing.assert_array_equal(split._boundary_distance([outline], region, np.zeros(2)), expected)
+
+
+def test_a_giant_window_measures_on_a_coarser_raster_that_is_no_power_of_two():
+    # 2^20 samples over a window of 400 x 400 pixels: 2.56 times finer, rounded down to 2; 250
+    # x 250 gives 4; 180 x 180 gives 5, for which _thinner_than claims nothing
+    assert [split._supersample((n, n)) for n in (400, 250, 180, 100)] == [2, 4, 5, 8]
+    assert not split._thinner_than(np.ones((180, 180), bool), np.zeros((3, 2)), 1e9)
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_the_pixel_raster_bounds_the_boundary_distance_and_a_thin_object_has_no_neck(seed):
+    outline = random_outline(seed)
+    region = window_of(outline)
+    distance = split._boundary_distance([outline], region, np.zeros(2))
+    if split._supersample(region.shape) & (split._supersample(region.shape) - 1) == 0:
+        bound = scipy.ndimage.distance_transform_edt(rasterize([outline], region.shape))
+        assert np.all(distance <= bound)
+    if split._thinner_than(region, outline, split.MIN_SPLIT_RADIUS) and scipy.ndimage.label(region)[1] == 1:
+        concavity = split._concavity(region, outline)
+        parts = split._neck_parts(region, concavity, distance, split.NECK_RATIO, split.MIN_SPLIT_RADIUS)
+        assert parts.max() == 1
+
+
+def test_thin_and_thick_outlines_are_both_drawn():
+    # the property above must see both sides of the shortcut
+    thin = [split._thinner_than(window_of(o), o, split.MIN_SPLIT_RADIUS)
+            for o in map(random_outline, range(60))]
+    assert 5 <= sum(thin) <= 55
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_the_corner_stage_shortcuts_cut_what_the_full_search_cuts(seed, monkeypatch):
+    outline = random_outline(seed)
+    parts = split._corner_parts(outline)
+    monkeypatch.setattr(split, "_uncuttable", lambda area, good: False)
+    full = split._corner_parts(outline)
+    assert len(parts) == len(full)
+    for part, other in zip(parts, full, strict=True):
+        np.testing.assert_array_equal(part, other)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_the_two_sides_of_every_admissible_cut_add_up_to_the_part(seed):
+    # what makes a part under twice the smallest part uncuttable
+    outline = random_outline(seed)
+    corners, kappa, normals = split._concave_corners(outline)
+    is_corner = np.zeros(len(outline), dtype=bool)
+    is_corner[corners] = True
+    cycle = np.arange(len(outline))
+    for _, a, b in split._cuts(outline, cycle, is_corner, kappa <= 0, normals):
+        sides = signed_area(outline[cycle[a:b + 1]]), signed_area(outline[np.r_[cycle[b:], cycle[:a + 1]]])
+        assert min(sides) > 0
+        assert sum(sides) == pytest.approx(signed_area(outline), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_neck_parts_with_one_part_thick_enough_merge_into_one(seed):
+    # the merging itself (the graph of the watershed's parts), run where _neck_parts stops early
+    import skimage.morphology
+    import skimage.segmentation
+
+    outline = random_outline(seed)
+    region = window_of(outline)
+    distance = split._boundary_distance([outline], region, np.zeros(2))
+    markers, count = scipy.ndimage.label(skimage.morphology.local_maxima(distance) & region)
+    if count <= 1 or scipy.ndimage.label(region)[1] != 1:
+        return
+    parts = skimage.segmentation.watershed(-distance, markers, mask=region)
+    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+    graph = split._PartGraph(parts, distance, peak.copy(), split._concavity(region, outline),
+                             split.MIN_SPLIT_RADIUS)
+    graph.merge_necks(split.NECK_RATIO)
+    graph.merge_non_blobs()
+    merged = graph.labels()
+    if np.count_nonzero(peak >= split.MIN_SPLIT_RADIUS) <= 1:
+        np.testing.assert_array_equal(merged, region.astype(np.int32))
+    np.testing.assert_array_equal(split._neck_parts(region, split._concavity(region, outline), distance,
+                                                    split.NECK_RATIO, split.MIN_SPLIT_RADIUS), merged)
+
+
+@pytest.mark.parametrize("step", [1, 2, 3, 8])
+def test_the_sampled_distance_kernel_is_the_distance_transform_read_every_step_pixels(step):
+    from activecontour import _kernels
+
+    rng = np.random.default_rng(step)
+    for _ in range(40):
+        m, n = rng.integers(2, 40, 2)
+        shape = (step * (m - 1) + 1, step * (n - 1) + 1)
+        # blobs, specks and rows or columns without an outside pixel
+        smooth = scipy.ndimage.gaussian_filter(rng.random(shape), rng.uniform(0.5, 5))
+        inside = smooth > rng.uniform(0.46, 0.5)
+        inside[rng.integers(shape[0])] = False
+        # the mask's crossings as rasterize draws them: +1 where a run of inside pixels starts,
+        # -1 where it stops (at the row's end too); some rows twice over (winding 2 inside), and
+        # pairs +1, -1 at one column that cancel
+        change = np.diff(np.pad(inside.astype(np.int32), ((0, 0), (1, 1))), axis=1)
+        rows, cols = np.nonzero(change)
+        direction = change[rows, cols]
+        twice = np.isin(rows, np.flatnonzero(rng.random(shape[0]) < 0.3))
+        pairs = rng.integers(0, shape[0], 5), rng.integers(0, shape[1], 5)
+        rows = np.concatenate([rows, rows[twice], pairs[0], pairs[0]])
+        cols = np.concatenate([cols, cols[twice], pairs[1], pairs[1]])
+        direction = np.concatenate([direction, direction[twice], np.ones(5, int), -np.ones(5, int)])
+        order = np.lexsort((cols, rows))
+        out = np.empty((m, n))
+        _kernels.sampled_distance(rows[order].astype(np.intp), cols[order].astype(np.intp),
+                                  direction[order].astype(np.int32), *shape, step, out)
+        np.testing.assert_array_equal(out, scipy.ndimage.distance_transform_edt(inside)[::step, ::step])
