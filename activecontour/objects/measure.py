@@ -249,17 +249,38 @@ def label_image(objects, shape):
     Each object is rasterised in its own bounding box (:func:`activecontour.geometry.raster.rasterize`),
     so the cost is the objects' area, not n times the image.
     """
-    m, n = shape
-    labels = np.zeros((m, n), dtype=np.int32)
+    labels = np.zeros(shape, dtype=np.int32)
     for index, curves in enumerate(objects):
-        low = np.floor(np.min([c.min(axis=0) for c in curves], axis=0)).astype(int)
-        high = np.ceil(np.max([c.max(axis=0) for c in curves], axis=0)).astype(int) + 1
-        low, high = np.maximum(low, 0), np.minimum(high, (m, n))
+        low, high = _window(curves, shape)
         if np.any(high <= low):
             continue
         inside = rasterize([c - low for c in curves], tuple(high - low))
         labels[low[0]:high[0], low[1]:high[1]][inside] = index + 1
     return labels
+
+
+def _window(curves, shape):
+    """The pixel rows and columns ``[low, high)`` that can hold a centre inside ``curves``
+    (their bounding box, clipped to ``shape``; empty when ``high <= low`` somewhere)."""
+    low = np.floor(np.min([c.min(axis=0) for c in curves], axis=0)).astype(int)
+    high = np.ceil(np.max([c.max(axis=0) for c in curves], axis=0)).astype(int) + 1
+    return np.maximum(low, 0), np.minimum(high, shape)
+
+
+def _pixel_boxes(objects, labels):
+    """``bbox-0..3`` of each object's pixels in ``labels`` (as ``scipy.ndimage.find_objects``,
+    zeros for an object without pixels), searched in each object's :func:`_window`, which holds
+    all its pixels since :func:`label_image` draws them there: the cost is the objects' area."""
+    boxes = np.zeros((len(objects), 4), dtype=np.int64)
+    for k, curves in enumerate(objects):
+        low, high = _window(curves, labels.shape)
+        if np.any(high <= low):
+            continue
+        mine = labels[low[0]:high[0], low[1]:high[1]] == k + 1
+        rows, cols = np.flatnonzero(mine.any(axis=1)), np.flatnonzero(mine.any(axis=0))
+        if len(rows):
+            boxes[k] = low[0] + rows[0], low[1] + cols[0], low[0] + rows[-1] + 1, low[1] + cols[-1] + 1
+    return boxes
 
 
 def measure(objects, labels, image=None):
@@ -284,8 +305,6 @@ def measure(objects, labels, image=None):
         ``orientation = atan2(-2 T_01, T_11 - T_00) / 2`` (the angle from the row axis to the
         major axis, in (-pi/2, pi/2]).
     """
-    import scipy.ndimage
-
     n = len(objects)
     ids = np.arange(1, n + 1)
     table = {"label": ids.astype(np.int32)}
@@ -301,9 +320,7 @@ def measure(objects, labels, image=None):
     table["area"] = area
     table["perimeter"] = perimeter
     table["centroid-0"], table["centroid-1"] = centroid[:, 0], centroid[:, 1]
-    boxes = scipy.ndimage.find_objects(labels, max_label=n)
-    bbox = np.array([[s[0].start, s[1].start, s[0].stop, s[1].stop] if s is not None else [0, 0, 0, 0]
-                     for s in boxes], dtype=np.int64).reshape(n, 4)
+    bbox = _pixel_boxes(objects, labels)
     for j in range(4):
         table[f"bbox-{j}"] = bbox[:, j]
     table["num_pixels"] = np.bincount(labels.ravel(), minlength=n + 1)[1:n + 1]

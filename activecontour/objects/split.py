@@ -149,8 +149,6 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     list of list of ndarray
         The objects, split ones replaced by their parts (each an outer boundary then its holes).
     """
-    import scipy.ndimage
-
     if image is not None:
         image = np.asarray(image, dtype=np.float64)
         image = image.mean(axis=2) if image.ndim == 3 else image
@@ -179,6 +177,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if not concave and not contrast:
             result.append(curves)
             continue
+        import scipy.ndimage  # here: an object with nothing to split need not load it
+
         low = np.array([box[0].start - 1, box[1].start - 1])
         # the outline's shape decides (holes filled): the rim around a hole is no neck
         window = np.pad(scipy.ndimage.binary_fill_holes(inside), 1)
@@ -752,10 +752,7 @@ class _PartShapes:
 
 def _hull(points):
     """The vertices of the convex hull of points (P, 2), P >= 3 not all on a line."""
-    import scipy.spatial
-
-    points = np.unique(points, axis=0)
-    return points[scipy.spatial.ConvexHull(points).vertices]
+    return points[hull_vertices(points)]
 
 
 def _lattice_points(vertices):

@@ -362,3 +362,20 @@ def test_a_constant_image_has_no_contrast_to_split():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert len(split_touching([square], labels, np.zeros((20, 20)))) == 1
+
+
+def test_bboxes_agree_with_regionprops_when_objects_overlap_nest_or_leave_the_image():
+    # drawn in order, a later object covers an earlier one's pixels; a sliver between pixel
+    # centres has none (bbox zeros), an object past the border keeps only its pixels inside
+    objects = [[ac.circle((30.0, 30.0), 20.0)], [ac.circle((40.0, 40.0), 12.0)],
+               [ac.circle((5.0, 70.0), 15.0)], [ac.rectangle((60.2, 10.2), (60.8, 40.8))],
+               [ac.circle((30.0, 30.0), 25.0), orient(ac.circle((30.0, 30.0), 23.0), hole=True)],
+               [ac.circle((75.0, 75.0), 9.0)]]
+    labels = label_image(objects, (80, 90))
+    table = measure(objects, labels)
+    props = skimage.measure.regionprops_table(labels, properties=("label", "bbox"))
+    present = np.isin(table["label"], props["label"])
+    assert list(present) == [True, True, True, False, True, True]
+    for j in range(4):
+        np.testing.assert_array_equal(table[f"bbox-{j}"][present], props[f"bbox-{j}"])
+        assert table[f"bbox-{j}"][3] == 0
