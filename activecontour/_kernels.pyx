@@ -11,7 +11,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.backends.network` (a network's segments that meet);
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
-  boundary at its pixel centres, from a finer raster);
+  boundary at its pixel centres, from a finer raster), :func:`near_distance` (the distance
+  transform up to a few pixels, for the split's tests against a radius);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
   :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
@@ -1937,3 +1938,47 @@ cdef inline void _run_distances(long long *across, Py_ssize_t r, Py_ssize_t n, P
         right = stop - c if stop < cols else far
         across[r * n + j] = left if left < right else right
         j += 1
+
+
+# ==== split2 (issue 23 item 2): the split's cheap exact tests ====================================
+
+def near_distance(const unsigned char[:, ::1] mask, long long cap, long long[:, ::1] out):
+    """The squared Euclidean distance transform of a mask, up to ``cap``: ``out[i, j]`` is
+    ``min(D, cap)`` for D the squared distance from pixel (i, j) to the nearest pixel where
+    ``mask`` is 0 (0 there; pixels beyond the array's edge do not count, as in
+    ``scipy.ndimage.distance_transform_edt``, whose values are ``sqrt(D)``), and ``cap`` where
+    the mask has no 0.
+
+    Only rows within ``sqrt(cap)`` of a pixel can hold a 0 nearer than ``cap``: per row, the
+    distance h along it to the nearest 0 (two passes, capped), then per pixel the least
+    ``dy^2 + h^2`` over those rows.  O(pixels x sqrt(cap)): for small radii (a few pixels)."""
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, d, reach = 0
+    cdef long long best, value, h
+    cdef long long *along
+    while (reach + 1) * (reach + 1) <= cap:
+        reach += 1
+    along = <long long *> malloc(max(m * n, 1) * sizeof(long long))
+    if along == NULL:
+        raise MemoryError()
+    with nogil:
+        for i in range(m):
+            h = reach + 1  # no 0 within reach: h^2 > cap
+            for j in range(n):
+                h = 0 if mask[i, j] == 0 else (h + 1 if h <= reach else reach + 1)
+                along[i * n + j] = h
+            h = reach + 1
+            for j in range(n - 1, -1, -1):
+                h = 0 if mask[i, j] == 0 else (h + 1 if h <= reach else reach + 1)
+                if h < along[i * n + j]:
+                    along[i * n + j] = h
+        for i in range(m):
+            for j in range(n):
+                best = cap
+                for d in range(-reach, reach + 1):
+                    if 0 <= i + d < m:
+                        h = along[(i + d) * n + j]
+                        value = d * d + h * h
+                        if value < best:
+                            best = value
+                out[i, j] = best
+    free(along)

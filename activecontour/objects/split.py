@@ -257,13 +257,26 @@ def _thinner_than(region, outline, min_radius):
     :func:`activecontour.geometry.raster.rasterize` scales by ``2^k`` exactly), so every pixel
     centre outside it is a fine pixel outside, and the fine distance, in pixels, is at most the
     distance transform of the pixel raster (less half a fine pixel)."""
-    import scipy.ndimage
-
     fine = _supersample(region.shape)
     if fine & (fine - 1):  # not a power of two: no exact bound
         return False
     inside = rasterize([outline], region.shape)
-    return scipy.ndimage.distance_transform_edt(inside)[region].max() < min_radius
+    return _near_distance(inside, min_radius)[region].max() < min_radius
+
+
+def _near_distance(mask, radius):
+    """The distance transform of a bool mask with a False pixel (``scipy.ndimage.
+    distance_transform_edt``'s values: from each pixel to the nearest False one) where it is at
+    most ``radius``, and a value above ``radius`` elsewhere: every comparison with ``radius``
+    comes out as on the transform, at a cost of the pixels times ``radius``
+    (:func:`activecontour._kernels.near_distance`, the squared distances as integers up to a cap
+    whose square root exceeds ``radius``, then the transform's own square root)."""
+    cap = int(radius * radius) + 1
+    while np.sqrt(cap) <= radius:  # (a radius whose square rounds down)
+        cap += 1
+    squared = np.empty(mask.shape, dtype=np.int64)
+    _kernels.near_distance(np.ascontiguousarray(mask, dtype=np.uint8), cap, squared)
+    return np.sqrt(squared)
 
 
 def _boundary_distance(curves, region, low):
@@ -407,7 +420,7 @@ def _contrast_parts(parts, values, least, min_radius):
             # a piece's inscribed radius on its box and a pixel more (the nearest pixel outside
             # a piece touches it)
             if not all(_is_blob(p) and p.area >= CONTRAST_SIZE_RATIO * largest
-                       and _inscribed_radius(pieces, p.label, p.slice) >= min_radius for p in props):
+                       and _inscribed_radius_reaches(pieces, p.label, p.slice, min_radius) for p in props):
                 pieces = None
         if pieces is None:
             count += 1
@@ -418,12 +431,11 @@ def _contrast_parts(parts, values, least, min_radius):
     return result
 
 
-def _inscribed_radius(labels, label, box):
-    """The largest distance from a pixel of ``labels == label`` (within ``box``) to one outside."""
-    import scipy.ndimage
-
+def _inscribed_radius_reaches(labels, label, box, radius):
+    """Whether the largest distance from a pixel of ``labels == label`` (within ``box``) to one
+    outside is at least ``radius``."""
     grown = tuple(slice(max(b.start - 1, 0), b.stop + 1) for b in box)
-    return scipy.ndimage.distance_transform_edt(labels[grown] == label).max()
+    return bool(_near_distance(labels[grown] == label, radius).max() >= radius)
 
 
 def _contrast_split(mask, values, least, smallest):
@@ -451,8 +463,8 @@ def _contrast_split(mask, values, least, smallest):
         return None  # (Otsu of values that hardly differ can put them all on one side)
     bright = _without_small(scipy.ndimage.binary_fill_holes((smooth > threshold) & mask), smallest) & mask
     # (no bright core: every pixel is far from one)
-    away = (scipy.ndimage.distance_transform_edt(mask) > CONTRAST_RIM) & (
-        (scipy.ndimage.distance_transform_edt(~bright) > CONTRAST_RIM) if bright.any() else True)
+    away = (_near_distance(mask, CONTRAST_RIM) > CONTRAST_RIM) & (
+        (_near_distance(~bright, CONTRAST_RIM) > CONTRAST_RIM) if bright.any() else True)
     dim = _without_small(mask & ~bright & away, smallest / 2)
     bright_cores, n_bright = scipy.ndimage.label(bright)
     dim_cores, n_dim = scipy.ndimage.label(dim)

@@ -169,3 +169,38 @@ def test_the_sampled_distance_kernel_is_the_distance_transform_read_every_step_p
         _kernels.sampled_distance(rows[order].astype(np.intp), cols[order].astype(np.intp),
                                   direction[order].astype(np.int32), *shape, step, out)
         np.testing.assert_array_equal(out, scipy.ndimage.distance_transform_edt(inside)[::step, ::step])
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_near_distance_kernel_is_the_squared_distance_transform_up_to_its_cap(seed):
+    from activecontour import _kernels
+
+    rng = np.random.default_rng(seed)
+    for _ in range(30):
+        m, n = rng.integers(1, 45, 2)
+        # blobs with holes and specks; a mask without a False pixel has every value at the cap
+        smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 4))
+        inside = smooth > np.quantile(smooth, rng.uniform(0.0, 0.6))
+        cap = int(rng.integers(0, 70))
+        out = np.empty((m, n), dtype=np.int64)
+        _kernels.near_distance(inside.astype(np.uint8), cap, out)
+        if inside.all():
+            assert np.all(out == cap)
+            continue
+        # the definition: squared offsets to the feature transform's nearest False pixel
+        _, nearest = scipy.ndimage.distance_transform_edt(inside, return_indices=True)
+        squared = np.sum((nearest - np.indices(inside.shape)) ** 2, axis=0)
+        np.testing.assert_array_equal(out, np.minimum(squared, cap))
+
+
+@pytest.mark.parametrize("radius", [0.0, 1.0, np.sqrt(2), 2.5, 3.0, 4.0, np.sqrt(17)])
+def test_the_near_distance_compares_with_its_radius_as_the_distance_transform(radius):
+    rng = np.random.default_rng(int(10 * radius))
+    for _ in range(20):
+        inside = scipy.ndimage.gaussian_filter(rng.random((40, 50)), rng.uniform(1, 5)) > 0.48
+        inside[0, 0] = False
+        transform = scipy.ndimage.distance_transform_edt(inside)
+        near = split._near_distance(inside, radius)
+        np.testing.assert_array_equal(near > radius, transform > radius)
+        np.testing.assert_array_equal(near >= radius, transform >= radius)
+        np.testing.assert_array_equal(near[transform <= radius], transform[transform <= radius])
