@@ -439,7 +439,8 @@ def _inscribed_radius_reaches(labels, label, box, radius):
 
 
 def _contrast_split(mask, values, least, smallest):
-    """The pieces of :func:`_contrast_parts` for one part, or None when there is no split."""
+    """The pieces of :func:`_contrast_parts` for one part, or None when there is no split (or a
+    piece is sure to fail its size test)."""
     import scipy.ndimage
     import skimage.filters
 
@@ -471,8 +472,27 @@ def _contrast_split(mask, values, least, smallest):
     if n_bright + n_dim < 2:
         return None
     cores = np.where(bright, bright_cores, np.where(dim, dim_cores + n_bright, 0))
+    if _a_piece_too_small(mask, cores):
+        return None
+    return _nearest_core(mask, cores)
+
+
+def _nearest_core(mask, cores):
+    """The pieces of a part: each pixel of ``mask`` takes the id of its nearest core."""
+    import scipy.ndimage
+
     nearest = scipy.ndimage.distance_transform_edt(cores == 0, return_distances=False, return_indices=True)
     return np.where(mask, cores[tuple(nearest)], 0)
+
+
+def _a_piece_too_small(mask, cores):
+    """Whether one of the pieces of :func:`_nearest_core` is sure to be under
+    ``CONTRAST_SIZE_RATIO`` of the largest (so :func:`_contrast_parts` makes no split), told from
+    the cores' areas: every piece holds its core and the pieces tile the part, so a piece is at
+    most the part less the other cores, and the largest at least the largest core."""
+    core_area = np.bincount(cores.ravel())[1:]
+    return bool(np.count_nonzero(mask) - core_area.sum() + core_area.min()
+                < CONTRAST_SIZE_RATIO * core_area.max())
 
 
 #: A part of a split object must be blob-like: at least this solid (area / convex hull area) ...

@@ -204,3 +204,33 @@ def test_the_near_distance_compares_with_its_radius_as_the_distance_transform(ra
         np.testing.assert_array_equal(near > radius, transform > radius)
         np.testing.assert_array_equal(near >= radius, transform >= radius)
         np.testing.assert_array_equal(near[transform <= radius], transform[transform <= radius])
+
+
+def test_a_piece_too_small_is_told_right_from_the_cores_alone():
+    # cores of random sizes in a disk; whenever the cores' areas say that a piece will be under
+    # CONTRAST_SIZE_RATIO of the largest, the pieces the pixels make say so too
+    rng = np.random.default_rng(5)
+    told = []
+    for _ in range(200):
+        rows, cols = np.indices((60, 60))
+        mask = (rows - 30) ** 2 + (cols - 30) ** 2 < rng.uniform(10, 29) ** 2
+        # small cores, and one covering up to all the rest of the part
+        cores = np.zeros(mask.shape, dtype=np.int64)
+        for k in range(2, rng.integers(3, 6)):
+            r, c = rng.integers(5, 55, 2)
+            cores[((rows - r) ** 2 + (cols - c) ** 2 < rng.uniform(1, 6) ** 2) & mask] = k
+        cores[mask & (cores == 0) & ((rows - 30) ** 2 + (cols - 30) ** 2 < rng.uniform(3, 40) ** 2)] = 1
+        present = np.unique(cores[cores > 0])
+        if len(present) < 2:
+            continue
+        cores = (np.searchsorted(present, cores) + 1) * (cores > 0)  # ids 1..n, each present
+        pieces = split._nearest_core(mask, cores)
+        area = np.bincount(pieces.ravel())[1:]
+        assert np.all(area >= np.bincount(cores.ravel())[1:])
+        too_small = split._a_piece_too_small(mask, cores)
+        if too_small:
+            assert area.min() < split.CONTRAST_SIZE_RATIO * area.max()
+        if np.count_nonzero(cores) == np.count_nonzero(mask):  # the cores are the pieces: told exactly
+            assert too_small == (area.min() < split.CONTRAST_SIZE_RATIO * area.max())
+        told.append(too_small)
+    assert 10 <= sum(told) <= len(told) - 10  # both answers drawn
