@@ -25,6 +25,8 @@ centres, so its second moments differ by the 1/12 px^2 of a pixel square and by 
 
 from __future__ import annotations
 
+import operator
+
 import numpy as np
 
 from activecontour.geometry.curve import signed_area
@@ -177,7 +179,7 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, se
         :func:`measure`, with a ``class`` column.
     """
     by_class = [contours] if not contours or isinstance(contours[0], np.ndarray) else list(contours)
-    objects, classes, labels = [], [], None
+    objects, classes, labels, drawn = [], [], None, None
     for k, curves in enumerate(by_class):
         found = group_curves(curves)
         if separate and found:
@@ -188,6 +190,7 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, se
                 # nothing was cut: these are the objects in reading order (group_curves), and
                 # their label image is the one just drawn
                 labels = drawn
+            drawn = (found, drawn) if len(by_class) == 1 else None
             found = split
         if min_size > 0:
             kept = [curves for curves in found if sum(map(signed_area, curves)) >= min_size]
@@ -199,7 +202,7 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, se
     order = sorted(range(len(objects)), key=lambda i: top_left(objects[i]))
     objects, classes = [objects[i] for i in order], np.array([classes[i] for i in order], dtype=np.int32)
     if labels is None:
-        labels = label_image(objects, shape)
+        labels = label_image(objects, shape) if drawn is None else _redrawn(*drawn, objects)
     present = np.bincount(labels.ravel(), minlength=len(objects) + 1)[1:] > 0
     if not present.all():
         objects, classes = [o for o, keep in zip(objects, present, strict=True) if keep], classes[present]
@@ -251,12 +254,37 @@ def label_image(objects, shape):
     """
     labels = np.zeros(shape, dtype=np.int32)
     for index, curves in enumerate(objects):
-        low, high = _window(curves, shape)
-        if np.any(high <= low):
-            continue
-        inside = rasterize([c - low for c in curves], tuple(high - low))
-        labels[low[0]:high[0], low[1]:high[1]][inside] = index + 1
+        _draw(labels, curves, index + 1)
     return labels
+
+
+def _redrawn(before, drawn, objects):
+    """:func:`label_image` of ``objects`` given that of ``before`` (``drawn``), when the objects
+    are some of those before (the same curves), and parts of others: the objects kept keep their
+    pixels under their new ids, and only the others are drawn.  The objects of one class are
+    disjoint (no pixel centre lies inside two), so no object drawn covers another's pixels."""
+    number = {id(curves[0]): k for k, curves in enumerate(before)}
+    relabel = np.zeros(len(before) + 1, dtype=np.int32)
+    new = []
+    for index, curves in enumerate(objects):
+        k = number.get(id(curves[0]), -1)
+        if k >= 0 and len(curves) == len(before[k]) and all(map(operator.is_, curves, before[k])):
+            relabel[k + 1] = index + 1
+        else:
+            new.append(index)
+    labels = relabel[drawn]
+    for index in new:
+        _draw(labels, objects[index], index + 1)
+    return labels
+
+
+def _draw(labels, curves, number):
+    """Give the pixel centres inside ``curves`` the id ``number`` in ``labels`` (in place),
+    rasterising them in their bounding box."""
+    low, high = _window(curves, labels.shape)
+    if np.all(high > low):
+        inside = rasterize([c - low for c in curves], tuple(high - low))
+        labels[low[0]:high[0], low[1]:high[1]][inside] = number
 
 
 def _window(curves, shape):

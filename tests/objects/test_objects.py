@@ -113,6 +113,23 @@ def test_labels_are_the_mask_with_ids_and_agree_with_regionprops():
     assert table["label"].dtype == np.int32 and labels.dtype == np.int32
 
 
+@pytest.mark.parametrize("min_size", [0.0, 50.0])
+def test_the_labels_after_a_split_are_the_objects_drawn_anew(min_size):
+    # find_objects redraws only the parts of cut objects (and drops the small ones' pixels):
+    # the label image must be label_image of the objects, drawn from scratch
+    import shapely
+
+    pair = shapely.union(shapely.Polygon(ellipse((40, 30), 14, 14, n=400)),
+                         shapely.Polygon(ellipse((40, 52), 14, 14, n=400)))
+    curves = [orient(np.asarray(pair.exterior.coords)[:-1]), ellipse((12, 90), 9, 6, 0.3, n=300),
+              ellipse((80, 20), 3, 3, n=60), ellipse((75, 80), 15, 12, n=400),
+              ellipse((75, 80), 5, 4, n=200, hole=True), ellipse((12, 12), 7, 7, n=200)]
+    objects, labels, _ = find_objects(curves, (100, 110), min_size=min_size)
+    cut = len(group_curves(curves)) - (min_size > 0)
+    assert len(objects) == cut + 1  # the pair is two, the speck dropped with min_size
+    np.testing.assert_array_equal(labels, label_image(objects, (100, 110)))
+
+
 def test_intensity_mean_in_the_input_units():
     image = np.full((60, 80), 100, dtype=np.uint16)
     image[10:30, 10:30] = 1000
