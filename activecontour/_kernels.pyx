@@ -1982,3 +1982,64 @@ def near_distance(const unsigned char[:, ::1] mask, long long cap, long long[:, 
                             best = value
                 out[i, j] = best
     free(along)
+
+
+def ellipse_moments(const double[:, ::1] points, double[::1] out):
+    """The sums of the direct least-squares ellipse fit (Fitzgibbon, Pilu and Fisher; Halir and
+    Flusser's blocks) of points (P, 2), in their normalised frame: ``out[0:2]`` their mean,
+    ``out[2]`` their rms distance to it (1 when 0), and with (x, y) the points less the mean over
+    that scale, q = (x^2, xy, y^2) and l = (x, y, 1): ``out[3:12]`` the 3 x 3 sums of
+    ``q q^T``, ``out[12:21]`` of ``q l^T``, ``out[21:30]`` of ``l l^T`` (row-major)."""
+    cdef Py_ssize_t p, count = points.shape[0], i, j
+    cdef double mean0 = 0.0, mean1 = 0.0, scale = 0.0, x, y
+    cdef double q[3]
+    cdef double l[3]
+    for i in range(3, 30):
+        out[i] = 0.0
+    if count == 0:
+        return
+    for p in range(count):
+        mean0 += points[p, 0]
+        mean1 += points[p, 1]
+    mean0 /= count
+    mean1 /= count
+    for p in range(count):
+        x = points[p, 0] - mean0
+        y = points[p, 1] - mean1
+        scale += x * x + y * y
+    scale = sqrt(scale / count)
+    if scale == 0.0:
+        scale = 1.0
+    out[0], out[1], out[2] = mean0, mean1, scale
+    l[2] = 1.0
+    for p in range(count):
+        x = (points[p, 0] - mean0) / scale
+        y = (points[p, 1] - mean1) / scale
+        q[0], q[1], q[2] = x * x, x * y, y * y
+        l[0], l[1] = x, y
+        for i in range(3):
+            for j in range(3):
+                out[3 + 3 * i + j] += q[i] * q[j]
+                out[12 + 3 * i + j] += q[i] * l[j]
+                out[21 + 3 * i + j] += l[i] * l[j]
+
+
+def conic_residual(const double[:, ::1] points, double mean0, double mean1, double scale,
+                   double a, double b, double c, double d, double e, double f):
+    """The sum of squared Sampson distances (in the points' units) of points (P, 2) to the conic
+    ``a x^2 + b xy + c y^2 + d x + e y + f = 0`` of :func:`ellipse_moments`' normalised frame:
+    ``(scale value / |gradient|)^2`` (the gradient's norm at least 1e-12)."""
+    cdef Py_ssize_t p
+    cdef double total = 0.0, x, y, value, gx, gy, norm
+    for p in range(points.shape[0]):
+        x = (points[p, 0] - mean0) / scale
+        y = (points[p, 1] - mean1) / scale
+        value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
+        gx = 2 * a * x + b * y + d
+        gy = b * x + 2 * c * y + e
+        norm = sqrt(gx * gx + gy * gy)
+        if norm < 1e-12:
+            norm = 1e-12
+        value = scale * value / norm
+        total += value * value
+    return total

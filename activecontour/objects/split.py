@@ -925,18 +925,20 @@ def _corner_parts(outline, depth=None):
         area, good = fit
         if _uncuttable(area, good):
             return [(cycle, fit)]
-        options = []
+        cuts = []
         for _, a, b in _cuts(outline, cycle, is_corner, flat, normals):
             first, second = cycle[a:b + 1], np.r_[cycle[b:], cycle[:a + 1]]
             areas = signed_area(outline[first]), signed_area(outline[second])
             if min(areas) < np.pi * MIN_SPLIT_RADIUS**2:
                 continue
-            fits = _ellipse_fit(outline[first]), _ellipse_fit(outline[second])
-            options.append((fits[0][1] + fits[1][1], first, second, fits))
-            if len(options) == CUT_OPTIONS:
+            cuts.append((first, second))
+            if len(cuts) == CUT_OPTIONS:
                 break
-        if not options:
+        if not cuts:
             return [(cycle, fit)]
+        fits = _ellipse_fits([outline[side] for cut in cuts for side in cut])
+        options = [(fits[2 * k][1] + fits[2 * k + 1][1], first, second, (fits[2 * k], fits[2 * k + 1]))
+                   for k, (first, second) in enumerate(cuts)]
         _, first, second, fits = min(options, key=lambda option: option[0])
         sides = [(first, _explained(outline[first], fits[0], region)),
                  (second, _explained(outline[second], fits[1], region))]
@@ -1111,28 +1113,38 @@ def _ellipse_fit(points):
     points to it: (conic or None, residual).  The conic is its coefficients in the points'
     normalised frame; :func:`_ellipse_axes` gives its centre and axes (only the chosen cut's
     parts need them)."""
-    mean = points.mean(axis=0)
-    scale = np.sqrt(np.mean(np.sum((points - mean) ** 2, axis=1))) or 1.0
-    x, y = ((points - mean) / scale).T
-    quadratic = np.column_stack([x * x, x * y, y * y])
-    linear = np.column_stack([x, y, np.ones_like(x)])
-    s1, s2, s3 = quadratic.T @ quadratic, quadratic.T @ linear, linear.T @ linear
+    return _ellipse_fits([points])[0]
+
+
+def _ellipse_fits(sides):
+    """:func:`_ellipse_fit` of each of several point sets: the sums over the points and the
+    residuals compiled (:func:`activecontour._kernels.ellipse_moments`,
+    :func:`activecontour._kernels.conic_residual`), the 3 x 3 solves and eigenproblems of all
+    the sets stacked in one call each."""
+    sides = [np.ascontiguousarray(points, dtype=np.float64) for points in sides]
+    moments = np.empty((len(sides), 30))
+    for row, points in zip(moments, sides, strict=True):
+        _kernels.ellipse_moments(points, row)
+    s1, s2, s3 = (moments[:, k:k + 9].reshape(-1, 3, 3) for k in (3, 12, 21))
     try:
-        t = -np.linalg.solve(s3, s2.T)
-    except np.linalg.LinAlgError:
-        return None, np.inf
+        t = -np.linalg.solve(s3, np.swapaxes(s2, 1, 2))
+    except np.linalg.LinAlgError:  # one of them is singular: each on its own
+        return ([fit for points in sides for fit in _ellipse_fits([points])] if len(sides) > 1
+                else [(None, np.inf)])
     m = s1 + s2 @ t
-    _, vectors = np.linalg.eig(np.array([m[2] / 2, -m[1], m[0] / 2]))
+    _, vectors = np.linalg.eig(np.stack([m[:, 2] / 2, -m[:, 1], m[:, 0] / 2], axis=1))
     vectors = np.real(vectors)
-    elliptic = 4 * vectors[0] * vectors[2] - vectors[1] ** 2 > 0
-    if not elliptic.any():
-        return None, np.inf
-    a, b, c = vectors[:, np.argmax(elliptic)]
-    d, e, f = t @ [a, b, c]
-    value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
-    gradient = np.hypot(2 * a * x + b * y + d, b * x + 2 * c * y + e)
-    residual = float(np.sum((scale * value / np.maximum(gradient, 1e-12)) ** 2))
-    return (a, b, c, d, e, f, mean, scale), residual
+    fits = []
+    for points, (mean0, mean1, scale), block, vector in zip(sides, moments[:, :3], t, vectors, strict=True):
+        elliptic = 4 * vector[0] * vector[2] - vector[1] ** 2 > 0
+        if not elliptic.any():
+            fits.append((None, np.inf))
+            continue
+        a, b, c = vector[:, np.argmax(elliptic)]
+        d, e, f = block @ [a, b, c]
+        residual = _kernels.conic_residual(points, mean0, mean1, scale, a, b, c, d, e, f)
+        fits.append(((a, b, c, d, e, f, np.array([mean0, mean1]), scale), residual))
+    return fits
 
 
 def _ellipse_axes(conic):

@@ -234,3 +234,54 @@ def test_a_piece_too_small_is_told_right_from_the_cores_alone():
             assert too_small == (area.min() < split.CONTRAST_SIZE_RATIO * area.max())
         told.append(too_small)
     assert 10 <= sum(told) <= len(told) - 10  # both answers drawn
+
+
+def _ellipse_fit_numpy(points):
+    """The direct least-squares ellipse fit written with numpy alone (Halir and Flusser)."""
+    mean = points.mean(axis=0)
+    scale = np.sqrt(np.mean(np.sum((points - mean) ** 2, axis=1))) or 1.0
+    x, y = ((points - mean) / scale).T
+    quadratic = np.column_stack([x * x, x * y, y * y])
+    linear = np.column_stack([x, y, np.ones_like(x)])
+    s1, s2, s3 = quadratic.T @ quadratic, quadratic.T @ linear, linear.T @ linear
+    t = -np.linalg.solve(s3, s2.T)
+    m = s1 + s2 @ t
+    _, vectors = np.linalg.eig(np.array([m[2] / 2, -m[1], m[0] / 2]))
+    vectors = np.real(vectors)
+    elliptic = 4 * vectors[0] * vectors[2] - vectors[1] ** 2 > 0
+    if not elliptic.any():
+        return None, np.inf
+    a, b, c = vectors[:, np.argmax(elliptic)]
+    d, e, f = t @ [a, b, c]
+    value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
+    gradient = np.hypot(2 * a * x + b * y + d, b * x + 2 * c * y + e)
+    return (a, b, c, d, e, f, mean, scale), float(np.sum((scale * value / np.maximum(gradient, 1e-12)) ** 2))
+
+
+def test_the_compiled_ellipse_fits_are_the_numpy_fits():
+    rng = np.random.default_rng(11)
+    sides = []
+    for seed in range(40):
+        outline = random_outline(seed)
+        a = rng.integers(0, len(outline) - 20)
+        b = rng.integers(a + 20, len(outline) + 1)
+        sides += [outline, outline[a:b]]  # whole outlines, and stretches of 20 vertices or more
+    sides.append(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]))  # on a line: singular
+    fits = split._ellipse_fits(sides)
+    for points, (conic, residual) in zip(sides, fits, strict=True):
+        try:
+            expected_conic, expected = _ellipse_fit_numpy(points)
+        except np.linalg.LinAlgError:
+            expected_conic, expected = None, np.inf
+        assert (conic is None) == (expected_conic is None)
+        if conic is None:
+            assert residual == np.inf
+            continue
+        # the conic up to its sign (an eigenvector's), the residual in pixels^2
+        sign = np.sign(np.dot(conic[:6], expected_conic[:6]))
+        np.testing.assert_allclose(sign * np.array(conic[:6]), expected_conic[:6], rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(conic[6], expected_conic[6], rtol=1e-12)
+        assert conic[7] == pytest.approx(expected_conic[7], rel=1e-12)
+        assert residual == pytest.approx(expected, rel=1e-7, abs=1e-9)
+    assert sum(conic is None for conic, _ in fits) >= 1
+    assert split._ellipse_fit(sides[0])[1] == fits[0][1]
