@@ -173,7 +173,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
                 from activecontour.imaging.noise import estimate_noise
 
                 least = max(CONTRAST_DEPTH * float(estimate_noise(image[:, :, None])[0]), floor)
-            contrast = spread > floor and spread > least
+            # (a part of fewer than twice pi min_radius^2 pixels is never split by contrast,
+            # :func:`_contrast_split`, and the parts lie in the object's box)
+            contrast = spread > floor and spread > least and inside.size > 2 * np.pi * min_radius ** 2
         if not concave and not contrast:
             result.append(curves)
             continue

@@ -285,3 +285,4 @@ def test_the_compiled_ellipse_fits_are_the_numpy_fits():
         assert residual == pytest.approx(expected, rel=1e-7, abs=1e-9)
     assert sum(conic is None for conic, _ in fits) >= 1
     assert split._ellipse_fit(sides[0])[1] == fits[0][1]
+
