@@ -185,11 +185,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         # the outline's shape decides (holes filled): the rim around a hole is no neck
         window = np.pad(scipy.ndimage.binary_fill_holes(inside), 1)
         parts = window.astype(np.int32)
-        if concave:
-            concavity = _concavity(window, curves[0] - low)
-            if _may_have_necks(window, concavity, curves[0] - low, min_radius):
-                parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
-                                    neck_ratio, min_radius)
+        if concave and (concavity := _may_have_necks(window, curves[0] - low, min_radius)) is not None:
+            parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
+                                neck_ratio, min_radius)
         if contrast:
             parts = _contrast_parts(parts, _window(image, box), least, min_radius)
         pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
@@ -216,26 +214,32 @@ def _hull_depth(outline):
     return np.abs(cross) / np.maximum(np.hypot(edge[:, 0], edge[:, 1]), 1e-12)
 
 
-def _may_have_necks(region, concavity, outline, min_radius):
-    """Whether the outline (in window coordinates) has two edge pixels ``MIN_WAIST_DEPTH`` inside
-    its convex hull (every split line ends in two such waists, :meth:`_PartGraph.is_waist`;
-    pixels touching only at a corner are parts without one), a part that may reach ``min_radius``
-    (:func:`_thinner_than`) and the pixel distance transform has two maxima of dynamic above half
-    a pixel: without them no neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors
-    (cheap tests that spare most single objects the exact distance).  The h-maxima (plateaus of
-    regional maxima) lie in the pixels not below any 8-neighbour, each of whose 4-connected
-    pieces holds at most one of them, so one such piece means no two h-maxima."""
+def _may_have_necks(region, outline, min_radius):
+    """The region's :func:`_concavity` when it may have necks, None when it has none: necks need
+    two edge pixels ``MIN_WAIST_DEPTH`` inside the outline's convex hull (every split line ends
+    in two such waists, :meth:`_PartGraph.is_waist`; pixels touching only at a corner are parts
+    without one), a part that may reach ``min_radius`` (:func:`_thinner_than`, told first: then
+    the concavity is not measured) and two maxima of dynamic above half a pixel in the pixel
+    distance transform: without them no neck is ``MIN_NECK_DEPTH`` deep even after its
+    half-pixel errors (cheap tests that spare most single objects the exact distance).  The
+    h-maxima (plateaus of regional maxima) lie in the pixels not below any 8-neighbour, each of
+    whose 4-connected pieces holds at most one of them, so one such piece means no two h-maxima.
+    The outline is in window coordinates."""
     import scipy.ndimage
     import skimage.morphology
 
-    if scipy.ndimage.label(region)[1] == 1 and (np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2
-                                                or _thinner_than(region, outline, min_radius)):
-        return False
+    whole = scipy.ndimage.label(region)[1] == 1
+    if whole and _thinner_than(region, outline, min_radius):
+        return None
+    concavity = _concavity(region, outline)
+    if whole and np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2:
+        return None
     distance = scipy.ndimage.distance_transform_edt(region)
     peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
     if scipy.ndimage.label(peaks)[1] <= 1:
-        return False
-    return scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
+        return None
+    two = scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
+    return concavity if two else None
 
 
 #: :func:`_boundary_distance` measures on a raster this many times finer than the pixels ...

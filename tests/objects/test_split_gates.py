@@ -286,3 +286,18 @@ def test_the_compiled_ellipse_fits_are_the_numpy_fits():
     assert sum(conic is None for conic, _ in fits) >= 1
     assert split._ellipse_fit(sides[0])[1] == fits[0][1]
 
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_may_have_necks_gives_the_concavity_or_none_by_its_tests_in_either_order(seed):
+    outline = random_outline(seed)
+    region = window_of(outline)
+    concavity = split._concavity(region, outline)
+    found = split._may_have_necks(region, outline, split.MIN_SPLIT_RADIUS)
+    whole = scipy.ndimage.label(region)[1] == 1
+    # the thin test told first (no concavity measured) or second: the same refusal
+    if whole and (np.count_nonzero(concavity >= split.MIN_WAIST_DEPTH) < 2
+                  or split._thinner_than(region, outline, split.MIN_SPLIT_RADIUS)):
+        assert found is None
+    if found is not None:
+        np.testing.assert_array_equal(found, concavity)
