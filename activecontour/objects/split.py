@@ -921,9 +921,7 @@ def _corner_parts(outline, depth=None):
     spacing = edge_lengths(outline).mean()
     reach = max(int(2 * CORNER_SMOOTHING / spacing), 1)
     # a cut may end across from a corner where the outline is concave or straight within reach
-    flat = np.zeros(len(outline), dtype=bool)
-    for shift in range(-reach, reach + 1):
-        flat |= np.roll(kappa, shift) <= 0
+    flat = _within(kappa <= 0, reach)
     is_corner = np.zeros(len(outline), dtype=bool)
     is_corner[corners] = True
 
@@ -965,6 +963,17 @@ def _corner_parts(outline, depth=None):
     whole = np.arange(len(outline))
     parts = split(whole, _explained(outline, _ellipse_fit(outline), region))
     return [outline[cycle] for cycle, _ in parts]
+
+
+def _within(marked, reach):
+    """Which entries of a cyclic bool array lie within ``reach`` places of a True one: the
+    count of True entries in each cyclic window of ``2 reach + 1``, from one cumulative sum."""
+    count = len(marked)
+    if 2 * reach + 1 >= count:
+        return np.full(count, marked.any())
+    wrapped = np.concatenate([marked[count - reach:], marked, marked[:reach]])
+    total = np.concatenate([[0], np.cumsum(wrapped)])
+    return total[2 * reach + 1:] > total[:count]
 
 
 def _uncuttable(area, good):

@@ -301,3 +301,14 @@ def test_may_have_necks_gives_the_concavity_or_none_by_its_tests_in_either_order
         assert found is None
     if found is not None:
         np.testing.assert_array_equal(found, concavity)
+
+
+@pytest.mark.parametrize("reach", [1, 2, 5, 9, 30])
+def test_within_reach_is_the_union_of_the_shifted_arrays(reach):
+    rng = np.random.default_rng(reach)
+    for count in (1, 3, 10, 19, 20, 61, 200):
+        marked = rng.random(count) < rng.uniform(0.0, 0.2)
+        expected = np.zeros(count, dtype=bool)
+        for shift in range(-reach, reach + 1):
+            expected |= np.roll(marked, shift)
+        np.testing.assert_array_equal(split._within(marked, reach), expected)
