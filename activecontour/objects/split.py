@@ -74,7 +74,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import curvature, edge_lengths, signed_area, vertex_normals
-from activecontour.geometry.hull import hull_vertices
+from activecontour.geometry.hull import hull_area, hull_vertices
 from activecontour.geometry.raster import rasterize, sorted_crossings
 from activecontour.geometry.regions import _from_shapely, _to_shapely
 
@@ -931,7 +931,7 @@ def _corner_parts(outline, depth=None):
             return [(cycle, fit)]
         cuts = []
         for _, a, b in _cuts(outline, cycle, is_corner, flat, normals):
-            first, second = cycle[a:b + 1], np.r_[cycle[b:], cycle[:a + 1]]
+            first, second = cycle[a:b + 1], np.concatenate([cycle[b:], cycle[:a + 1]])
             areas = signed_area(outline[first]), signed_area(outline[second])
             if min(areas) < np.pi * MIN_SPLIT_RADIUS**2:
                 continue
@@ -1051,7 +1051,7 @@ def _cuts(outline, cycle, is_corner, flat, normals):
         if -normals[cycle[a]] @ direction < least or normals[cycle[b]] @ direction < least:
             continue
         along = centred @ direction
-        extent = min(np.ptp(along[a:b + 1]), np.ptp(np.r_[along[b:], along[:a + 1]]))
+        extent = min(np.ptp(along[a:b + 1]), np.ptp(np.concatenate([along[b:], along[:a + 1]])))
         ratio = length / max(extent, 1e-12)
         if ratio <= CUT_NECK:
             cuts.append((ratio, a, b))
@@ -1183,7 +1183,6 @@ def _explained(part, fit, region):
     """(area, whether the part is explained by its ellipse): ``ELLIPSE_RMS``, ``ELLIPSE_OUTSIDE``,
     ``ELLIPSE_SOLIDITY``, an aspect of at most ``MAX_PART_ASPECT`` and an equal-area radius of at
     least ``MIN_SPLIT_RADIUS``."""
-    import scipy.spatial
     import shapely
 
     area = signed_area(part)
@@ -1203,4 +1202,4 @@ def _explained(part, fit, region):
                                                       semi_axes[1] * np.sin(angle)]) @ axes.T)
     if 1 - shapely.intersection(shape, region).area / shape.area > ELLIPSE_OUTSIDE:
         return area, False
-    return area, area >= ELLIPSE_SOLIDITY * scipy.spatial.ConvexHull(part).volume
+    return area, area >= ELLIPSE_SOLIDITY * hull_area(part)
