@@ -425,7 +425,8 @@ def _contrast_parts(parts, values, least, min_radius):
             largest = max(p.area for p in props)
             # a piece's inscribed radius on its box and a pixel more (the nearest pixel outside
             # a piece touches it)
-            if not all(_is_blob(p) and p.area >= CONTRAST_SIZE_RATIO * largest
+            # (the size first: a blob's solidity and moments cost a convex hull image)
+            if not all(p.area >= CONTRAST_SIZE_RATIO * largest and _is_blob(p)
                        and _inscribed_radius_reaches(pieces, p.label, p.slice, min_radius) for p in props):
                 pieces = None
         if pieces is None:
