@@ -2043,3 +2043,34 @@ def conic_residual(const double[:, ::1] points, double mean0, double mean1, doub
         value = scale * value / norm
         total += value * value
     return total
+
+
+cdef inline double _side(double u0, double u1, double v0, double v1, double w0, double w1) noexcept nogil:
+    return (v0 - u0) * (w1 - u1) - (v1 - u1) * (w0 - u0)
+
+
+def segment_inside(const double[:, ::1] start, const double[:, ::1] end, Py_ssize_t a, Py_ssize_t b):
+    """Whether the segment from vertex a to vertex b of a simple polygon (edge i from
+    ``start[i]`` to ``end[i]``) lies inside it: it crosses no edge properly (the edges at a and
+    b aside) and its midpoint is inside (the crossing count of the row through it, each
+    crossing counted by the side it passes on).  The same sign tests, in the same arithmetic,
+    as :func:`activecontour.objects.split`'s definition."""
+    cdef Py_ssize_t i, count = start.shape[0], up = 0, down = 0
+    cdef double p0 = start[a, 0], p1 = start[a, 1], q0 = start[b, 0], q1 = start[b, 1]
+    cdef double m0, m1, turn
+    for i in range(count):
+        if i == a or (i + 1) % count == a or i == b or (i + 1) % count == b:
+            continue
+        if (_side(p0, p1, q0, q1, start[i, 0], start[i, 1]) * _side(p0, p1, q0, q1, end[i, 0], end[i, 1]) < 0
+                and _side(start[i, 0], start[i, 1], end[i, 0], end[i, 1], p0, p1)
+                * _side(start[i, 0], start[i, 1], end[i, 0], end[i, 1], q0, q1) < 0):
+            return False
+    m0 = 0.5 * (p0 + q0)
+    m1 = 0.5 * (p1 + q1)
+    for i in range(count):
+        turn = _side(start[i, 0], start[i, 1], end[i, 0], end[i, 1], m0, m1)
+        if start[i, 0] <= m0 and end[i, 0] > m0 and turn > 0:
+            up += 1
+        elif start[i, 0] > m0 and end[i, 0] <= m0 and turn < 0:
+            down += 1
+    return up != down

@@ -1101,26 +1101,10 @@ def _ray_hits(outline, cycle, edges, positions, normals):
 
 def _segment_inside(edges, a, b):
     """Whether the segment between vertices a and b of a simple polygon (its ``edges``: starts and
-    ends) lies inside it: it crosses no edge (those at a and b aside) and its midpoint is inside."""
-    start, end = edges
-    count = len(start)
-    p, q = start[a], start[b]
-
-    def side(u, v, w):
-        return ((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
-                - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
-
-    index = np.arange(count)
-    away = (index != a) & ((index + 1) % count != a) & (index != b) & ((index + 1) % count != b)
-    crossing = ((side(p, q, start) * side(p, q, end) < 0)
-                & (side(start, end, p[None]) * side(start, end, q[None]) < 0))
-    if np.any(crossing & away):
-        return False
-    middle = 0.5 * (p + q)
-    up = (start[:, 0] <= middle[0]) & (end[:, 0] > middle[0])
-    down = (start[:, 0] > middle[0]) & (end[:, 0] <= middle[0])
-    turn = side(start, end, middle[None])
-    return np.count_nonzero(up & (turn > 0)) != np.count_nonzero(down & (turn < 0))
+    ends) lies inside it: it crosses no edge (those at a and b aside) and its midpoint is inside
+    (:func:`activecontour._kernels.segment_inside`)."""
+    return _kernels.segment_inside(np.ascontiguousarray(edges[0], dtype=np.float64),
+                                   np.ascontiguousarray(edges[1], dtype=np.float64), int(a), int(b))
 
 
 def _ellipse_fit(points):

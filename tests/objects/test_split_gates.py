@@ -312,3 +312,40 @@ def test_within_reach_is_the_union_of_the_shifted_arrays(reach):
         for shift in range(-reach, reach + 1):
             expected |= np.roll(marked, shift)
         np.testing.assert_array_equal(split._within(marked, reach), expected)
+
+
+def _segment_inside_numpy(edges, a, b):
+    """Whether segment a-b of a simple polygon lies inside it, written with numpy alone: no proper
+    crossing of an edge (those at a and b aside), and the midpoint inside (signed crossings)."""
+    start, end = edges
+    count = len(start)
+    p, q = start[a], start[b]
+
+    def side(u, v, w):
+        return ((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
+                - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
+
+    index = np.arange(count)
+    away = (index != a) & ((index + 1) % count != a) & (index != b) & ((index + 1) % count != b)
+    crossing = ((side(p, q, start) * side(p, q, end) < 0)
+                & (side(start, end, p[None]) * side(start, end, q[None]) < 0))
+    if np.any(crossing & away):
+        return False
+    middle = 0.5 * (p + q)
+    up = (start[:, 0] <= middle[0]) & (end[:, 0] > middle[0])
+    down = (start[:, 0] > middle[0]) & (end[:, 0] <= middle[0])
+    turn = side(start, end, middle[None])
+    return np.count_nonzero(up & (turn > 0)) != np.count_nonzero(down & (turn < 0))
+
+
+def test_the_compiled_segment_test_is_the_numpy_one():
+    rng = np.random.default_rng(4)
+    answers = []
+    for seed in range(20):
+        outline = random_outline(seed)
+        edges = outline, np.roll(outline, -1, axis=0)
+        for _ in range(60):
+            a, b = sorted(rng.choice(len(outline), 2, replace=False))
+            answers.append(split._segment_inside(edges, a, b))
+            assert answers[-1] == _segment_inside_numpy(edges, a, b)
+    assert 100 < sum(answers) < len(answers) - 100  # both answers drawn
