@@ -39,9 +39,15 @@ objects before and after a change; ``tests/objects/test_split_gates.py`` the sho
 neck is looked for where the pixel raster bounds the boundary distance below ``min_radius``
 (:func:`_thinner_than`), nor past a watershed with one part thick enough to be an object; no
 corner cut in a part that is an ellipse or under twice the smallest part (:func:`_uncuttable`),
-nor on the second side of a cut whose first side already leaves too much unexplained.  The
-boundary distance computes the fine raster's distance transform at the pixel centres only
-(:func:`activecontour._kernels.sampled_distance`).
+nor on the second side of a cut whose first side already leaves too much unexplained; no
+contrast split in an object whose box holds fewer pixels than two smallest parts, nor pixels
+assigned to cores when the cores' areas already make a piece too small
+(:func:`_a_piece_too_small`).  The boundary distance computes the fine raster's distance
+transform at the pixel centres only (:func:`activecontour._kernels.sampled_distance`); a
+distance compared with a radius of a few pixels is the squared transform up to that radius
+(:func:`_near_distance`); the ellipse fits' sums and residuals and the chord-inside test of the
+cut search are compiled, and a search's fits share one stacked eigenproblem
+(:func:`_ellipse_fits`).
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
 ``res.labels``, ``benchmarks/bench_objects.py``; worst seed / mean):
