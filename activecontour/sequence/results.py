@@ -189,7 +189,8 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
     The generator under :func:`segment_sequence` (same parameters): it holds one frame, one result
     and the previous frame's labels, whatever the length of the sequence.
     """
-    from activecontour._segment import segment
+    from activecontour._segment import segment, solve_problem
+    from activecontour.problem import prepare
 
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
@@ -207,8 +208,11 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
         elif previous.n_regions > 2:  # K regions: the previous frame's classes are the start
             result = segment(image, previous, **settings.keywords())
         else:
-            start = _warm_start(previous, image, settings)
-            result = segment(image, start, **(settings if start is None else warm).keywords())
+            problem = prepare(image, warm)
+            start = _warm_start(previous, problem)
+            result = (segment(image, None, **settings.keywords()) if start is None
+                      else solve_problem(problem, start))
+            del problem
         result, parents = tracker.update(result)
         frame = SequenceFrame(index, position, n_frames, image, result, parents)
         previous = result
