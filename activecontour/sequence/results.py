@@ -217,7 +217,7 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
             start = _warm_start(previous, problem)
             result = (segment(image, None, **settings.keywords()) if start is None
                       else solve_problem(problem, start))
-            del problem
+            del problem  # (not held while the frame is out)
         found = result  # (in the frame's own ids: the tracker's input)
         result, parents = tracker.update(result)
         frame = SequenceFrame(index, position, n_frames, image, result, parents)
