@@ -31,7 +31,7 @@ must be kept from overlapping and gapping after every step.
 Topology
 --------
 The network moves its vertices; it does not change its graph.  The topology comes first, from the
-label field (:func:`activecontour.backends.labelfield.segment_labels`: the global K-means start, then
+label field (:func:`activecontour.backends.labelfield.descend_labels`: the global K-means start, then
 the exact descent with its merge and split moves, which create, remove and reconnect regions
 freely).  Its partition (boundaries through the midpoints between pixels, junctions at cell
 centres: :mod:`activecontour.geometry.partition`) is the network's start; the flow then moves every
@@ -133,12 +133,16 @@ class Network:
     @classmethod
     def of_classes(cls, classes):
         """The network of the partition a label image stands for (:mod:`activecontour.geometry.partition`)."""
-        boundary = class_boundary(classes)
+        return cls.of_boundary(class_boundary(classes), classes.shape)
+
+    @classmethod
+    def of_boundary(cls, boundary, shape):
+        """The network of a label image's partition given as its
+        :func:`~activecontour.geometry.partition.class_boundary` (vertices on the half-pixel lattice)."""
         points = np.vstack([boundary.start, boundary.end])
         _, first, index = np.unique(lattice_keys(points), return_index=True, return_inverse=True)
         count = len(boundary.start)
-        return cls(points[first], index[:count], index[count:], boundary.inner, boundary.outer,
-                   classes.shape)
+        return cls(points[first], index[:count], index[count:], boundary.inner, boundary.outer, shape)
 
     def boundary(self, nodes=None):
         """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
@@ -689,7 +693,7 @@ def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callba
     ----------
     model : ImageModel
     init : None, int ndarray (M, N), or SegmentationResult
-        As for :func:`activecontour.backends.labelfield.segment_labels`, which finds the topology.
+        As for :func:`activecontour.backends.labelfield.segment_labels`, whose descent finds the topology.
     params : ChanVeseParameters
     n_regions : int
     max_num_iter : int
@@ -706,11 +710,11 @@ def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callba
         ``backend="polygon"``; ``classes`` are the pixels whose centre lies in each region,
         ``class_contours`` the sub-pixel regions, ``energy`` their functional.
     """
-    from activecontour.backends.labelfield import segment_labels
+    from activecontour.backends.labelfield import descend_labels
 
-    start = segment_labels(model, init, params, n_regions=n_regions, max_num_iter=max_num_iter,
+    start = descend_labels(model, init, params, n_regions=n_regions, max_num_iter=max_num_iter,
                            tol=tol, callback=callback)
-    network = Network.of_classes(start.classes)
+    network = Network.of_boundary(start.boundary, start.classes.shape)
     energies = list(start.energies)
     if start.status == 2:
         return _result(model, params, network, network.nodes, n_regions, energies, start.n_iter, 2)
