@@ -815,7 +815,7 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_next is None else min(dt_next, _MAX_STEP / spread)
-            crossed, steps = None, network.steps(nodes, velocity)
+            crossings, steps = [], network.steps(nodes, velocity)
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
                 if steps.admissible(dt, trial):
@@ -824,18 +824,19 @@ class _Flow:
                         candidate = self.evaluate(network, trial)
                         if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                             break
-                    elif crossed is None and (self.evaluate(network, trial).energy
-                                              <= current.energy + _ARMIJO * dt * slope):
-                        crossed = trial
+                    else:
+                        crossings.append((dt, trial))
                 dt *= 0.5
             else:
-                # a region folding over itself as the flow shrinks it: drop it and go on
+                # a region folding over itself as the flow shrinks it: drop it and go on (the
+                # first crossing trial that lowers J enough tells where)
+                crossed = next((trial for step, trial in crossings if self.evaluate(network, trial).energy
+                                <= current.energy + _ARMIJO * step * slope), None)
                 if crossed is not None and self.drop_islands(network.crossing_nodes(crossed)):
                     factors, dt_next = None, None
                     continue
                 return 4, n_iter
-            dt_next = dt if crossed is not None else dt * _step_factor(
-                (candidate.energy - current.energy) / (dt * slope))
+            dt_next = dt if crossings else dt * _step_factor((candidate.energy - current.energy) / (dt * slope))
             self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
