@@ -14,7 +14,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
   boundary at its pixel centres, from a finer raster);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
-  :func:`cycles`, :func:`step_bounds` -- :mod:`activecontour.energy`,
+  :func:`cycles`, :func:`untwist`, :func:`step_bounds` -- :mod:`activecontour.energy`,
+  :mod:`activecontour.geometry.partition`,
   :mod:`activecontour.backends.network` (the N-region network: its integrals, load (6.41), H^1
   solve and the bounds of an iteration's steps);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
@@ -1941,7 +1942,7 @@ cdef inline void _run_distances(long long *across, Py_ssize_t r, Py_ssize_t n, P
         j += 1
 
 
-# ==== network per-iteration kernels (issue 24 item 5, branch net2) ==============================
+# ==== the network's kernels (issue 24 item 5, branch net2) =========================================
 
 
 def segment_loads(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
@@ -2028,7 +2029,8 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
             f, s = face[k], segment[k]
             old_r = nodes[end[s], 0] - nodes[start[s], 0]
             old_c = nodes[end[s], 1] - nodes[start[s], 1]
-            areas[f] += sign[k] * (nodes[start[s], 0] * nodes[end[s], 1] - nodes[end[s], 0] * nodes[start[s], 1])
+            areas[f] += sign[k] * (nodes[start[s], 0] * nodes[end[s], 1]
+                                   - nodes[end[s], 0] * nodes[start[s], 1])
             perimeter[f] += sqrt(old_r * old_r + old_c * old_c)
             fast = max(hypot(velocity[start[s], 0], velocity[start[s], 1]),
                        hypot(velocity[end[s], 0], velocity[end[s], 1]))
@@ -2039,4 +2041,89 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
     return reverse, inside
 
 
-# ==== end of the network per-iteration kernels ===================================================
+
+cdef Py_ssize_t _untwist_loop(const Py_ssize_t *loop, Py_ssize_t n, const Py_ssize_t[::1] ids,
+                              unsigned char *seen, Py_ssize_t[::1] out, Py_ssize_t[::1] out_offsets,
+                              Py_ssize_t *position, Py_ssize_t *loops) noexcept nogil:
+    """One loop of :func:`untwist` (recursive, as the definition); -1 when out of memory."""
+    cdef Py_ssize_t k, key, best = -1, i = -1, j = -1, size
+    cdef Py_ssize_t *part
+    for k in range(n):  # the smallest key the loop passes twice
+        key = ids[loop[k]]
+        if seen[key] and (best < 0 or key < best):
+            best = key
+        seen[key] = 1
+    for k in range(n):
+        seen[ids[loop[k]]] = 0
+    if best < 0:
+        for k in range(n):
+            out[position[0] + k] = loop[k]
+        position[0] += n
+        loops[0] += 1
+        out_offsets[loops[0]] = position[0]
+        return 0
+    for k in range(n):  # its first two passes
+        if ids[loop[k]] == best:
+            if i < 0:
+                i = k
+            else:
+                j = k
+                break
+    part = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
+    if part == NULL:
+        return -1
+    size = 0
+    for k in range(i, j):
+        part[size] = loop[k]
+        size += 1
+    if _untwist_loop(part, size, ids, seen, out, out_offsets, position, loops) < 0:
+        free(part)
+        return -1
+    size = 0
+    for k in range(j, n):
+        part[size] = loop[k]
+        size += 1
+    for k in range(i):
+        part[size] = loop[k]
+        size += 1
+    k = _untwist_loop(part, size, ids, seen, out, out_offsets, position, loops)
+    free(part)
+    return k
+
+
+def untwist(const Py_ssize_t[::1] order, const Py_ssize_t[::1] offsets, const unsigned char[::1] twisted,
+            const Py_ssize_t[::1] ids, Py_ssize_t distinct, Py_ssize_t[::1] out, Py_ssize_t[::1] out_offsets):
+    """Loops cut where they pass a point twice (:func:`activecontour.geometry.partition.chain_loops`).
+
+    Loop c is ``order[offsets[c]:offsets[c + 1]]`` (elements whose points have the keys ``ids``,
+    dense in 0..distinct-1 and in the order of the points' keys); a loop with ``twisted[c]`` is
+    cut, recursively: at its smallest key that it passes twice, between the first two passes,
+    into the loop from the first pass to the second and the rest from the second pass on (then
+    its start), in that order.  The loops that pass every point once go to ``out`` (as long as
+    ``order``), loop l at ``out[out_offsets[l]:out_offsets[l + 1]]`` (``out_offsets`` as long as
+    ``order`` + 1).  Returns the number of loops.
+    """
+    cdef Py_ssize_t count = offsets.shape[0] - 1, c, k, position = 0, loops = 0, failed = 0
+    cdef unsigned char *seen = <unsigned char *> calloc(max(distinct, 1), sizeof(unsigned char))
+    if seen == NULL:
+        raise MemoryError()
+    out_offsets[0] = 0
+    with nogil:
+        for c in range(count):
+            if twisted[c]:
+                if _untwist_loop(&order[offsets[c]], offsets[c + 1] - offsets[c], ids, seen, out,
+                                 out_offsets, &position, &loops) < 0:
+                    failed = 1
+                    break
+            else:
+                for k in range(offsets[c], offsets[c + 1]):
+                    out[position] = order[k]
+                    position += 1
+                loops += 1
+                out_offsets[loops] = position
+    free(seen)
+    if failed:
+        raise MemoryError()
+    return loops
+
+# ==== end of the network's kernels ==============================================================

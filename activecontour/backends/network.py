@@ -63,7 +63,14 @@ from activecontour.energy import (
     partition_moments,
     soup_moments,
 )
-from activecontour.geometry.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
+from activecontour.geometry.partition import (
+    Boundary,
+    Sides,
+    chain_loops,
+    class_boundary,
+    lattice_keys,
+    loop_order,
+)
 from activecontour.geometry.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
 
@@ -174,20 +181,21 @@ class Network:
         do not change while the nodes move, so each face's signed area (:meth:`face_areas`) must
         keep its sign: a region turned inside out crosses no segment when it is a triangle."""
         if self._faces is None:
-            face, segment, sign = [], [], []
-            for k in range(max(int(self.inner.max()), int(self.outer.max())) + 1):
-                forward = np.flatnonzero(self.inner == k)
-                backward = np.flatnonzero(self.outer == k)
-                both = np.concatenate([forward, backward])
-                starts = np.concatenate([self.start[forward], self.end[backward]])
-                ends = np.concatenate([self.end[forward], self.start[backward]])
-                signs = np.concatenate([np.ones(len(forward)), -np.ones(len(backward))])
-                for loop in chain_loops(starts, ends):
-                    face.append(np.full(len(loop), len(face)))
-                    segment.append(both[loop])
-                    sign.append(signs[loop])
-            self._faces = (np.concatenate(face).astype(np.intp), np.concatenate(segment).astype(np.intp),
-                           np.concatenate(sign))
+            # every region's entries: its segments forward (inner side), then backward (outer
+            # side), each in segment order; keyed by (region, node), so that one chaining pass
+            # finds the loops of every region, region by region
+            backward = np.flatnonzero(self.outer >= 0)
+            segment = np.concatenate([np.arange(len(self.start)), backward])
+            region = np.concatenate([self.inner, self.outer[backward]])
+            forward = np.arange(len(segment)) < len(self.start)
+            entries = np.lexsort((segment, ~forward, region))
+            segment, region, forward = segment[entries], region[entries], forward[entries]
+            tails = np.where(forward, self.start[segment], self.end[segment])
+            heads = np.where(forward, self.end[segment], self.start[segment])
+            order, offsets = loop_order(region * len(self.nodes) + tails, region * len(self.nodes) + heads)
+            face = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+            self._faces = (face.astype(np.intp), segment[order].astype(np.intp),
+                           np.where(forward[order], 1.0, -1.0))
         return self._faces
 
     @property
@@ -836,7 +844,8 @@ class _Flow:
                     factors, dt_next = None, None
                     continue
                 return 4, n_iter
-            dt_next = dt if crossings else dt * _step_factor((candidate.energy - current.energy) / (dt * slope))
+            ratio = (candidate.energy - current.energy) / (dt * slope)
+            dt_next = dt if crossings else dt * _step_factor(ratio)
             self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
