@@ -762,11 +762,6 @@ class _Flow:
         uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
         by_row = np.argsort(nodes[:, 0], kind="stable")
         for loop in candidates:  # one at a time: a loop may hold another part until that is gone
-            loop_nodes = np.concatenate([network.start[loop], network.end[loop]])
-            uses_without = uses.copy()
-            np.subtract.at(uses_without, loop_nodes, 1)
-            if network.encloses(nodes, loop, uses_without, by_row):
-                continue
             flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
             starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
             ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
@@ -780,7 +775,12 @@ class _Flow:
                 part[around] += sign * island
             loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
             candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
-            if candidate.energy <= energy:
+            if candidate.energy > energy:
+                continue
+            # J first: most candidates stay because removing them would raise it
+            uses_without = uses.copy()
+            np.subtract.at(uses_without, np.concatenate([network.start[loop], network.end[loop]]), 1)
+            if not network.encloses(nodes, loop, uses_without, by_row):
                 keep[loop], uses, (areas, first, second) = False, uses_without, trial
                 length, energy = length - loop_length, candidate.energy
         removed = not keep.all()
