@@ -14,7 +14,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   boundary at its pixel centres, from a finer raster);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
-  :func:`cycles`, :func:`untwist`, :func:`step_bounds` -- :mod:`activecontour.energy`,
+  :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
   :mod:`activecontour.geometry.partition`,
   :mod:`activecontour.backends.network` (the N-region network: its integrals, load (6.41), H^1
   solve and the bounds of an iteration's steps);
@@ -2125,5 +2125,42 @@ def untwist(const Py_ssize_t[::1] order, const Py_ssize_t[::1] offsets, const un
     if failed:
         raise MemoryError()
     return loops
+
+
+def normal_part(const double[:, ::1] nodes, double[:, ::1] velocity, const Py_ssize_t[::1] start,
+                const Py_ssize_t[::1] end, const Py_ssize_t[::1] plain):
+    """A velocity without its tangential part at the nodes ``plain`` (inside an interface), in
+    place (:meth:`activecontour.backends.network.Network.normal_part`).
+
+    A plain node's normal is that of the sum of its segments' vectors ``t`` (the segments
+    ``start -> end``; their starts' sums first, then their ends'): ``(t_c, -t_r)``, normalised;
+    its velocity v becomes ``(v . n) n``.  A node whose sum vanishes keeps its velocity.
+    """
+    cdef Py_ssize_t count = start.shape[0], points = nodes.shape[0], s, k, p
+    cdef double n_r, n_c, squared, along, norm
+    cdef double *at_start = <double *> calloc(2 * max(points, 1), sizeof(double))
+    cdef double *at_end = <double *> calloc(2 * max(points, 1), sizeof(double))
+    if at_start == NULL or at_end == NULL:
+        free(at_start)
+        free(at_end)
+        raise MemoryError()
+    with nogil:
+        for s in range(count):
+            for k in range(2):
+                at_start[2 * start[s] + k] += nodes[end[s], k] - nodes[start[s], k]
+                at_end[2 * end[s] + k] += nodes[end[s], k] - nodes[start[s], k]
+        for k in range(plain.shape[0]):
+            p = plain[k]
+            n_r = at_start[2 * p + 1] + at_end[2 * p + 1]
+            n_c = -(at_start[2 * p] + at_end[2 * p])
+            squared = n_r * n_r + n_c * n_c
+            if squared > 0.0:
+                norm = sqrt(squared)
+                n_r, n_c = n_r / norm, n_c / norm
+                along = velocity[p, 0] * n_r + velocity[p, 1] * n_c
+                velocity[p, 0] = along * n_r
+                velocity[p, 1] = along * n_c
+    free(at_start)
+    free(at_end)
 
 # ==== end of the network's kernels ==============================================================

@@ -552,19 +552,10 @@ class Network:
         """The velocity without its tangential part at the nodes inside an interface (degree two,
         off the border): moving along the curve changes the region only through the polygon's
         discretisation, and lets vertices bunch up."""
-        a, b = self._interface_ends
-        tangent = nodes[b] - nodes[a]
-        count = len(nodes)
-        plain = self._plain
-        # the sum of the normals (t_c, -t_r) of the two segments at each plain node
-        normal = np.column_stack([(np.bincount(a, tangent[:, d], count)
-                                   + np.bincount(b, tangent[:, d], count))[plain] for d in (1, 0)])
-        normal[:, 1] *= -1
-        squared = np.einsum("ij,ij->i", normal, normal)
-        some = squared > 0
-        plain, normal = plain[some], normal[some] / np.sqrt(squared[some])[:, None]
-        out = velocity.copy()
-        out[plain] = np.einsum("ij,ij->i", velocity[plain], normal)[:, None] * normal
+        start, end = self._interface_ends
+        out = np.array(velocity, dtype=np.float64, order="C")
+        # the normal (t_c, -t_r) of the sum of the two segments at each plain node
+        _kernels.normal_part(np.ascontiguousarray(nodes, dtype=np.float64), out, start, end, self._plain)
         return out
 
     def force(self, nodes, model, params, constants, parts=None):

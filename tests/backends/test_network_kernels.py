@@ -116,3 +116,31 @@ def test_step_bounds_without_shrinking_segments_or_motion_is_unbounded():
     assert areas[0] == pytest.approx(-3.0)
     assert perimeter[0] == pytest.approx(2.0 + 2.0 * np.sqrt(10.0))
     assert speed[0] == 0.0
+
+
+def test_normal_part_is_the_numpy_definition():
+    rng = np.random.default_rng(14)
+    # a closed polygon (plain nodes 0..9) and a spur (node 10 -> 11) whose nodes are not plain
+    angle = np.sort(rng.uniform(0, 2 * np.pi, 10))
+    ring = np.column_stack([5 + 3 * np.cos(angle), 5 + 3 * np.sin(angle)])
+    nodes = np.vstack([ring, [[1.0, 1.0], [2.0, 1.5]]])
+    start = np.array([*range(10), 10], dtype=np.intp)
+    end = np.array([*range(1, 10), 0, 11], dtype=np.intp)
+    start[3], end[3] = end[3], start[3]  # one segment the other way round: its vector counts reversed
+    plain = np.arange(10, dtype=np.intp)
+    velocity = rng.normal(size=(12, 2))
+    out = velocity.copy()
+    _kernels.normal_part(nodes, out, start, end, plain)
+    tangent = nodes[end] - nodes[start]
+    summed = np.zeros((12, 2))
+    np.add.at(summed, start, tangent)
+    np.add.at(summed, end, tangent)
+    normal = np.column_stack([summed[:, 1], -summed[:, 0]])[plain]
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    expected = velocity.copy()
+    expected[plain] = np.einsum("ij,ij->i", velocity[plain], normal)[:, None] * normal
+    np.testing.assert_allclose(out, expected, rtol=1e-12, atol=1e-12)
+    # what is left is normal at the plain nodes, and the spur's velocity is untouched
+    along = np.column_stack([normal[:, 1], -normal[:, 0]])
+    np.testing.assert_allclose(np.einsum("ij,ij->i", out[plain], along), 0.0, atol=1e-12)
+    np.testing.assert_array_equal(out[10:], velocity[10:])
