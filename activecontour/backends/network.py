@@ -95,12 +95,8 @@ _REMESH_COOLDOWN = 4
 _BACKTRACKS = 30
 #: Half bandwidth above which :meth:`Network.factors` uses a sparse LU factorisation.
 _BAND_LIMIT = 64
-#: Pairs of meeting segments :meth:`Network.meeting_nodes` makes room for at first.
-_MEETINGS = 64
 #: No crossing parameters: the network asks for pairs only (:func:`activecontour._kernels.segments_meet`).
 _NO_WHERE = np.empty((0, 2))
-#: Segments along the interfaces, either way from where two meet, that stop moving (:meth:`_Flow.run`).
-_HELD_REACH = 2
 
 
 class Network:
@@ -587,31 +583,6 @@ class Network:
         start, end = self._interface_ends
         return _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, 1,
                                       np.empty((0, 2), dtype=np.intp), _NO_WHERE) == 0
-
-    def around(self, seeds, reach):
-        """The nodes at most ``reach`` interface segments away from the nodes ``seeds``."""
-        start, end = self._interface_ends
-        near = np.zeros(len(self.nodes), dtype=bool)
-        near[seeds] = True
-        for _ in range(reach):
-            touched = near[start] | near[end]
-            near[start[touched]] = near[end[touched]] = True
-        return np.flatnonzero(near)
-
-    def meeting_nodes(self, nodes):
-        """The nodes of the interface segments that meet another one elsewhere than at a common
-        node (:meth:`simple`)."""
-        start, end = self._interface_ends
-        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
-        capacity = _MEETINGS
-        while True:
-            pairs = np.empty((capacity, 2), dtype=np.intp)
-            found = _kernels.segments_meet(nodes, start, end, True, len(start) ** 2, pairs, _NO_WHERE)
-            if found <= capacity:
-                break
-            capacity = found
-        segments = pairs[:found].ravel()
-        return np.unique(np.concatenate([start[segments], end[segments]]))
 
     def steps(self, nodes, velocity):
         """The admissibility of the steps ``nodes + dt velocity`` of one iteration, for any dt
