@@ -260,6 +260,14 @@ def _result_fields(problem, solution, seeds=None):
         c_out = scalar_if_gray(offset + scale * np.asarray(c_out))
         if constants is not None:
             constants = offset + scale * np.asarray(constants)
+    if solution.light is None:  # an optimised constant is a region's mean (6.42): in the values' range
+        values = part.normalised.reshape(-1, part.normalised.shape[-1])
+        low, high = values.min(axis=0), values.max(axis=0)
+        settings = problem.settings
+        c_in = c_in if settings.c_in is not None else scalar_if_gray(np.clip(c_in, low, high))
+        c_out = c_out if settings.c_out is not None else scalar_if_gray(np.clip(c_out, low, high))
+        if constants is not None:  # N regions: every constant optimised
+            constants = np.clip(constants, low, high)
     if result.classes is None:  # two regions: the inside is region 1 (the classes made after the objects)
         constants = np.array([np.atleast_1d(c_out), np.atleast_1d(c_in)])
     offset, scale = part.units

@@ -160,7 +160,9 @@ class FlowState:
 
 
 def scalar_if_gray(value):
-    value = np.asarray(value, dtype=np.float64)
+    """A region constant as a float (gray) or a float array (C,) (colour), -0.0 as 0.0 (a constant
+    of an empty or all-zero region reads 0, inside [0, 1])."""
+    value = np.asarray(value, dtype=np.float64) + 0.0
     return float(value.reshape(-1)[0]) if value.size == 1 else value
 
 

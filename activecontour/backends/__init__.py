@@ -77,7 +77,7 @@ class Solver:
         return getattr(importlib.import_module(self.module), self.function)
 
     def option_specs(self):
-        """The options (name, kind, default, help, choices), from the options dataclass
+        """The options (name, kind, default, help, choices, typical values), from the options dataclass
         (:func:`~activecontour.backends.options.option_specs`)."""
         return option_specs(self.options)
 

@@ -6,7 +6,7 @@ and valid range: ``field(metadata={"help": ...})`` made by :func:`option`, the r
 ``__post_init__``.  :func:`activecontour.segment` reads the ``options`` dict into it once, with
 :func:`parse_options` (through :class:`activecontour.settings.Settings`), and the backend runs with
 that instance; the front ends read the same fields through :func:`option_specs` (name, kind,
-default, help, choices).
+default, help, choices, typical values).
 
 This module imports nothing but numpy, so the registry and the command line's help need no solver.
 """
@@ -26,11 +26,15 @@ __all__ = ["LevelSetOptions", "NoOptions", "OptionSpec", "PolygonOptions", "opti
 _KINDS = (bool, int, float, str)
 
 
-def option(default, help, choices=None):
-    """A field of an options dataclass: its default, its documentation and, for text, its choices."""
+def option(default, help, choices=None, typical=None):
+    """A field of an options dataclass: its default, its documentation, for text its choices and,
+    for a number worth tuning, its ``typical`` (lowest, highest) values (the valid range is the
+    class's ``__post_init__``; a front end offers the typical one, a slider say)."""
     metadata = {"help": help}
     if choices is not None:
         metadata["choices"] = tuple(choices)
+    if typical is not None:
+        metadata["typical"] = tuple(typical)
     return dataclasses.field(default=default, metadata=metadata)
 
 
@@ -51,6 +55,8 @@ class OptionSpec:
         Whether None is a valid value.
     choices : tuple or None
         The valid values of a text option.
+    typical : tuple or None
+        (lowest, highest) of the values worth trying, for a number worth tuning.
     """
 
     name: str
@@ -59,6 +65,7 @@ class OptionSpec:
     help: str
     optional: bool = False
     choices: tuple | None = None
+    typical: tuple | None = None
 
     def check(self, value, backend):
         """The value as this option's kind (an integral float as an int, a number as a float), or
@@ -105,7 +112,8 @@ def option_specs(options_class):
             else (hints[field.name],)
         kind = next(k for k in kinds if k in _KINDS)
         specs.append(OptionSpec(field.name, kind, field.default, field.metadata["help"],
-                                optional=type(None) in kinds, choices=field.metadata.get("choices")))
+                                optional=type(None) in kinds, choices=field.metadata.get("choices"),
+                                typical=field.metadata.get("typical")))
     return tuple(specs)
 
 
@@ -163,7 +171,7 @@ class PolygonOptions:
         "in pixels either way."))
     max_step: float = option(8.0, (
         "Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps "
-        "double while they are accepted, up to this; backtracking halves them."))
+        "double while they are accepted, up to this; backtracking halves them."), typical=(0.25, 10.0))
     smoothing: float | None = option(None, (
         "First length l in b(V, Y) = int V.Y + l^2 int grad V : grad Y, in pixels (smoothing >= "
         "min_smoothing).  The book's (6.39) is l = 1 in its units.  In pixel units l = 1 barely "
@@ -226,7 +234,7 @@ class LevelSetOptions:
 
     dt: float = option(16.0, (
         "First step, pixels of travel at the typical force, at most half the width of the start's "
-        "regions (but not below dt_min)."))
+        "regions (but not below dt_min)."), typical=(_DT_MIN, _DT_MAX))
     dt_min: float | None = option(None, (
         "Below this ceiling the smoothed-force stages end and the unsmoothed stage runs, with steps "
         "up to dt_min and the force within the band only (no single pixel far from Gamma flips).  "

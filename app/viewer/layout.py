@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from activecontour.backends import BACKENDS
+
 from .tools import INIT_MODES, TextField
 
 __all__ = ["CONTOUR_COLOR", "DEFAULT_SIZE", "INIT_COLOR", "PREVIEW_COLOR", "SLIDERS", "STEP_OPTIONS",
@@ -52,12 +54,23 @@ SLIDERS = (
     ("lambda_out", "background fit", 0.05, 5.0, "linear"),
 )
 
-#: backend -> (option, label, lowest, highest) of the "step" slider: the polygon flow's largest
-#: trial displacement in pixels (``max_step``), the level set's first step (``dt``), options of
-#: the backends' options dataclasses (:data:`activecontour.backends.BACKENDS`).  Its starting
-#: value is the backend's own default.
-STEP_OPTIONS = {"polygon": ("max_step", "step (px)", 0.25, 10.0),
-                "levelset": ("dt", "first step (px)", 1.0, 64.0)}
+
+
+def _step_options():
+    """backend -> (option, label, lowest, highest) of its "step" slider: the first number option
+    of its options dataclass with typical values (:class:`activecontour.backends.options.OptionSpec`),
+    e.g. the polygon flow's largest trial displacement ``max_step`` and the level set's first step
+    ``dt``; a backend added to the registry brings its own.  Its starting value is the default."""
+    options = {}
+    for name, solver in BACKENDS.items():
+        tuned = [spec for spec in solver.option_specs() if spec.kind is float and spec.typical is not None]
+        if tuned:
+            options[name] = (tuned[0].name, tuned[0].name, *tuned[0].typical)
+    return options
+
+
+#: :func:`_step_options` of the registry (:data:`activecontour.backends.BACKENDS`).
+STEP_OPTIONS = _step_options()
 
 #: The window's size in inches (at matplotlib's default 100 dpi: 1200 x 740 pixels).
 DEFAULT_SIZE = (12.0, 7.4)

@@ -218,3 +218,29 @@ def test_levelset_results_obey_the_invariants(case):
     result = run(image, init, kwargs, "levelset")
     if result is not None:
         check_invariants(image, result, kwargs)
+
+
+# Sparse bright pixels: the polygon's inside mean came out as -8.1e-17, a rounding below the image's
+# least value (issue 22: "c_out = -0.0 outside [0, 1]"); a region's mean (6.42) lies in the values' range
+SPARSE_ROWS = (
+    "00000000000000000000", "00000000000000000000", "00000000100000000000", "00000000000000000000",
+    "00000000000001000100", "00000000000100001000", "00000000000000000001", "00000000110000000000",
+    "00000000010000000000", "00000000000000000000", "00010000000000010000", "00000000001000000000",
+    "00000000000000010000", "00010000000000000000", "00000000010000010000", "00000000000000000000",
+    "00000000000000000000", "00000000000000000000", "00000000000000010000", "00000000000000000000",
+    "00000000000000000000", "00000100000000000000", "00010100000000000000", "00000000000000000000",
+    "00000100000000000000", "00001010000000000000", "00000000000000000000", "01000000000010000001",
+    "00000000000000000000", "00000000000000000000", "00000000000000000000", "10000000000000000000",
+    "00000000000000000000", "00000000000010000000", "00000000000100000000", "00000000100000000000",
+    "00000100000000000000", "00000000000000000000", "00000010000000000100",
+)
+
+
+@pytest.mark.parametrize("backend", ["polygon", "levelset"])
+def test_optimised_constants_lie_in_the_values_range_exactly(backend):
+    image = 255.0 * np.array([[c == "1" for c in row] for row in SPARSE_ROWS])
+    result = ac.segment(image, backend=backend, max_num_iter=3, mu=1.0)
+    for c in (result.c_in, result.c_out):
+        assert 0.0 <= c <= 1.0 and not np.signbit(c), c
+    fixed = ac.segment(image, backend=backend, max_num_iter=3, mu=1.0, c_out=-0.5)
+    assert fixed.c_out == -0.5  # a constant the caller fixes is reported as given

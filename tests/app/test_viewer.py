@@ -951,6 +951,36 @@ def test_step_sliders_start_at_the_options_dataclass_defaults(disk_image, make_v
         assert viewer.step_sliders[name].val == getattr(backend.options(), option)
 
 
+def test_a_new_backend_brings_its_step_slider_from_its_options(monkeypatch):
+    # a backend added to the registry gets the slider of its first number option with typical
+    # values, with that range; one without such an option gets none (the app names no backend)
+    import dataclasses
+
+    from activecontour import backends
+    from activecontour.backends.options import option
+    from app.viewer import layout
+
+    @dataclasses.dataclass(frozen=True)
+    class TunedOptions:
+        label: str = option("a", "text", choices=("a", "b"))
+        rate: float = option(0.5, "a number worth tuning", typical=(0.1, 2.0))
+        other: float = option(3.0, "a second one", typical=(1.0, 9.0))
+
+    @dataclasses.dataclass(frozen=True)
+    class PlainOptions:
+        rate: float = option(0.5, "no typical values")
+
+    added = {"tuned": dataclasses.replace(backends.BACKENDS["polygon"], name="tuned", backend="tuned",
+                                          options=TunedOptions),
+             "plain": dataclasses.replace(backends.BACKENDS["polygon"], name="plain", backend="plain",
+                                          options=PlainOptions)}
+    monkeypatch.setattr(layout, "BACKENDS", {**backends.BACKENDS, **added})
+    steps = layout._step_options()
+    assert steps["tuned"][0] == "rate" and steps["tuned"][2:] == (0.1, 2.0)
+    assert "plain" not in steps
+    assert steps["polygon"][0] == "max_step" and steps["levelset"][0] == "dt"
+
+
 # ------------------------------------------------------------------ objects you can see (issue 23, 5)
 @pytest.fixture(scope="module")
 def touching_image():
