@@ -419,6 +419,28 @@ class Network:
         uses = np.bincount(np.concatenate([self.start[keep], self.end[keep]]), minlength=len(nodes))
         return None if self.encloses(nodes, loop, uses) else self.subset(keep, nodes)
 
+    def boxes_hold_nodes(self, nodes, loops, used, by_row):
+        """For each closed loop of segments (indices), whether a node ``used`` lies strictly within
+        its bounding box: where none does, the loop :meth:`encloses` none, whichever nodes stay in
+        use.  ``by_row``: the node indices sorted by row."""
+        if not loops:
+            return np.zeros(0, dtype=bool)
+        segment = np.concatenate(loops)
+        firsts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops])[:-1]])
+        a, b = nodes[self.start[segment]], nodes[self.end[segment]]
+        low = np.minimum.reduceat(np.minimum(a, b), firsts, axis=0)
+        high = np.maximum.reduceat(np.maximum(a, b), firsts, axis=0)
+        # the nodes within each box's rows, then those within its columns
+        rows = nodes[by_row, 0]
+        begin = np.searchsorted(rows, low[:, 0], side="right")
+        counts = np.maximum(np.searchsorted(rows, high[:, 0], side="left") - begin, 0)
+        owner = np.repeat(np.arange(len(loops)), counts)
+        near = by_row[np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts - begin, counts)]
+        within = used[near] & (nodes[near, 1] > low[owner, 1]) & (nodes[near, 1] < high[owner, 1])
+        holds = np.zeros(len(loops), dtype=bool)
+        holds[owner[within]] = True
+        return holds
+
     def encloses(self, nodes, loop, uses, by_row=None):
         """Whether a node in use (``uses > 0``: an end of a segment kept) lies inside the closed
         loop of segments ``loop``, strictly within its bounding box.  ``by_row``: the node
@@ -723,7 +745,9 @@ class _Flow:
         keep = np.ones(len(network.start), dtype=bool)
         uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
         by_row = np.argsort(nodes[:, 0], kind="stable")
-        for loop in candidates:  # one at a time: a loop may hold another part until that is gone
+        boxed = network.boxes_hold_nodes(nodes, candidates, uses > 0, by_row)
+        # one at a time: a loop may hold another part until that is gone
+        for loop, holds in zip(candidates, boxed, strict=True):
             flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
             starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
             ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
@@ -742,7 +766,7 @@ class _Flow:
             # J first: most candidates stay because removing them would raise it
             uses_without = uses.copy()
             np.subtract.at(uses_without, np.concatenate([network.start[loop], network.end[loop]]), 1)
-            if not network.encloses(nodes, loop, uses_without, by_row):
+            if not (holds and network.encloses(nodes, loop, uses_without, by_row)):
                 keep[loop], uses, (areas, first, second) = False, uses_without, trial
                 length, energy = length - loop_length, candidate.energy
         removed = not keep.all()
