@@ -45,10 +45,11 @@ crossing); a trial that reverses an interface segment, turns a face inside out, 
 or makes two interfaces meet is halved (those tests cost a fraction of J's, and come first: every
 iteration costs about one evaluation of J, whose boundary integrals also give the next force).
 The H^1 system is solved by a banded Cholesky factorisation in the graph's reverse Cuthill-McKee
-order, and crossings are found on a uniform grid: an iteration costs O(boundary).  The flow has
-converged when the interfaces' mean normal displacement (the area they sweep over their length)
-between the start and the end of a block of five iterations falls below ``tol`` px per iteration
-in two consecutive blocks.
+order, and crossings are found on a uniform grid: an iteration costs O(boundary), each of its
+passes over the segments compiled (the integrals, the load, the normal part, the bounds of the
+steps: :mod:`activecontour._kernels`).  The flow has converged when the interfaces' mean normal
+displacement (the area they sweep over their length) between the start and the end of a block of
+five iterations falls below ``tol`` px per iteration in two consecutive blocks.
 """
 
 from __future__ import annotations
