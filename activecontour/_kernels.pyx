@@ -12,10 +12,14 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
   boundary at its pixel centres, from a finer raster), :func:`near_distance` (the distance
-  transform up to a few pixels, for the split's tests against a radius);
+  transform up to a few pixels, for the split's tests against a radius), :func:`ellipse_moments`,
+  :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
-* :func:`segment_integrals`, :func:`band_cholesky`, :func:`band_solve`, :func:`cycles` --
-  :mod:`activecontour.energy`, :mod:`activecontour.backends.network` (the N-region network);
+* :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
+  :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
+  :mod:`activecontour.geometry.partition`,
+  :mod:`activecontour.backends.network` (the N-region network: its integrals, load (6.41), H^1
+  solve and the bounds of an iteration's steps);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
   :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
@@ -29,7 +33,7 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 """
 
 from cpython.exc cimport PyErr_CheckSignals
-from libc.math cimport M_PI, fabs, isnan, sin, sqrt
+from libc.math cimport INFINITY, M_PI, fabs, hypot, isnan, sin, sqrt
 from libc.stdlib cimport calloc, free, malloc, realloc
 
 cdef Py_ssize_t _POLL_ROWS = 256
@@ -1940,6 +1944,230 @@ cdef inline void _run_distances(long long *across, Py_ssize_t r, Py_ssize_t n, P
         j += 1
 
 
+# ==== the network's kernels (issue 24 item 5, branch net2) =========================================
+
+
+def segment_loads(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
+                  const Py_ssize_t[::1] outer, const double[:, :, ::1] parts, const double[:, ::1] table,
+                  double mu, double[:, :, ::1] load):
+    """The load (6.41) of every boundary segment on its two ends, for
+    :func:`activecontour.energy.partition_load` (its docstring has the mathematics).
+
+    ``table[k] = (constant, linear (C), square (C))`` of region k's quadratic form; a segment
+    between regions i (inner) and o (outer, < 0: the image's edge, no form) carries
+    ``g_i - g_o``, whose integral against the end's hat function is ``parts[e, end] . (linear,
+    square) + constant / 2``, times the normal ``nu |e| = (dv, -du)``; the length term is
+    ``mu`` times the unit tangent (pulling the ends together) on interfaces (``o >= 0``) and on
+    the border of regions other than 0.  ``load[e, 0]`` is the start's, ``load[e, 1]`` the end's.
+    """
+    cdef Py_ssize_t count = starts.shape[0], width = parts.shape[2], e, end, c, i, o
+    cdef double du, dv, length, pull, density, coefficient
+    if table.shape[1] != 1 + width or load.shape[0] != count or parts.shape[0] != count:
+        raise ValueError("table must be (K, 1 + 2C), parts (S, 2, 2C) and load (S, 2, 2)")
+    with nogil:
+        for e in range(count):
+            i, o = inner[e], outer[e]
+            du, dv = ends[e, 0] - starts[e, 0], ends[e, 1] - starts[e, 1]
+            length = sqrt(du * du + dv * dv)
+            pull = mu / length if (o >= 0 or i > 0) and length > 0.0 else 0.0
+            for end in range(2):
+                density = 0.0
+                for c in range(width):
+                    coefficient = table[i, 1 + c] - (table[o, 1 + c] if o >= 0 else 0.0)
+                    density += parts[e, end, c] * coefficient
+                density += 0.5 * (table[i, 0] - (table[o, 0] if o >= 0 else 0.0))
+                load[e, end, 0] = density * dv
+                load[e, end, 1] = -density * du
+            load[e, 0, 0] -= pull * du
+            load[e, 0, 1] -= pull * dv
+            load[e, 1, 0] += pull * du
+            load[e, 1, 1] += pull * dv
+
+
+def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const Py_ssize_t[::1] start,
+                const Py_ssize_t[::1] end, const Py_ssize_t[::1] face, const Py_ssize_t[::1] segment,
+                const double[::1] sign, double high_r, double high_c, double[::1] areas,
+                double[::1] perimeter, double[::1] speed):
+    """The bounds of the steps ``nodes + dt velocity`` of a network's iteration, in one pass
+    (:class:`activecontour.backends.network._Steps` has the reasoning).
+
+    Returns ``(reverse, inside)``: the least dt at which a segment's projection on its old
+    direction falls to a quarter of its squared length (``(old + dt turn) . old = |old|^2 / 4``,
+    over the segments that shrink), and the least dt at which a vertex reaches the domain's
+    edge ``[-0.5, high]``; inf when none.  Per face f of the entries ``(face, segment, sign)``
+    (grouped by face): ``areas[f]`` its signed area (the shoelace sum, each segment's cross
+    product times its sign), ``perimeter[f]`` its length and ``speed[f]`` its fastest vertex's
+    speed.
+    """
+    cdef Py_ssize_t count = start.shape[0], points = nodes.shape[0], entries = face.shape[0], k, s, f, d
+    cdef double reverse = INFINITY, inside = INFINITY, old_r, old_c, along, room, value, fast
+    cdef double high[2]
+    high[0], high[1] = high_r, high_c
+    with nogil:
+        for s in range(count):
+            old_r = nodes[end[s], 0] - nodes[start[s], 0]
+            old_c = nodes[end[s], 1] - nodes[start[s], 1]
+            along = (old_r * (velocity[end[s], 0] - velocity[start[s], 0])
+                     + old_c * (velocity[end[s], 1] - velocity[start[s], 1]))
+            if along < 0.0:
+                value = 0.75 * (old_r * old_r + old_c * old_c) / -along
+                if value < reverse:
+                    reverse = value
+        for k in range(points):
+            for d in range(2):
+                if velocity[k, d] > 0.0:
+                    room = (high[d] - nodes[k, d]) / velocity[k, d]
+                elif velocity[k, d] < 0.0:
+                    room = (-0.5 - nodes[k, d]) / velocity[k, d]
+                else:
+                    continue
+                if room < inside:
+                    inside = room
+        for f in range(areas.shape[0]):
+            areas[f] = 0.0
+            perimeter[f] = 0.0
+            speed[f] = 0.0
+        for k in range(entries):
+            f, s = face[k], segment[k]
+            old_r = nodes[end[s], 0] - nodes[start[s], 0]
+            old_c = nodes[end[s], 1] - nodes[start[s], 1]
+            areas[f] += sign[k] * (nodes[start[s], 0] * nodes[end[s], 1]
+                                   - nodes[end[s], 0] * nodes[start[s], 1])
+            perimeter[f] += sqrt(old_r * old_r + old_c * old_c)
+            fast = max(hypot(velocity[start[s], 0], velocity[start[s], 1]),
+                       hypot(velocity[end[s], 0], velocity[end[s], 1]))
+            if fast > speed[f]:
+                speed[f] = fast
+        for f in range(areas.shape[0]):
+            areas[f] *= 0.5
+    return reverse, inside
+
+
+
+cdef Py_ssize_t _untwist_loop(const Py_ssize_t *loop, Py_ssize_t n, const Py_ssize_t[::1] ids,
+                              unsigned char *seen, Py_ssize_t[::1] out, Py_ssize_t[::1] out_offsets,
+                              Py_ssize_t *position, Py_ssize_t *loops) noexcept nogil:
+    """One loop of :func:`untwist` (recursive, as the definition); -1 when out of memory."""
+    cdef Py_ssize_t k, key, best = -1, i = -1, j = -1, size
+    cdef Py_ssize_t *part
+    for k in range(n):  # the smallest key the loop passes twice
+        key = ids[loop[k]]
+        if seen[key] and (best < 0 or key < best):
+            best = key
+        seen[key] = 1
+    for k in range(n):
+        seen[ids[loop[k]]] = 0
+    if best < 0:
+        for k in range(n):
+            out[position[0] + k] = loop[k]
+        position[0] += n
+        loops[0] += 1
+        out_offsets[loops[0]] = position[0]
+        return 0
+    for k in range(n):  # its first two passes
+        if ids[loop[k]] == best:
+            if i < 0:
+                i = k
+            else:
+                j = k
+                break
+    part = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
+    if part == NULL:
+        return -1
+    size = 0
+    for k in range(i, j):
+        part[size] = loop[k]
+        size += 1
+    if _untwist_loop(part, size, ids, seen, out, out_offsets, position, loops) < 0:
+        free(part)
+        return -1
+    size = 0
+    for k in range(j, n):
+        part[size] = loop[k]
+        size += 1
+    for k in range(i):
+        part[size] = loop[k]
+        size += 1
+    k = _untwist_loop(part, size, ids, seen, out, out_offsets, position, loops)
+    free(part)
+    return k
+
+
+def untwist(const Py_ssize_t[::1] order, const Py_ssize_t[::1] offsets, const unsigned char[::1] twisted,
+            const Py_ssize_t[::1] ids, Py_ssize_t distinct, Py_ssize_t[::1] out, Py_ssize_t[::1] out_offsets):
+    """Loops cut where they pass a point twice (:func:`activecontour.geometry.partition.chain_loops`).
+
+    Loop c is ``order[offsets[c]:offsets[c + 1]]`` (elements whose points have the keys ``ids``,
+    dense in 0..distinct-1 and in the order of the points' keys); a loop with ``twisted[c]`` is
+    cut, recursively: at its smallest key that it passes twice, between the first two passes,
+    into the loop from the first pass to the second and the rest from the second pass on (then
+    its start), in that order.  The loops that pass every point once go to ``out`` (as long as
+    ``order``), loop l at ``out[out_offsets[l]:out_offsets[l + 1]]`` (``out_offsets`` as long as
+    ``order`` + 1).  Returns the number of loops.
+    """
+    cdef Py_ssize_t count = offsets.shape[0] - 1, c, k, position = 0, loops = 0, failed = 0
+    cdef unsigned char *seen = <unsigned char *> calloc(max(distinct, 1), sizeof(unsigned char))
+    if seen == NULL:
+        raise MemoryError()
+    out_offsets[0] = 0
+    with nogil:
+        for c in range(count):
+            if twisted[c]:
+                if _untwist_loop(&order[offsets[c]], offsets[c + 1] - offsets[c], ids, seen, out,
+                                 out_offsets, &position, &loops) < 0:
+                    failed = 1
+                    break
+            else:
+                for k in range(offsets[c], offsets[c + 1]):
+                    out[position] = order[k]
+                    position += 1
+                loops += 1
+                out_offsets[loops] = position
+    free(seen)
+    if failed:
+        raise MemoryError()
+    return loops
+
+
+def normal_part(const double[:, ::1] nodes, double[:, ::1] velocity, const Py_ssize_t[::1] start,
+                const Py_ssize_t[::1] end, const Py_ssize_t[::1] plain):
+    """A velocity without its tangential part at the nodes ``plain`` (inside an interface), in
+    place (:meth:`activecontour.backends.network.Network.normal_part`).
+
+    A plain node's normal is that of the sum of its segments' vectors ``t`` (the segments
+    ``start -> end``; their starts' sums first, then their ends'): ``(t_c, -t_r)``, normalised;
+    its velocity v becomes ``(v . n) n``.  A node whose sum vanishes keeps its velocity.
+    """
+    cdef Py_ssize_t count = start.shape[0], points = nodes.shape[0], s, k, p
+    cdef double n_r, n_c, squared, along, norm
+    cdef double *at_start = <double *> calloc(2 * max(points, 1), sizeof(double))
+    cdef double *at_end = <double *> calloc(2 * max(points, 1), sizeof(double))
+    if at_start == NULL or at_end == NULL:
+        free(at_start)
+        free(at_end)
+        raise MemoryError()
+    with nogil:
+        for s in range(count):
+            for k in range(2):
+                at_start[2 * start[s] + k] += nodes[end[s], k] - nodes[start[s], k]
+                at_end[2 * end[s] + k] += nodes[end[s], k] - nodes[start[s], k]
+        for k in range(plain.shape[0]):
+            p = plain[k]
+            n_r = at_start[2 * p + 1] + at_end[2 * p + 1]
+            n_c = -(at_start[2 * p] + at_end[2 * p])
+            squared = n_r * n_r + n_c * n_c
+            if squared > 0.0:
+                norm = sqrt(squared)
+                n_r, n_c = n_r / norm, n_c / norm
+                along = velocity[p, 0] * n_r + velocity[p, 1] * n_c
+                velocity[p, 0] = along * n_r
+                velocity[p, 1] = along * n_c
+    free(at_start)
+    free(at_end)
+
+# ==== end of the network's kernels ==============================================================
+
+
 # ==== split2 (issue 23 item 2): the split's cheap exact tests ====================================
 
 def near_distance(const unsigned char[:, ::1] mask, long long cap, long long[:, ::1] out):
@@ -2074,3 +2302,6 @@ def segment_inside(const double[:, ::1] start, const double[:, ::1] end, Py_ssiz
         elif start[i, 0] > m0 and end[i, 0] <= m0 and turn < 0:
             down += 1
     return up != down
+
+
+# ==== end of split2's kernels ===================================================================

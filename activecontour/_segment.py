@@ -191,7 +191,13 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
                         options=options)
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
-    problem = prepare(image, settings)
+    return solve_problem(prepare(image, settings), init, callback)
+
+
+def solve_problem(problem, init=None, callback=None):
+    """:func:`segment` of a prepared problem (:func:`~activecontour.problem.prepare`): what a
+    caller that prepared the image already for its own use (a sequence's warm start) runs."""
+    settings = problem.settings
     solver = solver_for(settings.backend, problem.n_regions)
     run = functools.partial(solver.solve, options=settings.backend_options, n_regions=problem.n_regions,
                             max_num_iter=int(settings.max_num_iter), tol=float(settings.tol))

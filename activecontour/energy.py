@@ -252,22 +252,12 @@ def partition_load(model, boundary, params, constants, parts=None):
     if parts is None:
         *_, parts = partition_moments(model, boundary, len(constants), parts=True)
     forms = params.class_forms(constants)
-    # each region's (constant, linear, square), and zeros at index -1 (outside the image)
-    table = np.zeros((len(forms) + 1, 1 + parts.shape[2]))
-    for k, form in enumerate(forms):
-        table[k] = np.concatenate([[form.constant], form.linear, form.square])
-    inner, outer = boundary.inner, boundary.outer
-    coefficients = table[inner] - table[outer]
-    # int phi (g_i - g_o) ds / |e| at each end: the constant's int phi = 1/2, the rest from the parts
-    density = np.einsum("sec,sc->se", parts, coefficients[:, 1:]) + 0.5 * coefficients[:, :1]
-    step = boundary.end - boundary.start
-    length = np.hypot(step[:, 0], step[:, 1])
-    mu = np.where((outer >= 0) | (inner > 0), params.mu, 0.0)
-    tangent = step * (mu / np.where(length > 0, length, 1.0))[:, None]  # mu times the unit tangent
-    load = np.empty((len(step), 2, 2))
-    # times the normal nu |e| = (dv, -du) (section 4.5.2)
-    load[:, :, 0] = density * step[:, 1:2]
-    load[:, :, 1] = density * -step[:, 0:1]
-    load[:, 0] -= tangent
-    load[:, 1] += tangent
+    # each region's (constant, linear, square)
+    table = np.array([np.concatenate([[form.constant], form.linear, form.square]) for form in forms])
+    # int phi (g_i - g_o) ds / |e| at each end (the constant's int phi = 1/2, the rest from the
+    # parts) times the normal nu |e| = (dv, -du) (section 4.5.2), and mu times the unit tangent
+    load = np.empty((len(parts), 2, 2))
+    _kernels.segment_loads(np.ascontiguousarray(boundary.start), np.ascontiguousarray(boundary.end),
+                           _indices(boundary.inner), _indices(boundary.outer), np.ascontiguousarray(parts),
+                           table, float(params.mu), load)
     return load

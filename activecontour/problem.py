@@ -154,8 +154,25 @@ class Problem:
 
     def model(self, light=None):
         """The image model and parameters in the working frame: ``build(values, light, working)``
-        of the noise model (light None: uniform)."""
-        return self.noise_model[0](self.values, light, self.working)
+        of the noise model (light None: uniform, built once)."""
+        return self._uniform if light is None else self.noise_model[0](self.values, light, self.working)
+
+    @functools.cached_property
+    def _uniform(self):
+        return self.noise_model[0](self.values, None, self.working)
+
+    def reweighted(self, **changes):
+        """This problem under other parameters of (6.38) or noise model (``changes``: fields of
+        :class:`~activecontour.settings.Settings` that leave the values alone, e.g. ``mu``, ``c_in``,
+        ``noise``): the values, their working frame and the noise level are shared, not computed
+        again (a sequence's warm start scores its starts on the frame it then segments)."""
+        if changes.keys() & {"color", "normalize", "channel_axis"}:
+            raise ValueError(f"reweighted keeps the values: {sorted(changes)} would change them")
+        other = dataclasses.replace(self, settings=dataclasses.replace(self.settings, **changes))
+        for name in ("frame", "values", "auto_mu"):
+            if name in self.__dict__:
+                other.__dict__[name] = self.__dict__[name]
+        return other
 
     def restricted(self, box, domain):
         """The whole image's problem on the crop ``box`` of a region of interest, the pixels outside

@@ -8,13 +8,20 @@ load hits all three alike): the warm frame of :func:`activecontour.iter_sequence
 :func:`activecontour.segment` of the same frame, and ``skimage.segmentation.chan_vese`` with its
 defaults (``--no-skimage`` leaves it out: ~25 ms per iteration at 512^2).
 
+The frames are made one at a time (:class:`Frames`) and the warm run streams them through
+:func:`activecontour.iter_sequence`, so a run of 1000 frames holds one frame; ``--cold-every K``
+segments only every K-th frame cold (and with scikit-image), the warm/cold ratio is then taken on
+those frames.  Times are process CPU time (the machine is shared); ``--repeats R`` takes the least
+of R runs of each cold and scikit-image frame (a warm frame depends on the one before: one run).
+
 Reported: per-frame Dice of the foreground against the truth (mean and worst), identity switches
 (a truth track whose pixels are given more than one id over its life, plus ids shared by two
-truth tracks; cold results get no ids), ms per frame (median), warm/cold ratio, and the peak
-memory of the warm run (tracemalloc: numpy's allocations) at two lengths, which is flat when the
-run streams (``keep_results=False``, labels to a TIFF file).
+truth tracks; cold results get no ids), ms per frame (median), iterations per frame (mean),
+warm/cold CPU ratio, and the peak memory of the warm run (tracemalloc: numpy's allocations) at
+two lengths, which is flat when the run streams (``keep_results=False``, labels to a TIFF file).
 
-usage: python benchmarks/bench_sequence.py [--frames T] [--size N] [--no-skimage] [--long T]
+usage: python benchmarks/bench_sequence.py [--frames T] [--size N] [--no-skimage] [--cold-every K]
+                                           [--repeats R] [--long T]
 """
 
 from __future__ import annotations
@@ -56,32 +63,67 @@ def scene(n_frames, size):
     return frames
 
 
-def identity_switches(labels, truth):
+class IdentitySwitches:
     """Truth tracks seen under more than one id, plus ids given to more than one truth track
-    (each pixel of a truth object votes for the id it got; the majority id is the object's)."""
-    seen, owners = {}, {}
-    for ours, true in zip(labels, truth, strict=True):
+    (each pixel of a truth object votes for the id it got; the majority id is the object's),
+    counted frame by frame (:meth:`add`), so a long run need not keep its labels."""
+
+    def __init__(self):
+        self.seen, self.owners = {}, {}
+
+    def add(self, ours, true):
         for track in np.unique(true[true > 0]):
             votes = np.bincount(ours[true == track])
             votes[0] = 0
             if votes.sum() == 0:
                 continue
             label = int(votes.argmax())
-            seen.setdefault(int(track), set()).add(label)
-            owners.setdefault(label, set()).add(int(track))
-    return sum(len(ids) - 1 for ids in seen.values()) + sum(len(t) - 1 for t in owners.values())
+            self.seen.setdefault(int(track), set()).add(label)
+            self.owners.setdefault(label, set()).add(int(track))
+
+    @property
+    def count(self):
+        return sum(len(ids) - 1 for ids in self.seen.values()) + sum(len(t) - 1 for t in self.owners.values())
 
 
-def peak_memory(images, n_frames):
-    """Peak traced memory (MB, tracemalloc: numpy's buffers included) of a streaming run over
-    ``n_frames`` frames drawn from ``images`` by a generator (labels to a temporary TIFF)."""
-    frames = (images[t % len(images)] for t in range(n_frames))
+class Frames:
+    """The frames of the scene, made one at a time (frame t of :func:`disk_sequence` with noise seed
+    ``seed + t``, the same image as the whole stack's frame t): a run of any length streams.
+    Iterating yields the images."""
+
+    def __init__(self, disks, size, sigma=0.25, seed=1):
+        self.disks, self.size, self.sigma, self.seed = disks, size, sigma, seed
+
+    def frame(self, t):
+        """Frame t's image and ground truth."""
+        images, truth = disk_sequence(self.size, self.disks[t:t + 1], sigma=self.sigma, seed=self.seed + t)
+        return images[0], truth[0]
+
+    def __iter__(self):
+        return (self.frame(t)[0] for t in range(len(self.disks)))
+
+
+def peak_memory(source, n_frames):
+    """Peak traced memory (MB, tracemalloc: numpy's buffers included) of a streaming run over the
+    first ``n_frames`` frames of ``source`` (a :class:`Frames`, made one at a time; labels to a
+    temporary TIFF)."""
+    frames = Frames(source.disks[:n_frames], source.size, source.sigma, source.seed)
     with tempfile.TemporaryDirectory() as folder:
         tracemalloc.start()
-        ac.segment_sequence(frames, keep_results=False, labels_file=os.path.join(folder, "l.tif"))
+        ac.segment_sequence(iter(frames), keep_results=False, labels_file=os.path.join(folder, "l.tif"))
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
     return peak / 2**20
+
+
+def cpu(function, *args, repeats=1, **kwargs):
+    """``function(*args, **kwargs)`` and its process CPU time in seconds (the least of ``repeats``)."""
+    best = np.inf
+    for _ in range(repeats):
+        start = time.process_time()
+        value = function(*args, **kwargs)
+        best = min(best, time.process_time() - start)
+    return value, best
 
 
 def main():
@@ -89,54 +131,72 @@ def main():
     parser.add_argument("--frames", type=int, default=24)
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--no-skimage", action="store_true")
+    parser.add_argument("--cold-every", type=int, default=1,
+                        help="segment cold (and with scikit-image) only every K-th frame (a long run)")
+    parser.add_argument("--repeats", type=int, default=1,
+                        help="cold and scikit-image frames: the least CPU time of this many runs")
     parser.add_argument("--long", type=int, default=0,
                         help="also stream this many frames (a generator) and report peak memory")
     args = parser.parse_args()
-    images, truth = disk_sequence(args.size, scene(args.frames, args.size), sigma=0.25, seed=1)
-    ac.segment(images[0])  # imports and caches warm before timing
-    warm_labels, times = [], {"warm": [], "cold": [], "skimage": []}
-    cpu = {"warm": [], "cold": []}
+    source = Frames(scene(args.frames, args.size), args.size)
+    ac.segment(source.frame(0)[0])  # imports and caches warm before timing
+    import scipy.optimize  # noqa: F401  (the tracker's; loaded on frame 1, not timed there)
+
+    switches = IdentitySwitches()
+    seconds = {"warm": [], "cold": [], "skimage": []}
     dices = {"warm": [], "cold": [], "skimage": []}
-    frames = ac.iter_sequence(images)
+    iterations = {"warm": [], "cold": []}
+    paired = []  # (warm, cold) CPU seconds of the frames segmented both ways, frames 1..
+    current = {}
+
+    def stream():  # each frame made before its timing starts: the run reads what is there
+        while True:
+            yield current["image"]
+
+    frames = ac.iter_sequence(stream())
     for t in range(args.frames):
-        start, cpu_start = time.perf_counter(), time.process_time()
-        frame = next(frames)
-        times["warm"].append(time.perf_counter() - start)
-        cpu["warm"].append(time.process_time() - cpu_start)
-        warm_labels.append(frame.result.labels)
-        dices["warm"].append(dice(frame.result.labels > 0, truth[t] > 0))
-        start, cpu_start = time.perf_counter(), time.process_time()
-        cold = ac.segment(images[t])
-        times["cold"].append(time.perf_counter() - start)
-        cpu["cold"].append(time.process_time() - cpu_start)
-        dices["cold"].append(dice(cold.mask, truth[t] > 0))
+        current["image"], truth = source.frame(t)
+        frame, warm_seconds = cpu(next, frames)
+        seconds["warm"].append(warm_seconds)
+        iterations["warm"].append(frame.result.n_iter)
+        dices["warm"].append(dice(frame.result.labels > 0, truth > 0))
+        switches.add(frame.result.labels, truth)
+        if t % args.cold_every:
+            continue
+        cold, cold_seconds = cpu(ac.segment, frame.image, repeats=args.repeats)
+        seconds["cold"].append(cold_seconds)
+        iterations["cold"].append(cold.n_iter)
+        dices["cold"].append(dice(cold.mask, truth > 0))
+        if t > 0:
+            paired.append((warm_seconds, cold_seconds))
         if not args.no_skimage:
             from skimage.segmentation import chan_vese
 
-            start = time.perf_counter()
-            mask = chan_vese(images[t])
-            times["skimage"].append(time.perf_counter() - start)
+            mask, skimage_seconds = cpu(chan_vese, frame.image, repeats=args.repeats)
+            seconds["skimage"].append(skimage_seconds)
             # the functional does not say which class is the object: score the better reading
-            dices["skimage"].append(max(dice(mask, truth[t] > 0), dice(~mask, truth[t] > 0)))
-    switches = identity_switches(np.stack(warm_labels), truth)
-    print(f"{args.frames} frames of {args.size}x{args.size}, SNR 2, {len(np.unique(truth)) - 1} tracks "
-          f"(drift, breathing, leaving, entering, one division, two passing close by)")
-    print(f"{'method':28s} {'Dice mean':>9s} {'Dice worst':>10s} {'ms/frame':>9s} {'id switches':>11s}")
-    for name, label in (("warm", "ours, warm (segment_sequence)"), ("cold", "ours, cold (segment)"),
+            dices["skimage"].append(max(dice(mask, truth > 0), dice(~mask, truth > 0)))
+    print(f"{args.frames} frames of {args.size}x{args.size}, SNR 2, streamed; cold every {args.cold_every} "
+          f"frame(s), least of {args.repeats}; CPU time")
+    print(f"{'method':30s} {'Dice mean':>9s} {'Dice worst':>10s} {'frames':>6s} {'ms/frame':>9s} "
+          f"{'iterations':>10s} {'id switches':>11s}")
+    for name, label in (("warm", "ours, warm (iter_sequence)"), ("cold", "ours, cold (segment)"),
                         ("skimage", "skimage chan_vese")):
-        if not times[name]:
+        if not seconds[name]:
             continue
-        later = times[name][1:] if name == "warm" else times[name]  # frame 0 of warm is cold
-        print(f"{label:28s} {np.mean(dices[name]):9.4f} {np.min(dices[name]):10.4f} "
-              f"{1000 * np.median(later):9.1f} {switches if name == 'warm' else '-':>11}")
-    ratio = np.median(np.array(times["warm"][1:]) / np.array(times["cold"][1:]))
-    cpu_ratio = np.sum(cpu["warm"][1:]) / np.sum(cpu["cold"][1:])
-    print(f"warm/cold per frame (median of per-frame ratios, frames 1..): {ratio:.3f} wall, "
-          f"{cpu_ratio:.3f} CPU time (sums)")
+        later = seconds[name][1:] if name == "warm" else seconds[name]  # frame 0 of warm is cold
+        steps = f"{np.mean(iterations[name]):.1f}" if name in iterations else "-"
+        print(f"{label:30s} {np.mean(dices[name]):9.4f} {np.min(dices[name]):10.4f} {len(dices[name]):6d} "
+              f"{1000 * np.median(later):9.1f} {steps:>10s} {switches.count if name == 'warm' else '-':>11}")
+    if paired:
+        warm, cold = np.array(paired).T
+        print(f"warm/cold CPU time on the {len(paired)} frames segmented both ways (1..): "
+              f"{warm.sum() / cold.sum():.3f} (sums), {np.median(warm / cold):.3f} "
+              f"(median of per-frame ratios)")
     if args.long:
-        short = max(2, args.long // 10)
-        print(f"peak memory streaming {short} frames: {peak_memory(images, short):.1f} MB; "
-              f"{args.long} frames: {peak_memory(images, args.long):.1f} MB")
+        short, source = max(2, args.long // 10), Frames(scene(args.long, args.size), args.size)
+        print(f"peak memory streaming {short} frames: {peak_memory(source, short):.1f} MB; "
+              f"{args.long} frames: {peak_memory(source, args.long):.1f} MB")
 
 
 if __name__ == "__main__":

@@ -43,14 +43,16 @@ The energy of every iterate, the result's ``energy`` and ``energies`` are the co
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
-from activecontour.energy import evaluate_partition
-from activecontour.geometry.partition import chain, class_boundary, class_soup
+from activecontour.energy import PartitionEvaluation, evaluate_partition
+from activecontour.geometry.partition import Boundary, chain, class_boundary, class_soup
 from activecontour.models.kmeans import histogram_kmeans
 from activecontour.result import FlowState, SegmentationResult
 
-__all__ = ["initial_classes", "segment_labels"]
+__all__ = ["LabelDescent", "descend_labels", "initial_classes", "segment_labels"]
 
 _INIT_SMOOTHING = 1.0  # Gaussian sigma (px) of the image the K-means start classifies
 _BINS = 256
@@ -128,6 +130,28 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
     SegmentationResult
         With ``classes`` (0 = background, the others by mean intensity) and ``constants``.
     """
+    descent = descend_labels(model, init, params, n_regions=n_regions, max_num_iter=max_num_iter,
+                             tol=tol, callback=callback)
+    return _result(descent, n_regions)
+
+
+class LabelDescent(NamedTuple):
+    """What :func:`descend_labels` finds: the labels (named by :func:`order_classes`), their
+    partition's boundary and its evaluation, the energies (ending with that evaluation's), the
+    sweeps and the status."""
+
+    classes: np.ndarray
+    boundary: Boundary
+    final: PartitionEvaluation
+    energies: list
+    n_iter: int
+    status: int
+
+
+def descend_labels(model, init, params, *, n_regions, max_num_iter, tol, callback):
+    """:func:`segment_labels` without the result: no contours, for a caller that needs only the
+    labels (the network of :mod:`activecontour.backends.network` starts from them).  The same
+    parameters; returns a :class:`LabelDescent`."""
     image = model.image
     shape = tuple(model.shape)
     classes = order_classes(_initial(init, image, n_regions, shape), image, n_regions)
@@ -147,7 +171,14 @@ def segment_labels(model, init, params, *, n_regions, max_num_iter, tol, callbac
         if trial is None:
             break
         classes, status = trial
-    return _result(model, params, classes, n_regions, run.energies, run.n_iter, status)
+    classes = order_classes(classes, image, n_regions)
+    boundary = class_boundary(classes)
+    final = evaluate_partition(model, boundary, params, n_regions)
+    energies = list(run.energies)
+    if not np.isclose(energies[-1], final.energy, rtol=1e-9, atol=0.0):
+        energies.append(final.energy)
+    energies[-1] = final.energy
+    return LabelDescent(classes, boundary, final, energies, run.n_iter, status)
 
 
 def _reseed(classes, image, n_regions, run, model, params, tries=3):
@@ -282,14 +313,8 @@ def _initial(init, values, n_regions, shape):
     return classes.astype(np.int32)
 
 
-def _result(model, params, classes, n_regions, energies, n_iter, status):
-    classes = order_classes(classes, model.image, n_regions)
-    boundary = class_boundary(classes)
-    final = evaluate_partition(model, boundary, params, n_regions)
-    energies = list(energies)
-    if not np.isclose(energies[-1], final.energy, rtol=1e-9, atol=0.0):
-        energies.append(final.energy)
-    energies[-1] = final.energy
+def _result(descent, n_regions):
+    classes, boundary, final = descent.classes, descent.boundary, descent.final
     # the inside: every region but the background; its boundary, positively oriented
     foreground = (boundary.inner > 0) & (boundary.outer <= 0)
     background = (boundary.inner == 0) & (boundary.outer > 0)
@@ -301,8 +326,8 @@ def _result(model, params, classes, n_regions, energies, n_iter, status):
     c_in = (areas[1:, None] * final.constants[1:]).sum(axis=0) / inside if inside > 0 else final.constants[0]
     class_contours = [chain(*class_soup(boundary, k)) for k in range(n_regions)]
     return SegmentationResult(mask=mask, contours=contours, c_in=c_in, c_out=final.constants[0],
-                              energy=final.energy, energies=energies, n_iter=n_iter,
-                              status=3 if not mask.any() else status, backend="levelset",
+                              energy=final.energy, energies=descent.energies, n_iter=descent.n_iter,
+                              status=3 if not mask.any() else descent.status, backend="levelset",
                               classes=classes, constants=final.constants,
                               class_contours=class_contours)
 

@@ -31,7 +31,7 @@ must be kept from overlapping and gapping after every step.
 Topology
 --------
 The network moves its vertices; it does not change its graph.  The topology comes first, from the
-label field (:func:`activecontour.backends.labelfield.segment_labels`: the global K-means start, then
+label field (:func:`activecontour.backends.labelfield.descend_labels`: the global K-means start, then
 the exact descent with its merge and split moves, which create, remove and reconnect regions
 freely).  Its partition (boundaries through the midpoints between pixels, junctions at cell
 centres: :mod:`activecontour.geometry.partition`) is the network's start; the flow then moves every
@@ -45,10 +45,11 @@ crossing); a trial that reverses an interface segment, turns a face inside out, 
 or makes two interfaces meet is halved (those tests cost a fraction of J's, and come first: every
 iteration costs about one evaluation of J, whose boundary integrals also give the next force).
 The H^1 system is solved by a banded Cholesky factorisation in the graph's reverse Cuthill-McKee
-order, and crossings are found on a uniform grid: an iteration costs O(boundary).  The flow has
-converged when the interfaces' mean normal displacement (the area they sweep over their length)
-between the start and the end of a block of five iterations falls below ``tol`` px per iteration
-in two consecutive blocks.
+order, and crossings are found on a uniform grid: an iteration costs O(boundary), each of its
+passes over the segments compiled (the integrals, the load, the normal part, the bounds of the
+steps: :mod:`activecontour._kernels`).  The flow has converged when the interfaces' mean normal
+displacement (the area they sweep over their length) between the start and the end of a block of
+five iterations falls below ``tol`` px per iteration in two consecutive blocks.
 """
 
 from __future__ import annotations
@@ -63,7 +64,14 @@ from activecontour.energy import (
     partition_moments,
     soup_moments,
 )
-from activecontour.geometry.partition import Boundary, Sides, chain_loops, class_boundary, lattice_keys
+from activecontour.geometry.partition import (
+    Boundary,
+    Sides,
+    chain_loops,
+    class_boundary,
+    lattice_keys,
+    loop_order,
+)
 from activecontour.geometry.raster import rasterize
 from activecontour.result import FlowState, SegmentationResult
 
@@ -88,12 +96,8 @@ _REMESH_COOLDOWN = 4
 _BACKTRACKS = 30
 #: Half bandwidth above which :meth:`Network.factors` uses a sparse LU factorisation.
 _BAND_LIMIT = 64
-#: Pairs of meeting segments :meth:`Network.meeting_nodes` makes room for at first.
-_MEETINGS = 64
 #: No crossing parameters: the network asks for pairs only (:func:`activecontour._kernels.segments_meet`).
 _NO_WHERE = np.empty((0, 2))
-#: Segments along the interfaces, either way from where two meet, that stop moving (:meth:`_Flow.run`).
-_HELD_REACH = 2
 
 
 class Network:
@@ -133,12 +137,16 @@ class Network:
     @classmethod
     def of_classes(cls, classes):
         """The network of the partition a label image stands for (:mod:`activecontour.geometry.partition`)."""
-        boundary = class_boundary(classes)
+        return cls.of_boundary(class_boundary(classes), classes.shape)
+
+    @classmethod
+    def of_boundary(cls, boundary, shape):
+        """The network of a label image's partition given as its
+        :func:`~activecontour.geometry.partition.class_boundary` (vertices on the half-pixel lattice)."""
         points = np.vstack([boundary.start, boundary.end])
         _, first, index = np.unique(lattice_keys(points), return_index=True, return_inverse=True)
         count = len(boundary.start)
-        return cls(points[first], index[:count], index[count:], boundary.inner, boundary.outer,
-                   classes.shape)
+        return cls(points[first], index[:count], index[count:], boundary.inner, boundary.outer, shape)
 
     def boundary(self, nodes=None):
         """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
@@ -170,20 +178,21 @@ class Network:
         do not change while the nodes move, so each face's signed area (:meth:`face_areas`) must
         keep its sign: a region turned inside out crosses no segment when it is a triangle."""
         if self._faces is None:
-            face, segment, sign = [], [], []
-            for k in range(max(int(self.inner.max()), int(self.outer.max())) + 1):
-                forward = np.flatnonzero(self.inner == k)
-                backward = np.flatnonzero(self.outer == k)
-                both = np.concatenate([forward, backward])
-                starts = np.concatenate([self.start[forward], self.end[backward]])
-                ends = np.concatenate([self.end[forward], self.start[backward]])
-                signs = np.concatenate([np.ones(len(forward)), -np.ones(len(backward))])
-                for loop in chain_loops(starts, ends):
-                    face.append(np.full(len(loop), len(face)))
-                    segment.append(both[loop])
-                    sign.append(signs[loop])
-            self._faces = (np.concatenate(face).astype(np.intp), np.concatenate(segment).astype(np.intp),
-                           np.concatenate(sign))
+            # every region's entries: its segments forward (inner side), then backward (outer
+            # side), each in segment order; keyed by (region, node), so that one chaining pass
+            # finds the loops of every region, region by region
+            backward = np.flatnonzero(self.outer >= 0)
+            segment = np.concatenate([np.arange(len(self.start)), backward])
+            region = np.concatenate([self.inner, self.outer[backward]])
+            forward = np.arange(len(segment)) < len(self.start)
+            entries = np.lexsort((segment, ~forward, region))
+            segment, region, forward = segment[entries], region[entries], forward[entries]
+            tails = np.where(forward, self.start[segment], self.end[segment])
+            heads = np.where(forward, self.end[segment], self.start[segment])
+            order, offsets = loop_order(region * len(self.nodes) + tails, region * len(self.nodes) + heads)
+            face = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+            self._faces = (face.astype(np.intp), segment[order].astype(np.intp),
+                           np.where(forward[order], 1.0, -1.0))
         return self._faces
 
     @property
@@ -411,6 +420,28 @@ class Network:
         uses = np.bincount(np.concatenate([self.start[keep], self.end[keep]]), minlength=len(nodes))
         return None if self.encloses(nodes, loop, uses) else self.subset(keep, nodes)
 
+    def boxes_hold_nodes(self, nodes, loops, used, by_row):
+        """For each closed loop of segments (indices), whether a node ``used`` lies strictly within
+        its bounding box: where none does, the loop :meth:`encloses` none, whichever nodes stay in
+        use.  ``by_row``: the node indices sorted by row."""
+        if not loops:
+            return np.zeros(0, dtype=bool)
+        segment = np.concatenate(loops)
+        firsts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops])[:-1]])
+        a, b = nodes[self.start[segment]], nodes[self.end[segment]]
+        low = np.minimum.reduceat(np.minimum(a, b), firsts, axis=0)
+        high = np.maximum.reduceat(np.maximum(a, b), firsts, axis=0)
+        # the nodes within each box's rows, then those within its columns
+        rows = nodes[by_row, 0]
+        begin = np.searchsorted(rows, low[:, 0], side="right")
+        counts = np.maximum(np.searchsorted(rows, high[:, 0], side="left") - begin, 0)
+        owner = np.repeat(np.arange(len(loops)), counts)
+        near = by_row[np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts - begin, counts)]
+        within = used[near] & (nodes[near, 1] > low[owner, 1]) & (nodes[near, 1] < high[owner, 1])
+        holds = np.zeros(len(loops), dtype=bool)
+        holds[owner[within]] = True
+        return holds
+
     def encloses(self, nodes, loop, uses, by_row=None):
         """Whether a node in use (``uses > 0``: an end of a segment kept) lies inside the closed
         loop of segments ``loop``, strictly within its bounding box.  ``by_row``: the node
@@ -540,19 +571,10 @@ class Network:
         """The velocity without its tangential part at the nodes inside an interface (degree two,
         off the border): moving along the curve changes the region only through the polygon's
         discretisation, and lets vertices bunch up."""
-        a, b = self._interface_ends
-        tangent = nodes[b] - nodes[a]
-        count = len(nodes)
-        plain = self._plain
-        # the sum of the normals (t_c, -t_r) of the two segments at each plain node
-        normal = np.column_stack([(np.bincount(a, tangent[:, d], count)
-                                   + np.bincount(b, tangent[:, d], count))[plain] for d in (1, 0)])
-        normal[:, 1] *= -1
-        squared = np.einsum("ij,ij->i", normal, normal)
-        some = squared > 0
-        plain, normal = plain[some], normal[some] / np.sqrt(squared[some])[:, None]
-        out = velocity.copy()
-        out[plain] = np.einsum("ij,ij->i", velocity[plain], normal)[:, None] * normal
+        start, end = self._interface_ends
+        out = np.array(velocity, dtype=np.float64, order="C")
+        # the normal (t_c, -t_r) of the sum of the two segments at each plain node
+        _kernels.normal_part(np.ascontiguousarray(nodes, dtype=np.float64), out, start, end, self._plain)
         return out
 
     def force(self, nodes, model, params, constants, parts=None):
@@ -585,31 +607,6 @@ class Network:
         return _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, 1,
                                       np.empty((0, 2), dtype=np.intp), _NO_WHERE) == 0
 
-    def around(self, seeds, reach):
-        """The nodes at most ``reach`` interface segments away from the nodes ``seeds``."""
-        start, end = self._interface_ends
-        near = np.zeros(len(self.nodes), dtype=bool)
-        near[seeds] = True
-        for _ in range(reach):
-            touched = near[start] | near[end]
-            near[start[touched]] = near[end[touched]] = True
-        return np.flatnonzero(near)
-
-    def meeting_nodes(self, nodes):
-        """The nodes of the interface segments that meet another one elsewhere than at a common
-        node (:meth:`simple`)."""
-        start, end = self._interface_ends
-        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
-        capacity = _MEETINGS
-        while True:
-            pairs = np.empty((capacity, 2), dtype=np.intp)
-            found = _kernels.segments_meet(nodes, start, end, True, len(start) ** 2, pairs, _NO_WHERE)
-            if found <= capacity:
-                break
-            capacity = found
-        segments = pairs[:found].ravel()
-        return np.unique(np.concatenate([start[segments], end[segments]]))
-
     def steps(self, nodes, velocity):
         """The admissibility of the steps ``nodes + dt velocity`` of one iteration, for any dt
         (:class:`_Steps`)."""
@@ -633,34 +630,18 @@ class _Steps:
     _MARGIN = 1e-6
 
     def __init__(self, network, nodes, velocity):
-        start, end = network.start, network.end
-        first, last = nodes[start], nodes[end]
-        old, turn = last - first, velocity[end] - velocity[start]
-        along = np.einsum("ij,ij->i", old, turn)
-        size = np.einsum("ij,ij->i", old, old)
-        shrinking = along < 0
-        # (old + dt turn) . old > old . old / 4  <=>  dt along > -3/4 |old|^2
-        self.reverse = (float(np.min(0.75 * size[shrinking] / -along[shrinking])) if shrinking.any()
-                        else np.inf)
-        m, n = network.shape
-        high = np.array([m - 0.5, n - 0.5])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            room = np.where(velocity > 0, (high - nodes) / velocity,
-                            np.where(velocity < 0, (-0.5 - nodes) / velocity, np.inf))
-        self.inside = float(room.min()) if room.size else np.inf
         face, segment, sign = network.faces()
         self.network, self.nodes = network, nodes
-        # per face: the signed area (as face_areas), the perimeter, the fastest vertex's speed
-        twice = first[:, 0] * last[:, 1] - last[:, 0] * first[:, 1]
-        count = len(network.face_counts)
-        self.areas = 0.5 * np.bincount(face, weights=sign * twice[segment], minlength=count)
-        self.orientation = np.sign(self.areas)
-        speed = np.hypot(velocity[:, 0], velocity[:, 1])
-        firsts = np.cumsum(network.face_counts) - network.face_counts  # entries are grouped by face
-        fastest = np.maximum(speed[start], speed[end])[segment]
-        self.speed = np.maximum.reduceat(fastest, firsts) if count else fastest
-        self.perimeter = np.bincount(face, weights=np.sqrt(size)[segment], minlength=count)
         self.count = network.face_counts
+        # per face: the signed area (as face_areas), the perimeter, the fastest vertex's speed;
+        # and the bounds on dt, in one compiled pass
+        self.areas, self.perimeter, self.speed = (np.empty(len(self.count)) for _ in range(3))
+        m, n = network.shape
+        self.reverse, self.inside = _kernels.step_bounds(
+            np.ascontiguousarray(nodes, dtype=np.float64), np.ascontiguousarray(velocity, dtype=np.float64),
+            _indices(network.start), _indices(network.end), face, segment, sign, m - 0.5, n - 0.5,
+            self.areas, self.perimeter, self.speed)
+        self.orientation = np.sign(self.areas)
 
     def admissible(self, dt, trial):
         """Whether the step of ``dt`` to ``trial`` keeps the network a partition (the class's
@@ -689,7 +670,7 @@ def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callba
     ----------
     model : ImageModel
     init : None, int ndarray (M, N), or SegmentationResult
-        As for :func:`activecontour.backends.labelfield.segment_labels`, which finds the topology.
+        As for :func:`activecontour.backends.labelfield.segment_labels`, whose descent finds the topology.
     params : ChanVeseParameters
     n_regions : int
     max_num_iter : int
@@ -706,11 +687,11 @@ def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callba
         ``backend="polygon"``; ``classes`` are the pixels whose centre lies in each region,
         ``class_contours`` the sub-pixel regions, ``energy`` their functional.
     """
-    from activecontour.backends.labelfield import segment_labels
+    from activecontour.backends.labelfield import descend_labels
 
-    start = segment_labels(model, init, params, n_regions=n_regions, max_num_iter=max_num_iter,
+    start = descend_labels(model, init, params, n_regions=n_regions, max_num_iter=max_num_iter,
                            tol=tol, callback=callback)
-    network = Network.of_classes(start.classes)
+    network = Network.of_boundary(start.boundary, start.classes.shape)
     energies = list(start.energies)
     if start.status == 2:
         return _result(model, params, network, network.nodes, n_regions, energies, start.n_iter, 2)
@@ -765,12 +746,9 @@ class _Flow:
         keep = np.ones(len(network.start), dtype=bool)
         uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
         by_row = np.argsort(nodes[:, 0], kind="stable")
-        for loop in candidates:  # one at a time: a loop may hold another part until that is gone
-            loop_nodes = np.concatenate([network.start[loop], network.end[loop]])
-            uses_without = uses.copy()
-            np.subtract.at(uses_without, loop_nodes, 1)
-            if network.encloses(nodes, loop, uses_without, by_row):
-                continue
+        boxed = network.boxes_hold_nodes(nodes, candidates, uses > 0, by_row)
+        # one at a time: a loop may hold another part until that is gone
+        for loop, holds in zip(candidates, boxed, strict=True):
             flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
             starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
             ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
@@ -784,7 +762,12 @@ class _Flow:
                 part[around] += sign * island
             loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
             candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
-            if candidate.energy <= energy:
+            if candidate.energy > energy:
+                continue
+            # J first: most candidates stay because removing them would raise it
+            uses_without = uses.copy()
+            np.subtract.at(uses_without, np.concatenate([network.start[loop], network.end[loop]]), 1)
+            if not (holds and network.encloses(nodes, loop, uses_without, by_row)):
                 keep[loop], uses, (areas, first, second) = False, uses_without, trial
                 length, energy = length - loop_length, candidate.energy
         removed = not keep.all()
@@ -827,7 +810,7 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_next is None else min(dt_next, _MAX_STEP / spread)
-            crossed, steps = None, network.steps(nodes, velocity)
+            crossings, steps = [], network.steps(nodes, velocity)
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
                 if steps.admissible(dt, trial):
@@ -836,18 +819,20 @@ class _Flow:
                         candidate = self.evaluate(network, trial)
                         if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                             break
-                    elif crossed is None and (self.evaluate(network, trial).energy
-                                              <= current.energy + _ARMIJO * dt * slope):
-                        crossed = trial
+                    else:
+                        crossings.append((dt, trial))
                 dt *= 0.5
             else:
-                # a region folding over itself as the flow shrinks it: drop it and go on
+                # a region folding over itself as the flow shrinks it: drop it and go on (the
+                # first crossing trial that lowers J enough tells where)
+                crossed = next((trial for step, trial in crossings if self.evaluate(network, trial).energy
+                                <= current.energy + _ARMIJO * step * slope), None)
                 if crossed is not None and self.drop_islands(network.crossing_nodes(crossed)):
                     factors, dt_next = None, None
                     continue
                 return 4, n_iter
-            dt_next = dt if crossed is not None else dt * _step_factor(
-                (candidate.energy - current.energy) / (dt * slope))
+            ratio = (candidate.energy - current.energy) / (dt * slope)
+            dt_next = dt if crossings else dt * _step_factor(ratio)
             self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
@@ -864,6 +849,10 @@ class _Flow:
                     self.remesh()
                 block_start, block_network, factors = self.nodes, self.network, None
         return 1, n_iter
+
+
+def _indices(array):
+    return np.ascontiguousarray(array, dtype=np.intp)
 
 
 def _step_factor(ratio):

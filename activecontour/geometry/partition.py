@@ -30,7 +30,8 @@ import numpy as np
 
 from activecontour import _kernels
 
-__all__ = ["Boundary", "Sides", "chain", "chain_loops", "class_boundary", "class_soup", "lattice_keys"]
+__all__ = ["Boundary", "Sides", "chain", "chain_loops", "class_boundary", "class_soup", "lattice_keys",
+           "loop_order"]
 
 
 class Boundary:
@@ -203,48 +204,50 @@ def chain(starts, ends):
 
 def chain_loops(start_keys, end_keys):
     """The closed loops of oriented segments given by the keys of their ends (equal keys: the same
-    point), each as the indices of its segments in order.
+    point), each as the indices of its segments in order (:func:`loop_order`)."""
+    order, offsets = loop_order(start_keys, end_keys)
+    return np.split(order, offsets[1:-1]) if len(offsets) > 1 else []
+
+
+def loop_order(start_keys, end_keys):
+    """:func:`chain_loops` as one array: ``(order, offsets)``, loop l the segments
+    ``order[offsets[l]:offsets[l + 1]]``.
 
     The i-th segment ending at a point continues with the i-th starting there.  Where a region
     is pinched at a point (two of its corners meet at a junction), that pairing can make one
     loop that passes the point twice (a figure eight, which bounds no polygon); such a loop is
     cut there into two, each closed: two pieces that touch, or an outer boundary and a hole
-    that touches it.
+    that touches it (:func:`activecontour._kernels.untwist`: at the smallest key passed twice,
+    recursively, the piece between its first two passes first).  Loops come in the order of
+    their smallest segment index, each cut loop's pieces in its place.
     """
-    order = np.argsort(start_keys, kind="stable")
-    sorted_keys = start_keys[order]
+    order, offsets = np.empty(len(start_keys), dtype=np.intp), np.empty(len(start_keys) + 1, dtype=np.intp)
+    if len(start_keys) == 0:
+        offsets[0] = 0
+        return order, offsets
+    sorted_order = np.argsort(start_keys, kind="stable")
+    sorted_keys = start_keys[sorted_order]
     end_order = np.argsort(end_keys, kind="stable")
     following = np.empty(len(start_keys), dtype=np.intp)
     position = np.searchsorted(sorted_keys, end_keys[end_order])
     rank = np.arange(len(end_order)) - np.searchsorted(end_keys[end_order], end_keys[end_order])
-    following[end_order] = order[position + rank]
-    order, offsets = np.empty(len(start_keys), dtype=np.intp), np.empty(len(start_keys) + 1, dtype=np.intp)
+    following[end_order] = sorted_order[position + rank]
     count = _kernels.cycles(following, order, offsets)
-    if count == 0:
-        return []
     offsets = offsets[:count + 1]
     # the loops that pass a point twice: equal keys side by side once sorted within each loop
     loop_of = np.repeat(np.arange(count), np.diff(offsets))
     keys = start_keys[order]
     by_key = np.lexsort((keys, loop_of))
-    twice = np.zeros(count, dtype=bool)
+    twice = np.zeros(count, dtype=np.uint8)
     same = (keys[by_key[1:]] == keys[by_key[:-1]]) & (loop_of[by_key[1:]] == loop_of[by_key[:-1]])
-    twice[loop_of[by_key[1:]][same]] = True
-    loops = []
-    for index, loop in enumerate(np.split(order, offsets[1:-1])):
-        loops += _untwisted(loop, start_keys) if twice[index] else [loop]
-    return loops
-
-
-def _untwisted(loop, start_keys):
-    """A loop cut at every point it passes twice into loops that pass each point once."""
-    keys = start_keys[loop]
-    unique, first, counts = np.unique(keys, return_index=True, return_counts=True)
-    if np.all(counts == 1):
-        return [loop]
-    i = first[np.argmax(counts > 1)]
-    j = i + 1 + int(np.flatnonzero(keys[i + 1:] == keys[i])[0])
-    return _untwisted(loop[i:j], start_keys) + _untwisted(np.concatenate([loop[j:], loop[:i]]), start_keys)
+    twice[loop_of[by_key[1:]][same]] = 1
+    if not twice.any():
+        return order, offsets
+    distinct, ids = np.unique(start_keys, return_inverse=True)
+    out, out_offsets = np.empty_like(order), np.empty(len(order) + 1, dtype=np.intp)
+    ids = ids.astype(np.intp).ravel()
+    loops = _kernels.untwist(order, offsets, twice, ids, len(distinct), out, out_offsets)
+    return out, out_offsets[:loops + 1]
 
 
 def _corners(curve):

@@ -187,18 +187,24 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
     """Segment frames one after the other, yielding each frame's :class:`SequenceFrame` as it is done.
 
     The generator under :func:`segment_sequence` (same parameters): it holds one frame, one result
-    and the previous frame's labels, whatever the length of the sequence.
+    and the previous frame's image and labels, whatever the length of the sequence.  A frame equal
+    to the one before (a repeated frame of a video) is not segmented again: the frame before's
+    result, when it converged, is stationary on it.
     """
-    from activecontour._segment import segment
+    from activecontour._segment import segment, solve_problem
+    from activecontour.problem import prepare
 
     if callback is not None and not callable(callback):
         raise TypeError("callback must be callable or None")
     settings = Settings.of(segment_kwargs)
     source, n_frames = read_frames(frames, axis=axis, select=select)
     tracker = _Tracker()
-    previous = warm = None
+    previous = warm = found = previous_image = None
     for position, (index, image) in enumerate(source):
-        if previous is None:
+        if previous is not None and found.success and np.array_equal(image, previous_image):
+            # the frame before again: its result converged on this very image, it is stationary here
+            result = found
+        elif previous is None:
             result = segment(image, init, **settings.keywords())
             # n_regions="auto" chooses K on the first frame; every frame keeps it (a class means
             # the same region in every frame)
@@ -207,11 +213,15 @@ def iter_sequence(frames, init=None, *, axis=0, select=None, callback=None, **se
         elif previous.n_regions > 2:  # K regions: the previous frame's classes are the start
             result = segment(image, previous, **settings.keywords())
         else:
-            start = _warm_start(previous, image, settings)
-            result = segment(image, start, **(settings if start is None else warm).keywords())
+            problem = prepare(image, warm)
+            start = _warm_start(previous, problem)
+            result = (segment(image, None, **settings.keywords()) if start is None
+                      else solve_problem(problem, start))
+            del problem  # (not held while the frame is out)
+        found = result  # (in the frame's own ids: the tracker's input)
         result, parents = tracker.update(result)
         frame = SequenceFrame(index, position, n_frames, image, result, parents)
-        previous = result
+        previous, previous_image = result, image
         yield frame
         if callback is not None and callback(frame):
             return

@@ -24,7 +24,7 @@ def _warm_settings(settings):
                                                   **(settings.options or {})})
 
 
-def _warm_start(previous, image, settings):
+def _warm_start(previous, problem):
     """The start of a frame after the first: the lower in (6.38), on this frame, of
 
     * the previous frame's contours plus the new pieces of this frame's threshold split (objects
@@ -38,6 +38,9 @@ def _warm_start(previous, image, settings):
     :func:`activecontour.initial.speck_area` dropped; new pieces are its connected components
     that do not touch the previous result's inside.  Its constants are the previous frame's, not
     a new global scan (a third of a frame's time on 512^2; they barely move between frames).
+
+    ``problem`` is this frame's, prepared (:func:`activecontour.problem.prepare`) for the run that
+    follows: the starts are scored on its values and, for Gaussian noise, its tables.
     """
     import cv2
 
@@ -45,14 +48,13 @@ def _warm_start(previous, image, settings):
     from activecontour.geometry.curve import stack_curves
     from activecontour.geometry.raster import mask_to_curves
     from activecontour.initial import DEFAULT_INIT_BLUR, Start, speck_area
-    from activecontour.problem import prepare
 
     if not previous.contours:
         return None  # nothing to follow: the default start, as at frame 0
     # the starts are scored by (6.38) itself (squared error, free constants) with the previous
-    # frame's mu
-    problem = prepare(image, dataclasses.replace(settings, mu=previous.mu, c_in=None, c_out=None,
-                                                 noise="gaussian"))
+    # frame's mu; the squared error's tables are the run's own when its noise is Gaussian
+    scoring = problem.reweighted(mu=previous.mu, c_in=None, c_out=None, noise="gaussian")
+    gaussian = problem.settings.noise == "gaussian"
     values = problem.normalised
     offset, scale = problem.units
     c_in = (np.atleast_1d(previous.c_in_image) - offset) / scale
@@ -70,7 +72,7 @@ def _warm_start(previous, image, settings):
     speck = speck_area(previous.mu, float(np.mean(difference**2)))
     new = mask_to_curves(candidate & ~followed[pieces], min_area=speck)
     starts = [list(previous.contours) + new, mask_to_curves(candidate, min_area=speck)]
-    model, params = problem.model()
+    model, params = (problem if gaussian else scoring).model()[0], scoring.working
     energies = [evaluate(model, *stack_curves(curves)[:2], params).energy if curves else np.inf
                 for curves in starts]
     curves = starts[int(np.argmin(energies))]

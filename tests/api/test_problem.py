@@ -51,6 +51,27 @@ def test_a_crop_is_a_problem_of_its_own():
     np.testing.assert_allclose(offset + scale * crop.normalised[..., 0], image[5:40, 8:50], rtol=1e-12)
 
 
+
+def test_a_reweighted_problem_shares_the_values_and_is_prepared_as_anew():
+    """Problem.reweighted: the same values, frame and noise level (the same arrays, not copies),
+    the parameters of a fresh preparation with the new settings; changes that would change the
+    values are refused."""
+    image = 1000.0 + 250.0 * _scene()
+    problem = prepare(image, Settings(normalize=None))
+    values, mu = problem.values, problem.mu
+    other = problem.reweighted(mu=0.5 * mu, c_in=1100.0, noise="poisson")
+    fresh = prepare(image, Settings(normalize=None, mu=0.5 * mu, c_in=1100.0, noise="poisson"))
+    assert other.values is values and other.frame == fresh.frame
+    np.testing.assert_array_equal(fresh.values, values)
+    assert other.working == fresh.working and other.working.mu == pytest.approx(0.5 * problem.working.mu)
+    assert other.auto_mu == problem.auto_mu and problem.settings.noise == "gaussian"
+    (model, params), (expected_model, expected_params) = other.model(), fresh.model()
+    assert type(params) is type(expected_params) and params == expected_params
+    np.testing.assert_array_equal(model.image, expected_model.image)
+    assert problem.model()[0] is problem.model()[0]  # the uniform model is built once
+    with pytest.raises(ValueError, match="normalize"):
+        problem.reweighted(normalize="range")
+
 def test_a_path_is_read_as_segment_reads_it(tmp_path):
     import imageio.v3 as iio
 

@@ -165,7 +165,13 @@ def test_backend_option_specs_are_the_dataclass_defaults():
         for spec in option_specs(solver.options):
             assert spec.default == getattr(defaults, spec.name)
         for field in dataclasses.fields(solver.options):  # what an option is, not how a viewer shows it
-            assert set(field.metadata) <= {"help", "choices"}
+            assert set(field.metadata) <= {"help", "choices", "typical"}
+        for spec in option_specs(solver.options):
+            if spec.typical is not None:  # values worth trying: valid ones, around the default
+                low, high = spec.typical
+                assert spec.kind is float and low < high and low <= spec.default <= high
+                for value in (low, high):
+                    solver.parse({spec.name: value})
 
 
 # --------------------------------------------------------------------------------------------

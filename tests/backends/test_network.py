@@ -400,3 +400,25 @@ def test_random_crops_of_real_images_obey_the_invariants():
             assert all(len(curve) >= 3 and shapely.LinearRing(curve).is_simple for curve in curves)
             if k:
                 assert np.array_equal(rasterize(curves, crop.shape[:2]), res.classes == k)
+
+
+def test_boxes_hold_nodes_is_the_direct_test():
+    # islands of one and of a few pixels, some inside others' boxes, and the nodes in use at random
+    rng = np.random.default_rng(31)
+    classes = np.zeros((30, 40), dtype=np.int32)
+    classes[5:14, 5:16] = 1
+    classes[8:11, 8:12] = 2  # a block inside the first: its loop lies within the outer box
+    classes[rng.integers(0, 30, 25), rng.integers(0, 40, 25)] = 2
+    network = Network.of_classes(classes)
+    nodes = network.nodes + rng.uniform(-0.05, 0.05, network.nodes.shape)
+    loops = [loop for loop, _ in network.closed_loops(nodes)]
+    assert len(loops) >= 10
+    by_row = np.argsort(nodes[:, 0], kind="stable")
+    for used in (np.ones(len(nodes), dtype=bool), rng.random(len(nodes)) < 0.5):
+        holds = network.boxes_hold_nodes(nodes, loops, used, by_row)
+        for loop, found in zip(loops, holds, strict=True):
+            a, b = nodes[network.start[loop]], nodes[network.end[loop]]
+            low, high = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
+            inside = np.all((nodes > low) & (nodes < high), axis=1) & used
+            assert found == inside.any()
+        assert holds.any() and not holds.all()

@@ -84,6 +84,24 @@ def test_warm_frames_follow_the_previous_result(drift_and_breathing):
         assert seq.results[t].energy <= cold.energy * (1 + 1e-3)
 
 
+
+def test_a_repeated_frame_keeps_the_converged_result(drift_and_breathing):
+    """A frame equal to the one before is not segmented again (the result converged on that very
+    image: stationary there): the same energies, iterations and ids; a frame that differs by one
+    pixel is segmented from the warm start."""
+    images = drift_and_breathing[0]
+    changed = images[1].copy()
+    changed[80, 80] += 0.1
+    seq = ac.segment_sequence([images[0], images[1], images[1], changed])
+    first, again, other = seq.results[1], seq.results[2], seq.results[3]
+    assert first.success
+    np.testing.assert_array_equal(again.energies, first.energies)
+    assert again.n_iter == first.n_iter and again.energy == first.energy
+    np.testing.assert_array_equal(seq.labels[2], seq.labels[1])
+    # segmented: the energies of its own run, from its warm start
+    assert not np.array_equal(other.energies, first.energies)
+    assert dice(other.mask, first.mask) >= 0.99
+
 def test_leaving_and_entering():
     """Disk 1 leaves through the top border (its track ends), disk 2 enters from the left at
     frame 3, 14 px deep (a new id, never one of a finished track)."""
