@@ -295,20 +295,26 @@ def _window(curves, shape):
     return np.maximum(low, 0), np.minimum(high, shape)
 
 
-def _pixel_boxes(objects, labels):
-    """``bbox-0..3`` of each object's pixels in ``labels`` (as ``scipy.ndimage.find_objects``,
-    zeros for an object without pixels), searched in each object's :func:`_window`, which holds
-    all its pixels since :func:`label_image` draws them there: the cost is the objects' area."""
+def _pixel_columns(objects, labels, planes):
+    """The pixel columns of the table: ``bbox-0..3`` (as ``scipy.ndimage.find_objects``, zeros for
+    an object without pixels), ``num_pixels`` and each plane's sum over the object's pixels, read
+    in each object's :func:`_window`, which holds all its pixels since :func:`label_image` draws
+    them there: the cost is the objects' area, not the image's per column."""
     boxes = np.zeros((len(objects), 4), dtype=np.int64)
+    counts = np.zeros(len(objects), dtype=np.int64)
+    sums = np.zeros((len(objects), len(planes)))
     for k, curves in enumerate(objects):
         low, high = _window(curves, labels.shape)
         if np.any(high <= low):
             continue
-        mine = labels[low[0]:high[0], low[1]:high[1]] == k + 1
+        window = (slice(low[0], high[0]), slice(low[1], high[1]))
+        mine = labels[window] == k + 1
         rows, cols = np.flatnonzero(mine.any(axis=1)), np.flatnonzero(mine.any(axis=0))
         if len(rows):
             boxes[k] = low[0] + rows[0], low[1] + cols[0], low[0] + rows[-1] + 1, low[1] + cols[-1] + 1
-    return boxes
+            counts[k] = np.count_nonzero(mine)
+            sums[k] = [np.sum(plane[window], where=mine, dtype=np.float64) for plane in planes]
+    return boxes, counts, sums
 
 
 def measure(objects, labels, image=None):
@@ -348,10 +354,11 @@ def measure(objects, labels, image=None):
     table["area"] = area
     table["perimeter"] = perimeter
     table["centroid-0"], table["centroid-1"] = centroid[:, 0], centroid[:, 1]
-    bbox = _pixel_boxes(objects, labels)
+    image = None if image is None else np.asarray(image)
+    planes = [] if image is None else [image] if image.ndim == 2 else list(np.moveaxis(image, 2, 0))
+    bbox, table["num_pixels"], sums = _pixel_columns(objects, labels, planes)
     for j in range(4):
         table[f"bbox-{j}"] = bbox[:, j]
-    table["num_pixels"] = np.bincount(labels.ravel(), minlength=n + 1)[1:n + 1]
     with np.errstate(divide="ignore", invalid="ignore"):
         table["eccentricity"] = np.where(eigen[:, 0] > 0,
                                          np.sqrt(np.clip(1 - eigen[:, 1] / eigen[:, 0], 0, 1)), 0.0)
@@ -363,12 +370,8 @@ def measure(objects, labels, image=None):
     table["area_convex"] = convex
     table["solidity"] = area / np.maximum(convex, np.finfo(float).tiny)
     table["equivalent_diameter_area"] = np.sqrt(4 * area / np.pi)
-    if image is not None:
-        image = np.asarray(image)
-        planes = [image] if image.ndim == 2 else [image[:, :, ch] for ch in range(image.shape[2])]
-        for ch, plane in enumerate(planes):
-            name = "intensity_mean" if image.ndim == 2 else f"intensity_mean-{ch}"
-            sums = np.bincount(labels.ravel(), weights=plane.ravel().astype(np.float64), minlength=n + 1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                table[name] = sums[1:n + 1] / table["num_pixels"]
+    for ch in range(len(planes)):
+        name = "intensity_mean" if image.ndim == 2 else f"intensity_mean-{ch}"
+        with np.errstate(divide="ignore", invalid="ignore"):
+            table[name] = sums[:, ch] / table["num_pixels"]
     return table

@@ -232,7 +232,6 @@ def _may_have_necks(region, outline, min_radius):
     whose 4-connected pieces holds at most one of them, so one such piece means no two h-maxima.
     The outline is in window coordinates."""
     import scipy.ndimage
-    import skimage.morphology
 
     whole = scipy.ndimage.label(region)[1] == 1
     if whole and _thinner_than(region, outline, min_radius):
@@ -244,6 +243,8 @@ def _may_have_necks(region, outline, min_radius):
     peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
     if scipy.ndimage.label(peaks)[1] <= 1:
         return None
+    import skimage.morphology  # here: most objects are decided before (0.3 s of a cold import)
+
     two = scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
     return concavity if two else None
 

@@ -381,7 +381,7 @@ def test_a_constant_image_has_no_contrast_to_split():
         assert len(split_touching([square], labels, np.zeros((20, 20)))) == 1
 
 
-def test_bboxes_agree_with_regionprops_when_objects_overlap_nest_or_leave_the_image():
+def test_pixel_columns_agree_with_regionprops_when_objects_overlap_nest_or_leave_the_image():
     # drawn in order, a later object covers an earlier one's pixels; a sliver between pixel
     # centres has none (bbox zeros), an object past the border keeps only its pixels inside
     objects = [[ac.circle((30.0, 30.0), 20.0)], [ac.circle((40.0, 40.0), 12.0)],
@@ -389,10 +389,17 @@ def test_bboxes_agree_with_regionprops_when_objects_overlap_nest_or_leave_the_im
                [ac.circle((30.0, 30.0), 25.0), orient(ac.circle((30.0, 30.0), 23.0), hole=True)],
                [ac.circle((75.0, 75.0), 9.0)]]
     labels = label_image(objects, (80, 90))
-    table = measure(objects, labels)
-    props = skimage.measure.regionprops_table(labels, properties=("label", "bbox"))
+    image = np.random.default_rng(5).uniform(-1.0, 3.0, (80, 90, 2))
+    table = measure(objects, labels, image)
+    props = skimage.measure.regionprops_table(labels, image, properties=("label", "bbox", "num_pixels",
+                                                                         "intensity_mean"))
     present = np.isin(table["label"], props["label"])
     assert list(present) == [True, True, True, False, True, True]
     for j in range(4):
         np.testing.assert_array_equal(table[f"bbox-{j}"][present], props[f"bbox-{j}"])
         assert table[f"bbox-{j}"][3] == 0
+    np.testing.assert_array_equal(table["num_pixels"][present], props["num_pixels"])
+    assert table["num_pixels"][3] == 0
+    for ch in range(2):
+        np.testing.assert_allclose(table[f"intensity_mean-{ch}"][present], props[f"intensity_mean-{ch}"],
+                                   rtol=1e-12)
