@@ -356,9 +356,10 @@ def measure(objects, labels, image=None):
     table["centroid-0"], table["centroid-1"] = centroid[:, 0], centroid[:, 1]
     image = None if image is None else np.asarray(image)
     planes = [] if image is None else [image] if image.ndim == 2 else list(np.moveaxis(image, 2, 0))
-    bbox, table["num_pixels"], sums = _pixel_columns(objects, labels, planes)
+    bbox, num_pixels, sums = _pixel_columns(objects, labels, planes)
     for j in range(4):
         table[f"bbox-{j}"] = bbox[:, j]
+    table["num_pixels"] = num_pixels
     with np.errstate(divide="ignore", invalid="ignore"):
         table["eccentricity"] = np.where(eigen[:, 0] > 0,
                                          np.sqrt(np.clip(1 - eigen[:, 1] / eigen[:, 0], 0, 1)), 0.0)
