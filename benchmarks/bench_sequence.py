@@ -29,10 +29,10 @@ from __future__ import annotations
 import argparse
 import os
 import tempfile
-import time
 import tracemalloc
 
 import numpy as np
+from timing import least_cpu
 
 import activecontour as ac
 from activecontour.synthetic import dice, disk_sequence
@@ -116,16 +116,6 @@ def peak_memory(source, n_frames):
     return peak / 2**20
 
 
-def cpu(function, *args, repeats=1, **kwargs):
-    """``function(*args, **kwargs)`` and its process CPU time in seconds (the least of ``repeats``)."""
-    best = np.inf
-    for _ in range(repeats):
-        start = time.process_time()
-        value = function(*args, **kwargs)
-        best = min(best, time.process_time() - start)
-    return value, best
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=24)
@@ -156,14 +146,14 @@ def main():
     frames = ac.iter_sequence(stream())
     for t in range(args.frames):
         current["image"], truth = source.frame(t)
-        frame, warm_seconds = cpu(next, frames)
+        frame, warm_seconds = least_cpu(next, frames)
         seconds["warm"].append(warm_seconds)
         iterations["warm"].append(frame.result.n_iter)
         dices["warm"].append(dice(frame.result.labels > 0, truth > 0))
         switches.add(frame.result.labels, truth)
         if t % args.cold_every:
             continue
-        cold, cold_seconds = cpu(ac.segment, frame.image, repeats=args.repeats)
+        cold, cold_seconds = least_cpu(ac.segment, frame.image, repeats=args.repeats)
         seconds["cold"].append(cold_seconds)
         iterations["cold"].append(cold.n_iter)
         dices["cold"].append(dice(cold.mask, truth > 0))
@@ -172,7 +162,7 @@ def main():
         if not args.no_skimage:
             from skimage.segmentation import chan_vese
 
-            mask, skimage_seconds = cpu(chan_vese, frame.image, repeats=args.repeats)
+            mask, skimage_seconds = least_cpu(chan_vese, frame.image, repeats=args.repeats)
             seconds["skimage"].append(skimage_seconds)
             # the functional does not say which class is the object: score the better reading
             dices["skimage"].append(max(dice(mask, truth > 0), dice(~mask, truth > 0)))

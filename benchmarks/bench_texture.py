@@ -19,13 +19,13 @@ evaluator :func:`activecontour.chan_vese_energy`, the iterations and the curves.
 from __future__ import annotations
 
 import argparse
-import time
 import warnings
 
 import numpy as np
 import skimage.color
 import skimage.data
 import skimage.segmentation
+from timing import least_cpu
 
 import activecontour as ac
 
@@ -42,13 +42,6 @@ def gray01(image):
     return (image - image.min()) / span if span > 0 else image * 0
 
 
-def cpu(function, *args, **kwargs):
-    """``(CPU seconds, result)`` of one call."""
-    start = time.process_time()
-    result = function(*args, **kwargs)
-    return time.process_time() - start, result
-
-
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="runs per image and method; the minimum counts")
@@ -62,12 +55,12 @@ def main(argv=None):
         warnings.simplefilter("ignore")
         for _ in range(args.repeat):
             for name, image in images.items():
-                seconds, results[name] = cpu(ac.segment, image)
+                results[name], seconds = least_cpu(ac.segment, image)
                 best[name]["ours"] = min(best[name]["ours"], seconds)
-                seconds, _ = cpu(ac.segment, image, separate=False)
+                _, seconds = least_cpu(ac.segment, image, separate=False)
                 best[name]["flow"] = min(best[name]["flow"], seconds)
                 gray = gray01(image)
-                seconds, _ = cpu(skimage.segmentation.chan_vese, gray)
+                _, seconds = least_cpu(skimage.segmentation.chan_vese, gray)
                 best[name]["chan_vese"] = min(best[name]["chan_vese"], seconds)
     header = (f"{'image':18s} | {'ours s':>7s} | {'sep=False s':>11s} | {'chan_vese s':>11s} | "
               f"{'ratio':>6s} | {'ratio sep=False':>15s} | {'energy':>12s} | {'n_iter':>6s} | {'curves':>6s}")

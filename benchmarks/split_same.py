@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import argparse
 import pickle
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 from bench_objects import SAMPLES
+from timing import least_cpu
 
 import activecontour as ac
 import activecontour._segment as segment_module
@@ -89,23 +89,14 @@ def same(before, after):
     return True, float(max(gaps, default=0.0))
 
 
-def cpu(repeat, *args, **kwargs):
-    best = np.inf
-    for _ in range(repeat):
-        start = time.process_time()
-        found = find_objects(*args, **kwargs)
-        best = min(best, time.process_time() - start)
-    return best, found
-
-
 def check(folder, repeat):
     changed, total, gap = [], {True: 0.0, False: 0.0}, 0.0
     print(f"{'scene':22s} | {'objects':>7s} | {'split s':>7s} | {'no split s':>10s} | same | table rel. diff")
     for path in sorted(folder.glob("*.pkl")):
         with open(path, "rb") as file:
             args, kwargs, found = pickle.load(file)
-        seconds, now = cpu(repeat, *args, **kwargs)
-        alone, _ = cpu(repeat, *args, **{**kwargs, "separate": False})
+        now, seconds = least_cpu(find_objects, *args, repeats=repeat, **kwargs)
+        _, alone = least_cpu(find_objects, *args, repeats=repeat, **{**kwargs, "separate": False})
         total[True] += seconds
         total[False] += alone
         equal, difference = same(found, now)
