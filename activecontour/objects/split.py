@@ -36,7 +36,8 @@ waist, no neck and no concave corner: it skips stages 1 and 2 after one convex h
 Past that gate, each stage stops as soon as a consequence of its own criterion shows that it
 will not cut, so the shortcuts change no decision (``benchmarks/split_same.py`` compares the
 objects before and after a change; ``tests/objects/test_split_gates.py`` the shortcuts): no
-neck is looked for where the pixel raster bounds the boundary distance below ``min_radius``
+neck is looked for where the pixel distance transform has one piece of peaks (one compiled pass,
+:func:`_may_have_necks`) or the pixel raster bounds the boundary distance below ``min_radius``
 (:func:`_thinner_than`), nor past a watershed with one part thick enough to be an object; no
 corner cut in a part that is an ellipse or under twice the smallest part (:func:`_uncuttable`),
 nor on the second side of a cut whose first side already leaves too much unexplained; no
@@ -222,30 +223,33 @@ def _hull_depth(outline):
 
 def _may_have_necks(region, outline, min_radius):
     """The region's :func:`_concavity` when it may have necks, None when it has none: necks need
-    two edge pixels ``MIN_WAIST_DEPTH`` inside the outline's convex hull (every split line ends
-    in two such waists, :meth:`_PartGraph.is_waist`; pixels touching only at a corner are parts
-    without one), a part that may reach ``min_radius`` (:func:`_thinner_than`, told first: then
-    the concavity is not measured) and two maxima of dynamic above half a pixel in the pixel
-    distance transform: without them no neck is ``MIN_NECK_DEPTH`` deep even after its
-    half-pixel errors (cheap tests that spare most single objects the exact distance).  The
-    h-maxima (plateaus of regional maxima) lie in the pixels not below any 8-neighbour, each of
-    whose 4-connected pieces holds at most one of them, so one such piece means no two h-maxima.
-    The outline is in window coordinates."""
+    two maxima of dynamic above half a pixel in the pixel distance transform (without them no
+    neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors), two edge pixels
+    ``MIN_WAIST_DEPTH`` inside the outline's convex hull (every split line ends in two such
+    waists, :meth:`_PartGraph.is_waist`; pixels touching only at a corner are parts without one)
+    and a part that may reach ``min_radius`` (:func:`_thinner_than`): cheap tests that spare most
+    single objects the exact distance.  Each is a consequence of the neck criterion on its own,
+    so their order changes no answer; the cheapest proof for a single blob comes first.
+    The h-maxima (plateaus of regional maxima) lie in the pixels not below any 8-neighbour, each
+    of whose 4-connected pieces holds at most one of them, so one such piece means no two
+    h-maxima: the transform and its pieces of peaks cost one compiled pass
+    (:func:`activecontour._kernels.distance_peaks`), and only an object with two pieces or more
+    is looked at further.  The outline is in window coordinates."""
     import scipy.ndimage
 
+    squared = np.empty(region.shape, dtype=np.int64)
+    if _kernels.distance_peaks(region.view(np.uint8), squared) <= 1:
+        return None
     whole = scipy.ndimage.label(region)[1] == 1
     if whole and _thinner_than(region, outline, min_radius):
         return None
     concavity = _concavity(region, outline)
     if whole and np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2:
         return None
-    distance = scipy.ndimage.distance_transform_edt(region)
-    peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
-    if scipy.ndimage.label(peaks)[1] <= 1:
-        return None
     import skimage.morphology  # here: most objects are decided before (0.3 s of a cold import)
 
-    two = scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
+    # (the square roots of the squared transform: scipy.ndimage.distance_transform_edt's values)
+    two = scipy.ndimage.label(skimage.morphology.h_maxima(np.sqrt(squared), MIN_NECK_DEPTH / 2))[1] > 1
     return concavity if two else None
 
 
