@@ -14,6 +14,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   boundary at its pixel centres, from a finer raster), :func:`near_distance` (the distance
   transform up to a few pixels, for the split's tests against a radius), :func:`distance_peaks`
   (an object's distance transform and its pieces of peaks: the first test for necks),
+  :func:`fill_holes` (an object's window without holes),
   :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
@@ -2425,3 +2426,63 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
     if pieces < 0:
         raise MemoryError()
     return pieces
+
+
+def fill_holes(unsigned char[:, ::1] mask):
+    """Fill the holes of a mask whose edge rows and columns are 0, in place: every 0 pixel that
+    no path of 4-neighbours through 0 pixels joins to pixel (0, 0) becomes 1, as
+    ``scipy.ndimage.binary_fill_holes`` with its default structure (on the mask without its
+    frame: the frame joins every 0 pixel on the inner edge).  One flood fill over the 0 pixels
+    reached, then one pass."""
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, p, size = 1, capacity = 4096
+    cdef Py_ssize_t *stack = <Py_ssize_t *> malloc(capacity * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *grown
+    cdef bint failed = False
+    if stack == NULL:
+        raise MemoryError()
+    if m == 0 or n == 0:
+        free(stack)
+        return
+    with nogil:
+        # reached 0 pixels become 2 as they are pushed
+        mask[0, 0] = 2
+        stack[0] = 0
+        while size > 0 and not failed:
+            size -= 1
+            p = stack[size]
+            i, j = p // n, p % n
+            for k in range(4):
+                if k == 0:
+                    if i == 0:
+                        continue
+                    p = (i - 1) * n + j
+                elif k == 1:
+                    if i == m - 1:
+                        continue
+                    p = (i + 1) * n + j
+                elif k == 2:
+                    if j == 0:
+                        continue
+                    p = i * n + j - 1
+                else:
+                    if j == n - 1:
+                        continue
+                    p = i * n + j + 1
+                if mask[p // n, p % n] != 0:
+                    continue
+                mask[p // n, p % n] = 2
+                if size == capacity:
+                    capacity *= 2
+                    grown = <Py_ssize_t *> realloc(stack, capacity * sizeof(Py_ssize_t))
+                    if grown == NULL:
+                        failed = True
+                        break
+                    stack = grown
+                stack[size] = p
+                size += 1
+        for i in range(m):
+            for j in range(n):
+                mask[i, j] = 0 if mask[i, j] == 2 else 1
+    free(stack)
+    if failed:
+        raise MemoryError()

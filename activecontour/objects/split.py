@@ -157,12 +157,14 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         The objects, split ones replaced by their parts (each an outer boundary then its holes).
     """
     if image is not None:
-        image = np.asarray(image, dtype=np.float64)
-        image = image.mean(axis=2) if image.ndim == 3 else image
+        # (a grey image in its own type: each object's box is read as float64, the whole image
+        # only for the noise)
+        image = np.asarray(image)
+        image = image.astype(np.float64).mean(axis=2) if image.ndim == 3 else image
         # the least contrast of a split by intensity: a number of noise sigmas, and on a noise-free
         # image a fraction of its range (shading is not two objects); the noise is estimated
         # only for an object whose blocks differ by more than that fraction
-        floor = CONTRAST_FLOOR * float(np.ptp(image))
+        floor = CONTRAST_FLOOR * (float(image.max()) - float(image.min()))
         least = None
     result = []
     for k, curves in enumerate(objects):
@@ -175,29 +177,31 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         concave = depth.max() >= MIN_WAIST_DEPTH
         contrast = False
         if image is not None:
-            spread = _block_spread(inside, image[box], min_radius)
+            spread = _block_spread(inside, np.asarray(image[box], dtype=np.float64), min_radius)
             if spread > floor and least is None:
                 from activecontour.imaging.noise import estimate_noise
 
-                least = max(CONTRAST_DEPTH * float(estimate_noise(image[:, :, None])[0]), floor)
+                noise = estimate_noise(np.asarray(image, dtype=np.float64)[:, :, None])[0]
+                least = max(CONTRAST_DEPTH * float(noise), floor)
             # (a part of fewer than twice pi min_radius^2 pixels is never split by contrast,
             # :func:`_contrast_split`, and the parts lie in the object's box)
             contrast = spread > floor and spread > least and inside.size > 2 * np.pi * min_radius ** 2
         if not concave and not contrast:
             result.append(curves)
             continue
-        import scipy.ndimage  # here: an object with nothing to split need not load it
-
         low = np.array([box[0].start - 1, box[1].start - 1])
-        # the outline's shape decides (holes filled): the rim around a hole is no neck
-        window = np.pad(scipy.ndimage.binary_fill_holes(inside), 1)
-        parts = window.astype(np.int32)
+        # the outline's shape decides (holes filled, as scipy.ndimage.binary_fill_holes): the rim
+        # around a hole is no neck
+        window = np.pad(inside, 1)
+        _kernels.fill_holes(window.view(np.uint8))
+        parts = None  # the window as one part
         if concave and (concavity := _may_have_necks(window, curves[0] - low, min_radius)) is not None:
             parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
                                 neck_ratio, min_radius)
         if contrast:
-            parts = _contrast_parts(parts, _window(image, box), least, min_radius)
-        pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
+            parts = _contrast_parts(window.astype(np.int32) if parts is None else parts,
+                                    np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
+        pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
         if concave:
             # (an object its necks did not cut: its hull depth is known)
             pieces = [cut for piece in pieces for cut in

@@ -220,6 +220,24 @@ def test_the_distance_peaks_kernel_is_the_distance_transform_and_its_pieces_of_p
     assert min(counts) <= 1 and max(counts) >= 3
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_the_fill_holes_kernel_fills_as_scipy_on_the_framed_mask(seed):
+    from activecontour import _kernels
+
+    rng = np.random.default_rng(seed)
+    filled = 0
+    for _ in range(60):
+        m, n = rng.integers(1, 50, 2)
+        # blobs with holes (rings of noise above a threshold) and masks of one row or column
+        smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 4))
+        inside = smooth > np.quantile(smooth, rng.uniform(0.0, 0.9))
+        window = np.pad(inside, 1)
+        _kernels.fill_holes(window.view(np.uint8))
+        np.testing.assert_array_equal(window, np.pad(scipy.ndimage.binary_fill_holes(inside), 1))
+        filled += np.count_nonzero(window) > np.count_nonzero(inside)
+    assert filled >= 5  # holes were drawn
+
+
 @pytest.mark.parametrize("radius", [0.0, 1.0, np.sqrt(2), 2.5, 3.0, 4.0, np.sqrt(17)])
 def test_the_near_distance_compares_with_its_radius_as_the_distance_transform(radius):
     rng = np.random.default_rng(int(10 * radius))
