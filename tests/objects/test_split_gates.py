@@ -351,6 +351,17 @@ def test_may_have_necks_gives_the_concavity_or_none_by_its_tests_in_either_order
         np.testing.assert_array_equal(found, concavity)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_the_cyclic_gaussian_is_scipys_wrapped_gaussian_to_the_last_bit(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        # curves shorter than the kernel (wrapped more than once), and (K, 2) normals
+        count, sigma = int(rng.integers(1, 300)), rng.uniform(0.1, 40)
+        values = rng.normal(size=(count,) if rng.random() < 0.5 else (count, 2)) * 10 ** rng.uniform(-3, 3)
+        np.testing.assert_array_equal(split._cyclic_gaussian(values, sigma),
+                                      scipy.ndimage.gaussian_filter1d(values, sigma, axis=0, mode="wrap"))
+
+
 @pytest.mark.parametrize("reach", [1, 2, 5, 9, 30])
 def test_within_reach_is_the_union_of_the_shifted_arrays(reach):
     rng = np.random.default_rng(reach)
