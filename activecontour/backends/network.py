@@ -90,6 +90,8 @@ _ARMIJO = 1e-4
 _SPACING = 1.0
 #: Closed loops enclosing less than this (px^2) are dropped when that does not raise J.
 _ISLAND_AREA = 1.0
+#: Segments shorter than this (px) next to a pinch are collapsed to a node (:meth:`_Flow.resolve`).
+_TINY = 0.05
 #: Blocks before a remesh that raised J is tried again.
 _REMESH_COOLDOWN = 4
 #: Halvings of dt before the line search gives up (stationary to working precision).
@@ -355,6 +357,75 @@ class Network:
         outer = np.concatenate([self.outer[border], right[line_of]]).astype(np.intp)
         nodes = np.vstack([nodes[kept], new])
         return Network(nodes, start, end, inner, outer, self.shape), nodes
+
+    def meeting_pairs(self, nodes, limit=16):
+        """Up to ``limit`` pairs ``(e, f)`` of interface segments (indices among all segments)
+        that meet at ``nodes`` other than at a common node (:meth:`simple`'s test)."""
+        start, end = self._interface_ends
+        pairs = np.empty((limit, 2), dtype=np.intp)
+        found = _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, limit,
+                                       pairs, _NO_WHERE)
+        return np.flatnonzero(self.interface)[pairs[:min(found, limit)]]
+
+    def reconnected(self, pairs, nodes):
+        """The network with each pair of interface segments ``e = (a, b)``, ``f = (c, d)`` between
+        the same two regions, oriented alike (``f`` read backwards where its sides are swapped),
+        joined the other way: ``(a, d)`` and ``(c, b)``, both with ``e``'s sides.  Where the two
+        face each other across a thin part of one region (a neck, or a finger's sides), that part
+        is cut and the other region joins across; each new segment keeps the inner region on its
+        left, so the regions stay consistent.  Where one segment ``g`` joins ``b`` and ``c``
+        inside an interface (the sides of a spike cross), ``(c, b)`` and ``g`` would make a loop
+        of two segments: both go, the spike's tip with them.  Pairs that share a node with an
+        earlier one are skipped.  Returns ``(network, nodes)``, or None when no pair qualifies."""
+        start, end, inner, outer = self.start.copy(), self.end.copy(), self.inner.copy(), self.outer.copy()
+        keep, plain = np.ones(len(start), dtype=bool), np.zeros(len(nodes), dtype=bool)
+        plain[self._plain] = True
+        used = set()
+        for e, f in pairs:
+            if inner[e] == inner[f] and outer[e] == outer[f]:
+                c, d = start[f], end[f]
+            elif inner[e] == outer[f] and outer[e] == inner[f]:
+                c, d = end[f], start[f]
+            else:
+                continue
+            a, b = start[e], end[e]
+            ends = {int(a), int(b), int(c), int(d)}
+            if len(ends) < 4 or ends & used:
+                continue
+            used |= ends
+            end[e], start[f], end[f] = d, c, b
+            inner[f], outer[f] = inner[e], outer[e]
+            spike = np.flatnonzero(self.interface & (((self.start == b) & (self.end == c))
+                                                     | ((self.start == c) & (self.end == b))))
+            if spike.size and plain[b] and plain[c]:
+                keep[spike[0]] = keep[f] = False
+        if not used:
+            return None
+        return Network(nodes, start[keep], end[keep], inner[keep], outer[keep], self.shape), nodes
+
+    def collapsed(self, segments, nodes):
+        """The network without the interface segments ``segments``, the two ends of each made one
+        node: an end inside an interface (degree two, free) goes into the other end, which keeps
+        its place.  A segment is skipped where neither end is such, where the end would close a
+        loop of two segments, or where it shares a node with an earlier one.  Returns
+        ``(network, nodes)``, or None when none is left."""
+        start, end = self._interface_ends
+        others = np.bincount(start, weights=end, minlength=len(nodes)) + np.bincount(
+            end, weights=start, minlength=len(nodes))  # at a degree-two node: the sum of its neighbours
+        plain = np.zeros(len(nodes), dtype=bool)
+        plain[self._plain] = True
+        target, keep, used = np.arange(len(nodes)), np.ones(len(self.start), dtype=bool), set()
+        for s in segments:
+            u, v = int(self.start[s]), int(self.end[s])
+            gone, kept = (v, u) if plain[v] else (u, v)
+            if not plain[gone] or {u, v} & used or others[gone] - kept == kept:
+                continue
+            used |= {u, v}
+            target[gone], keep[s] = kept, False
+        if keep.all():
+            return None
+        return Network(nodes, target[self.start[keep]], target[self.end[keep]], self.inner[keep],
+                       self.outer[keep], self.shape), nodes
 
     def crossing_nodes(self, nodes):
         """The nodes of interface segments that cross another one (for the islands to drop)."""
@@ -782,6 +853,41 @@ class _Flow:
         self.network, self.current = network, current
         return True
 
+    def resolve(self, crossed):
+        """Resolve the pinch that held the step back, where the pairs of interface segments that
+        meet in the trial ``crossed`` (:meth:`Network.meeting_pairs`) tell: join them the other
+        way (:meth:`Network.reconnected`), or else make one node of the ends of each segment
+        shorter than ``_TINY`` px at their nodes (:meth:`Network.collapsed`: a fold about a
+        vanishing segment).  Either is made at the current nodes, the closed loops through the
+        pairs' nodes then dropped where that lowers J (:meth:`drop_islands`), and kept if the
+        network is still simple and J has not risen; else those loops alone are dropped where
+        that lowers J (a region shrinking to nothing).  Returns whether the network changed."""
+        network, nodes = self.network, self.nodes
+        pairs = network.meeting_pairs(crossed)
+        ends = np.unique(np.concatenate([network.start[pairs], network.end[pairs]], axis=None))
+        near = network.interface & (np.isin(network.start, ends) | np.isin(network.end, ends))
+        lengths = np.linalg.norm(nodes[network.end] - nodes[network.start], axis=1)
+        for changed in (lambda: network.reconnected(pairs, nodes),
+                        lambda: network.collapsed(np.flatnonzero(near & (lengths < _TINY)), nodes)):
+            candidate = changed()
+            if candidate is not None and candidate[0].simple(candidate[1]) and self.replace(*candidate, ends):
+                return True
+        return self.drop_islands(ends)
+
+    def replace(self, network, nodes, ends):
+        """Take ``network`` at ``nodes``, the closed loops through ``ends`` dropped where that
+        lowers J, if J does not rise.  Returns whether it was taken."""
+        previous, current, count = (self.network, self.nodes), self.current, len(self.energies)
+        self.network, self.nodes, self.current = network, nodes, self.evaluate(network, nodes)
+        self.drop_islands(ends)
+        if self.current.energy > current.energy:
+            (self.network, self.nodes), self.current = previous, current
+            del self.energies[count:]
+            return False
+        if self.current.energy < current.energy and len(self.energies) == count:
+            self.energies.append(self.current.energy)
+        return True
+
     def unhealthy(self):
         network, nodes = self.network, self.nodes
         chosen = network.interface
@@ -791,7 +897,7 @@ class _Flow:
     def run(self, max_num_iter, tol, callback, n_iter):
         """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step)
         and the iteration count."""
-        dt_next, block_start, block_network, still = None, self.nodes, self.network, 0
+        dt_next, block_start, block_network, still, held = None, self.nodes, self.network, 0, 0
         factors = None
         for iteration in range(1, max_num_iter + 1):
             network, nodes, current = self.network, self.nodes, self.current
@@ -836,6 +942,12 @@ class _Flow:
             self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
+            if crossings and self.resolve(crossings[-1][1]):
+                factors, dt_next, held = None, None, 0
+            else:
+                held = held + 1 if crossings else 0
+            if held == _BLOCK:  # a stall: each step held back by a pinch that cannot be resolved
+                return 4, n_iter
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
                 return 2, n_iter
             if iteration % _BLOCK == 0:
