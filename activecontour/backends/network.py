@@ -30,13 +30,21 @@ must be kept from overlapping and gapping after every step.
 
 Topology
 --------
-The network moves its vertices; it does not change its graph.  The topology comes first, from the
+The network moves its vertices; its graph changes only where the flow pinches it (below).  The
+topology comes first, from the
 label field (:func:`activecontour.backends.labelfield.descend_labels`: the global K-means start, then
 the exact descent with its merge and split moves, which create, remove and reconnect regions
 freely).  Its partition (boundaries through the midpoints between pixels, junctions at cell
 centres: :mod:`activecontour.geometry.partition`) is the network's start; the flow then moves every
 interface and junction to sub-pixel position, lowering J from the label field's value.  So the
-polygon backend's N-region result is the label field's topology with the polygon's geometry.
+polygon backend's N-region result is the label field's topology with the polygon's geometry,
+changed where the flow pinches it: a step held back because two interface segments would meet
+(:meth:`_Flow.resolve`) joins them the other way when they bound the same two regions (a neck
+or a finger's sides cut, a spike's tip dropped), or collapses a vanishing segment there, or drops
+the closed loops through them; each is kept only if J does not rise.  A pinch between three
+regions (a region thinning between two others, whose cut would make two junctions) is not
+resolved: two steps in a row held back by such a pinch end the flow with status 4, a stall, not
+convergence.
 
 The step: dt by Armijo backtracking on J, at most the dt that moves the vertices ``max_step`` px
 root-mean-square, the first trial where the parabola through the last step's J(0), slope and
@@ -61,7 +69,6 @@ from activecontour.energy import (
     energy_of_moments,
     evaluate_partition,
     partition_load,
-    partition_moments,
     soup_moments,
 )
 from activecontour.geometry.partition import (
@@ -90,6 +97,8 @@ _ARMIJO = 1e-4
 _SPACING = 1.0
 #: Closed loops enclosing less than this (px^2) are dropped when that does not raise J.
 _ISLAND_AREA = 1.0
+#: Consecutive steps held back by a pinch that cannot be resolved that end the flow (a stall).
+_HELD = 2
 #: Segments shorter than this (px) next to a pinch are collapsed to a node (:meth:`_Flow.resolve`).
 _TINY = 0.05
 #: Blocks before a remesh that raised J is tried again.
@@ -132,7 +141,7 @@ class Network:
         chosen = np.flatnonzero(self.interface)
         self._interface_ends = (np.ascontiguousarray(start[chosen], dtype=np.intp),
                                 np.ascontiguousarray(end[chosen], dtype=np.intp))
-        self._bands = {}
+        self._bands, self._orders = {}, {}
         degree = np.bincount(np.concatenate(self._interface_ends), minlength=len(nodes))
         self._plain = np.flatnonzero((degree == 2) & self.free[0] & self.free[1])
 
@@ -401,7 +410,8 @@ class Network:
                 keep[spike[0]] = keep[f] = False
         if not used:
             return None
-        return Network(nodes, start[keep], end[keep], inner[keep], outer[keep], self.shape), nodes
+        network = Network(nodes, start[keep], end[keep], inner[keep], outer[keep], self.shape)
+        return network.inheriting(self), nodes
 
     def collapsed(self, segments, nodes):
         """The network without the interface segments ``segments``, the two ends of each made one
@@ -424,8 +434,9 @@ class Network:
             target[gone], keep[s] = kept, False
         if keep.all():
             return None
-        return Network(nodes, target[self.start[keep]], target[self.end[keep]], self.inner[keep],
-                       self.outer[keep], self.shape), nodes
+        network = Network(nodes, target[self.start[keep]], target[self.end[keep]], self.inner[keep],
+                          self.outer[keep], self.shape)
+        return network.inheriting(self), nodes
 
     def crossing_nodes(self, nodes):
         """The nodes of interface segments that cross another one (for the islands to drop)."""
@@ -539,7 +550,7 @@ class Network:
     def subset(self, keep, nodes):
         """The network of the segments ``keep`` (bool), its nodes at ``nodes``."""
         return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
-                       self.shape)
+                       self.shape).inheriting(self)
 
     def stiffness(self, nodes, smoothing=1.0):
         """The matrix ``M + l^2 K`` of the H^1 form (6.39) of P1 functions on the interfaces."""
@@ -595,28 +606,52 @@ class Network:
 
     def _band(self, component):
         """The free nodes of a component in reverse Cuthill-McKee order, each node's position in
-        that order (-1: not free), and the half bandwidth of the matrix in it."""
+        that order (-1: not free), and the half bandwidth of the matrix in it.  A network made
+        from another by a local change (:meth:`inheriting`) keeps that one's order of the nodes
+        still free, unless the band got wider than ``_BAND_LIMIT``."""
         if component not in self._bands:
-            import scipy.sparse
-            from scipy.sparse.csgraph import reverse_cuthill_mckee
-
             free = self.free[component]
             index = np.flatnonzero(free)
-            position = np.full(len(self.nodes), -1)
-            position[index] = np.arange(index.size)
-            start, end = self._interface_ends
-            i, j = position[start], position[end]
-            inside = (i >= 0) & (j >= 0)
-            pairs = (np.concatenate([i[inside], j[inside]]), np.concatenate([j[inside], i[inside]]))
-            graph = scipy.sparse.csr_matrix((np.ones(len(pairs[0])), pairs), shape=(index.size,) * 2)
-            permutation = reverse_cuthill_mckee(graph, symmetric_mode=True) if index.size else index
-            order = index[permutation]
-            position[order] = np.arange(order.size)
-            i, j = position[start], position[end]
-            inside = (i >= 0) & (j >= 0)
-            width = int(np.abs(i[inside] - j[inside]).max()) if inside.any() else 0
+            inherited = self._orders.get(component)
+            order = None if inherited is None else inherited[free[inherited]]
+            if order is None or order.size != index.size:
+                order = self._reverse_cuthill_mckee(index)
+            position, width = self._positions(order)
+            if width > _BAND_LIMIT and inherited is not None:
+                order = self._reverse_cuthill_mckee(index)
+                position, width = self._positions(order)
             self._bands[component] = (order, position, width)
         return self._bands[component]
+
+    def inheriting(self, network):
+        """This network, to reuse ``network``'s orders of the free nodes (:meth:`_band`): made from
+        it by a change that moves no node and frees none (:meth:`reconnected`, :meth:`collapsed`,
+        :meth:`subset`)."""
+        self._orders = {component: band[0] for component, band in network._bands.items()}
+        return self
+
+    def _reverse_cuthill_mckee(self, index):
+        """The nodes ``index`` in reverse Cuthill-McKee order of the graph of the interfaces."""
+        import scipy.sparse
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        position = np.full(len(self.nodes), -1)
+        position[index] = np.arange(index.size)
+        start, end = self._interface_ends
+        i, j = position[start], position[end]
+        inside = (i >= 0) & (j >= 0)
+        pairs = (np.concatenate([i[inside], j[inside]]), np.concatenate([j[inside], i[inside]]))
+        graph = scipy.sparse.csr_matrix((np.ones(len(pairs[0])), pairs), shape=(index.size,) * 2)
+        return index[reverse_cuthill_mckee(graph, symmetric_mode=True)] if index.size else index
+
+    def _positions(self, order):
+        """Each node's position in ``order`` (-1: not in it), and the half bandwidth there."""
+        position = np.full(len(self.nodes), -1)
+        position[order] = np.arange(order.size)
+        start, end = self._interface_ends
+        i, j = position[start], position[end]
+        inside = (i >= 0) & (j >= 0)
+        return position, int(np.abs(i[inside] - j[inside]).max()) if inside.any() else 0
 
     def velocity(self, nodes, force, factors=None):
         """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component.
@@ -812,7 +847,7 @@ class _Flow:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
         # move from the region inside to the one around it, and its loop leaves the length
-        areas, first, second = partition_moments(self.model, network.boundary(nodes), self.n_regions)
+        areas, first, second = self.current.areas, self.current.first, self.current.second
         length, energy = self.current.length, self.current.energy
         keep = np.ones(len(network.start), dtype=bool)
         uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
@@ -946,7 +981,7 @@ class _Flow:
                 factors, dt_next, held = None, None, 0
             else:
                 held = held + 1 if crossings else 0
-            if held == _BLOCK:  # a stall: each step held back by a pinch that cannot be resolved
+            if held == _HELD:  # a stall: each step held back by a pinch that cannot be resolved
                 return 4, n_iter
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
                 return 2, n_iter
