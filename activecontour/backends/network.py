@@ -625,8 +625,8 @@ class Network:
 
     def inheriting(self, network):
         """This network, to reuse ``network``'s orders of the free nodes (:meth:`_band`): made from
-        it by a change that moves no node and frees none (:meth:`reconnected`, :meth:`collapsed`,
-        :meth:`subset`)."""
+        it by a change that moves no node and frees no other (:meth:`reconnected`,
+        :meth:`collapsed`, :meth:`subset`: the nodes they leave out are dropped from the order)."""
         self._orders = {component: band[0] for component, band in network._bands.items()}
         return self
 
@@ -930,8 +930,8 @@ class _Flow:
         return lengths.size and (lengths.min() < 0.5 * _SPACING or lengths.max() > 2.0 * _SPACING)
 
     def run(self, max_num_iter, tol, callback, n_iter):
-        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step)
-        and the iteration count."""
+        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step or
+        a stall at a pinch that cannot be resolved) and the iteration count."""
         dt_next, block_start, block_network, still, held = None, self.nodes, self.network, 0, 0
         factors = None
         for iteration in range(1, max_num_iter + 1):
@@ -981,10 +981,10 @@ class _Flow:
                 factors, dt_next, held = None, None, 0
             else:
                 held = held + 1 if crossings else 0
-            if held == _HELD:  # a stall: each step held back by a pinch that cannot be resolved
-                return 4, n_iter
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
                 return 2, n_iter
+            if held == _HELD:  # a stall: each step held back by a pinch that cannot be resolved
+                return 4, n_iter
             if iteration % _BLOCK == 0:
                 slow = block_network is network and network.swept(block_start, trial) / _BLOCK < tol
                 still = still + 1 if slow else 0
