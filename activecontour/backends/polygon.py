@@ -30,8 +30,8 @@ Per iteration k, on the polygon(s) Gamma^k:
    slide is slow (the energy hardly changes along the curve), so a run that stopped at spacing h
    and is continued with a 100x smaller tol lowers J by up to 0.14 % and flips up to 0.7 % of the
    mask (scikit-image's horse, gravel) in 500 iterations: more than "converged" allows.  Both
-   shrink as h^2; halving h for the last stage only pays for the finer polygon where the curve
-   is found already.
+   shrink about 3-fold when h is halved (benchmarks/restart.py), and J ends lower; halving h for
+   the last stage only pays for the finer polygon where the curve is found already.
 
 The flow stalls when the contour stops getting anywhere: its mean normal displacement (the area it
 sweeps over its length, in pixels) between the start and the end of a block of five iterations,
