@@ -171,7 +171,9 @@ def border_overlap(points, next_index, bounds):
     region's boundary covers every point of the border at most once, and each corner at most once.
     """
     # only vertices on the border take part: one pass over the points finds them
-    on = np.unique(np.flatnonzero((points == bounds[0]) | (points == bounds[1])) // 2)
+    rows, cols = points[:, 0], points[:, 1]
+    on = np.flatnonzero((rows == bounds[0, 0]) | (rows == bounds[1, 0]) | (cols == bounds[0, 1])
+                        | (cols == bounds[1, 1]))
     if on.size < 2:
         return False
     start, end = points[on], points[next_index[on]]
