@@ -495,10 +495,8 @@ class _Memory:
             q -= alpha * y
             alphas.append(alpha)
         s, y, _ = self.pairs[-1]
-        # b^{-1} y and b^{-1} q in one solve (the columns are eliminated independently)
-        solved = -velocity(geometry, np.hstack([y.reshape(load.shape), q.reshape(load.shape)]))
-        metric_y, metric_q = solved[:, :2].ravel(), solved[:, 2:].ravel()
-        r = _dot(s, y) / max(_dot(y, metric_y), 1e-300) * metric_q
+        metric_y = -velocity(geometry, y.reshape(load.shape)).ravel()  # b^{-1} y
+        r = _dot(s, y) / max(_dot(y, metric_y), 1e-300) * -velocity(geometry, q.reshape(load.shape)).ravel()
         for (s, y, rho), alpha in zip(self.pairs, reversed(alphas), strict=True):
             r += s * (alpha - rho * _dot(y, r))
         direction = -r.reshape(load.shape)
