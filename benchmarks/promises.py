@@ -180,8 +180,8 @@ def faithful_start(context):
     return text, held == len(rows)
 
 
-@claim("stationary", r"continuing with a 100× smaller `tol` changes J by < 0\.1 % and the mask by "
-                     r"< 0\.1 % of its area on \d+ of the \d+ runs")
+@claim("stationary", r"continuing with a 100× smaller `tol` changes J by < 0\.1 % and the mask by < 0\.1 % of "
+                     r"its area on \d+ of the \d+ runs")
 def stationary(context):
     from restart import stationarity_rows
 
