@@ -146,8 +146,11 @@ def test_suite(context):
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider"], cwd=ROOT,
                           capture_output=True, text=True)
     wall = time.perf_counter() - started
-    tail = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else done.stderr.strip()[-200:]
-    return f"{wall:.0f} s wall: {tail}", done.returncode == 0
+    lines = done.stdout.strip().splitlines()
+    tail = lines[-1] if lines else done.stderr.strip()[-200:]
+    failed = [line.removeprefix("FAILED ") for line in lines if line.startswith(("FAILED", "ERROR"))]
+    named = f" ({'; '.join(failed)})" if failed else ""
+    return f"{wall:.0f} s wall: {tail}{named}", done.returncode == 0
 
 
 # ------------------------------------------------------------------------ results and restarts
