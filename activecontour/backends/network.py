@@ -43,7 +43,7 @@ changed where the flow pinches it: a step held back because two interface segmen
 or a finger's sides cut, a spike's tip dropped), or collapses a vanishing segment there, or drops
 the closed loops through them; each is kept only if J does not rise.  A pinch between three
 regions (a region thinning between two others, whose cut would make two junctions) is not
-resolved: two steps in a row held back by such a pinch end the flow with status 4, a stall, not
+resolved: two steps in a row held back by such a pinch end the flow with status 5, a stall, not
 convergence.
 
 The step: dt by Armijo backtracking on J, at most the dt that moves the vertices ``max_step`` px
@@ -932,8 +932,8 @@ class _Flow:
         return lengths.size and (lengths.min() < 0.5 * _SPACING or lengths.max() > 2.0 * _SPACING)
 
     def run(self, max_num_iter, tol, callback, n_iter):
-        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step or
-        a stall at a pinch that cannot be resolved) and the iteration count."""
+        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step, 5 a
+        stall at a pinch that cannot be resolved) and the iteration count."""
         dt_next, block_start, block_network, still, held = None, self.nodes, self.network, 0, 0
         factors = None
         for iteration in range(1, max_num_iter + 1):
@@ -986,7 +986,7 @@ class _Flow:
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
                 return 2, n_iter
             if held == _HELD:  # a stall: each step held back by a pinch that cannot be resolved
-                return 4, n_iter
+                return 5, n_iter
             if iteration % _BLOCK == 0:
                 slow = block_network is network and network.swept(block_start, trial) / _BLOCK < tol
                 still = still + 1 if slow else 0

@@ -60,15 +60,9 @@ class Boundary:
 
 
 class Sides:
-    """The segments on each class's boundary, and the segments of each (inner, outer) pair."""
+    """The segments on each class's boundary, found when first asked."""
 
     def __init__(self, inner, outer):
-        order = np.lexsort((outer, inner))
-        pairs = np.column_stack([inner[order], outer[order]])
-        cuts = np.flatnonzero(np.any(np.diff(pairs, axis=0) != 0, axis=1)) + 1
-        self.pairs = [(int(group_pairs[0, 0]), int(group_pairs[0, 1]), group)
-                      for group_pairs, group in zip(np.split(pairs, cuts), np.split(order, cuts), strict=True)
-                      if len(group)]
         self._inner, self._outer = inner, outer
         self._soups = {}
 

@@ -477,3 +477,20 @@ def test_collapsing_a_vanishing_segment_keeps_the_partition():
     # a segment between two branch nodes (junctions, the border) is not collapsed
     branch = np.flatnonzero(network.interface & ~plain[network.start] & ~plain[network.end])
     assert network.collapsed(branch, network.nodes) is None
+
+
+def test_a_stall_at_a_pinch_says_so():
+    # a crop of scikit-image's camera where a region thins between two others: the flow's steps are
+    # held back there, J still falling, and the run ends as a stall (status 5), not as a flow that
+    # found no descent step (status 4: J no longer falls) nor as converged
+    import skimage.data
+
+    from activecontour.result import STATUS_MESSAGES
+
+    crop = skimage.data.camera()[230:263, 199:240]
+    res = ac.segment(crop, n_regions=3, separate=False)
+    assert res.status == 5 and res.message == STATUS_MESSAGES[5]
+    assert res.message.startswith("Stalled") and "pinch" in res.message
+    assert res.success and res.n_iter < 500  # before the default max_num_iter
+    assert res.energies[-1] < res.energies[-2]  # still descending when it stopped
+    assert all("stall" not in STATUS_MESSAGES[k].lower() for k in STATUS_MESSAGES if k != 5)
