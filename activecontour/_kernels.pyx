@@ -1353,6 +1353,68 @@ def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::
     return count
 
 
+def follow(const Py_ssize_t[::1] start_ids, const Py_ssize_t[::1] end_ids, Py_ssize_t distinct,
+           Py_ssize_t[::1] following):
+    """The chaining of :func:`activecontour.geometry.partition.loop_order` for dense point ids
+    (0..distinct-1): the i-th element (in index order) ending at a point is followed by the i-th
+    starting there, in O(n + distinct) (a counting sort of the starts by id).  Raises ValueError
+    when a point has more ends than starts."""
+    cdef Py_ssize_t n = start_ids.shape[0], e, k, failed = 0
+    cdef Py_ssize_t *first = <Py_ssize_t *> calloc(distinct + 1, sizeof(Py_ssize_t))
+    cdef Py_ssize_t *cursor = <Py_ssize_t *> malloc(max(distinct, 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *slots = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
+    if first == NULL or cursor == NULL or slots == NULL:
+        free(first)
+        free(cursor)
+        free(slots)
+        raise MemoryError()
+    with nogil:
+        for e in range(n):
+            first[start_ids[e] + 1] += 1
+        for k in range(distinct):
+            first[k + 1] += first[k]
+            cursor[k] = first[k]
+        for e in range(n):  # the starts by id, each id's in index order
+            k = start_ids[e]
+            slots[cursor[k]] = e
+            cursor[k] += 1
+        for k in range(distinct):
+            cursor[k] = first[k]
+        for e in range(n):
+            k = end_ids[e]
+            if cursor[k] >= first[k + 1]:
+                failed = 1
+                break
+            following[e] = slots[cursor[k]]
+            cursor[k] += 1
+    free(first)
+    free(cursor)
+    free(slots)
+    if failed:
+        raise ValueError("a point where more segments end than start")
+
+
+def passes_twice(const Py_ssize_t[::1] order, const Py_ssize_t[::1] offsets, const Py_ssize_t[::1] ids,
+                 Py_ssize_t distinct, unsigned char[::1] twice):
+    """``twice[c] = 1`` for the loops ``order[offsets[c]:offsets[c + 1]]`` that pass a point
+    (dense ids 0..distinct-1 of their elements) more than once, in O(n + distinct)."""
+    cdef Py_ssize_t count = offsets.shape[0] - 1, c, k, key
+    cdef Py_ssize_t *stamp = <Py_ssize_t *> malloc(max(distinct, 1) * sizeof(Py_ssize_t))
+    if stamp == NULL:
+        raise MemoryError()
+    with nogil:
+        for k in range(distinct):
+            stamp[k] = -1
+        for c in range(count):
+            twice[c] = 0
+            for k in range(offsets[c], offsets[c + 1]):
+                key = ids[order[k]]
+                if stamp[key] == c:
+                    twice[c] = 1
+                stamp[key] = c
+    free(stamp)
+
+
 ctypedef fused real:
     float
     double

@@ -196,11 +196,14 @@ class Network:
             segment = np.concatenate([np.arange(len(self.start)), backward])
             region = np.concatenate([self.inner, self.outer[backward]])
             forward = np.arange(len(segment)) < len(self.start)
-            entries = np.lexsort((segment, ~forward, region))
+            # (a stable sort of small integers is a radix sort: O(n))
+            entries = np.argsort((2 * region + ~forward).astype(np.int16), kind="stable")
             segment, region, forward = segment[entries], region[entries], forward[entries]
             tails = np.where(forward, self.start[segment], self.end[segment])
             heads = np.where(forward, self.end[segment], self.start[segment])
-            order, offsets = loop_order(region * len(self.nodes) + tails, region * len(self.nodes) + heads)
+            count = len(self.nodes)
+            order, offsets = loop_order(region * count + tails, region * count + heads,
+                                        (int(region.max()) + 1) * count if region.size else 0)
             face = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
             self._faces = (face.astype(np.intp), segment[order].astype(np.intp),
                            np.where(forward[order], 1.0, -1.0))
@@ -234,7 +237,7 @@ class Network:
         forward, backward = inner & ~outer, outer & ~inner
         starts = np.concatenate([self.start[forward], self.end[backward]])
         ends = np.concatenate([self.end[forward], self.start[backward]])
-        return [self.nodes[starts[loop]] for loop in chain_loops(starts, ends)]
+        return [self.nodes[starts[loop]] for loop in chain_loops(starts, ends, len(self.nodes))]
 
     def polylines(self):
         """The interfaces as polylines of nodes between branch nodes (junctions and nodes on the
