@@ -69,7 +69,7 @@ from activecontour.energy import (
     energy_of_moments,
     evaluate_partition,
     partition_load,
-    soup_moments,
+    partition_moments,
 )
 from activecontour.geometry.partition import (
     Boundary,
@@ -851,7 +851,17 @@ class _Flow:
         if not candidates:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
-        # move from the region inside to the one around it, and its loop leaves the length
+        # move from the region inside to the one around it, and its loop leaves the length.  The
+        # islands' moments in one pass, each loop's segments oriented as its first one and
+        # counted for its own label (1 + its index; 0 the unused background)
+        sizes = np.array([len(loop) for loop in candidates])
+        segments, owner = np.concatenate(candidates), np.repeat(np.arange(len(candidates)), sizes)
+        flip = network.inner[segments] != network.inner[[loop[0] for loop in candidates]][owner]
+        starts = np.where(flip[:, None], nodes[network.end[segments]], nodes[network.start[segments]])
+        ends = np.where(flip[:, None], nodes[network.start[segments]], nodes[network.end[segments]])
+        islands = partition_moments(self.model, Boundary(starts, ends, owner + 1, np.full(len(owner), -1)),
+                                    len(candidates) + 1)
+        loop_lengths = np.bincount(owner, weights=np.hypot(*(ends - starts).T), minlength=len(candidates))
         areas, first, second = self.current.areas, self.current.first, self.current.second
         length, energy = self.current.length, self.current.energy
         keep = np.ones(len(network.start), dtype=bool)
@@ -859,11 +869,8 @@ class _Flow:
         by_row = np.argsort(nodes[:, 0], kind="stable")
         boxed = network.boxes_hold_nodes(nodes, candidates, uses > 0, by_row)
         # one at a time: a loop may hold another part until that is gone
-        for loop, holds in zip(candidates, boxed, strict=True):
-            flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
-            starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
-            ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
-            area, moment_1, moment_2 = soup_moments(self.model, starts, ends)
+        for k, (loop, holds) in enumerate(zip(candidates, boxed, strict=True)):
+            area, moment_1, moment_2 = (part[k + 1] for part in islands)
             sides = (network.inner[loop[0]], network.outer[loop[0]])
             inside, around = sides if area > 0 else sides[::-1]
             sign = 1.0 if area > 0 else -1.0
@@ -871,7 +878,7 @@ class _Flow:
             for part, island in zip(trial, (area, moment_1, moment_2), strict=True):
                 part[inside] -= sign * island
                 part[around] += sign * island
-            loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
+            loop_length = loop_lengths[k]
             candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
             if candidate.energy > energy:
                 continue
