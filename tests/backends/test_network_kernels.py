@@ -144,3 +144,36 @@ def test_normal_part_is_the_numpy_definition():
     along = np.column_stack([normal[:, 1], -normal[:, 0]])
     np.testing.assert_allclose(np.einsum("ij,ij->i", out[plain], along), 0.0, atol=1e-12)
     np.testing.assert_array_equal(out[10:], velocity[10:])
+
+
+def test_band_cholesky_within_the_envelopes_is_the_factor():
+    # symmetric positive definite band matrices whose columns start at scattered rows (an
+    # envelope narrower than the band, as chains in reverse Cuthill-McKee order): U^T U = A with U
+    # numpy's upper Cholesky factor, zero above every column's envelope; a solve returns x
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        n, w = int(rng.integers(1, 60)), int(rng.integers(1, 9))
+        a = np.zeros((n, n))
+        for j in range(n):
+            reach = int(rng.integers(0, min(j, w) + 1))  # column j's nonzeros: rows j - reach .. j
+            a[j - reach:j, j] = rng.normal(size=reach) * (rng.random(reach) < 0.7)
+        a = a + a.T
+        a += np.diag(np.abs(a).sum(axis=1) + 0.5 + rng.random(n))  # diagonally dominant
+        band = np.zeros((n, w + 1))
+        for j in range(n):
+            for i in range(max(0, j - w), j + 1):
+                band[j, w + i - j] = a[i, j]
+        assert _kernels.band_cholesky(band) == 0
+        upper = np.linalg.cholesky(a).T
+        for j in range(n):
+            for i in range(max(0, j - w), j + 1):
+                assert band[j, w + i - j] == pytest.approx(upper[i, j], rel=1e-12, abs=1e-12)
+        x = rng.normal(size=n)
+        rhs = a @ x
+        _kernels.band_solve(band, rhs)
+        np.testing.assert_allclose(rhs, x, rtol=1e-10, atol=1e-10)
+
+
+def test_band_cholesky_reports_a_matrix_that_is_not_positive_definite():
+    band = np.array([[0.0, 1.0], [2.0, 1.0]])  # [[1, 2], [2, 1]]: the second leading minor is -3
+    assert _kernels.band_cholesky(band) == 2
