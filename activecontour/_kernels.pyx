@@ -17,7 +17,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :func:`fill_holes` (an object's window without holes),
   :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
-* :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
+* :func:`segment_integrals`, :func:`segment_loads`, :func:`h1_band`, :func:`band_cholesky`, :func:`band_solve`,
   :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
   :mod:`activecontour.geometry.partition`,
   :mod:`activecontour.backends.network` (the N-region network: its integrals, load (6.41), H^1
@@ -1324,6 +1324,42 @@ def band_cholesky(double[:, ::1] band):
                 break
     free(first)
     return failed
+
+
+def h1_band(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+            const Py_ssize_t[::1] position, double[:, ::1] band):
+    """The matrix ``M + K`` of the H^1 form (6.39) of P1 functions on segments, in
+    :func:`band_cholesky`'s layout (``band`` zeros, of shape (n, w + 1)), restricted to the nodes
+    with ``position >= 0`` and ordered by it: a segment of length h adds ``h / 3 + 1 / h`` to the
+    diagonal at each end and puts ``h / 6 - 1 / h`` between them (one segment per pair of nodes).
+    Each diagonal entry is its sum over the segments starting there plus its sum over those
+    ending there, each in segment order."""
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, e, i, j
+    cdef double h, dr, dc, diagonal
+    cdef double *ending = <double *> calloc(max(n, 1), sizeof(double))
+    if ending == NULL:
+        raise MemoryError()
+    with nogil:
+        for e in range(start.shape[0]):
+            i, j = position[start[e]], position[end[e]]
+            if i < 0 and j < 0:
+                continue
+            dr = nodes[end[e], 0] - nodes[start[e], 0]
+            dc = nodes[end[e], 1] - nodes[start[e], 1]
+            h = hypot(dr, dc)
+            diagonal = h / 3.0 + 1.0 / h
+            if i >= 0:
+                band[i, w] += diagonal
+            if j >= 0:
+                ending[j] += diagonal
+            if i >= 0 and j >= 0:
+                if i < j:
+                    band[j, w + i - j] = h / 6.0 - 1.0 / h
+                else:
+                    band[i, w + j - i] = h / 6.0 - 1.0 / h
+        for i in range(n):
+            band[i, w] += ending[i]
+    free(ending)
 
 
 def band_solve(const double[:, ::1] factor, double[::1] rhs):

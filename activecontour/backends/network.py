@@ -582,8 +582,7 @@ class Network:
         from scipy.sparse.linalg import splu
 
         start, end = self._interface_ends
-        h = np.hypot(*(nodes[end] - nodes[start]).T)
-        diagonal, off = h / 3.0 + 1.0 / h, h / 6.0 - 1.0 / h
+        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
         factors = []
         for component in range(2):
             order, position, width = self._band(component)
@@ -591,17 +590,12 @@ class Network:
             if size == 0:
                 factors.append((order, None))
                 continue
-            i, j = position[start], position[end]
-            inside = (i >= 0) & (j >= 0)
             if width > _BAND_LIMIT:
                 matrix = self.stiffness(nodes)
                 factors.append((order, splu(matrix[order][:, order].tocsc())))
                 continue
             band = np.zeros((size, width + 1))  # band[j, width + i - j] = A[i, j] for i <= j
-            band[:, width] = (np.bincount(i[i >= 0], weights=diagonal[i >= 0], minlength=size)
-                              + np.bincount(j[j >= 0], weights=diagonal[j >= 0], minlength=size))
-            low, high = np.minimum(i[inside], j[inside]), np.maximum(i[inside], j[inside])
-            band[high, width + low - high] = off[inside]  # one segment per pair of nodes
+            _kernels.h1_band(nodes, start, end, position, band)
             if _kernels.band_cholesky(band) != 0:
                 raise np.linalg.LinAlgError("the H^1 form is not positive definite")
             factors.append((order, band))
@@ -651,7 +645,7 @@ class Network:
     def _interfaces_within(self, index):
         """Each node's position in ``index`` (-1: not in it), and the positions of the two ends of
         every interface with both ends in it."""
-        position = np.full(len(self.nodes), -1)
+        position = np.full(len(self.nodes), -1, dtype=np.intp)
         position[index] = np.arange(index.size)
         start, end = self._interface_ends
         i, j = position[start], position[end]

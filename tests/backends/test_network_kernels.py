@@ -177,3 +177,33 @@ def test_band_cholesky_within_the_envelopes_is_the_factor():
 def test_band_cholesky_reports_a_matrix_that_is_not_positive_definite():
     band = np.array([[0.0, 1.0], [2.0, 1.0]])  # [[1, 2], [2, 1]]: the second leading minor is -3
     assert _kernels.band_cholesky(band) == 2
+
+
+def test_h1_band_is_the_stiffness_matrix_in_band_form():
+    # chains and a junction of segments between random nodes, some nodes held (position -1), the
+    # rest in a shuffled order: the band is Network.stiffness's matrix restricted and reordered
+    from activecontour.backends.network import Network
+
+    rng = np.random.default_rng(6)
+    for _ in range(10):
+        count = int(rng.integers(6, 40))
+        nodes = rng.uniform(0.0, 20.0, (count, 2))
+        start = np.arange(count - 1, dtype=np.intp)
+        end = np.arange(1, count, dtype=np.intp)
+        start, end = np.append(start, [0, count // 2]), np.append(end, [count // 2, count - 1])  # loops
+        keep = np.flatnonzero(rng.random(count) < 0.8)
+        order = rng.permutation(keep).astype(np.intp)
+        position = np.full(count, -1, dtype=np.intp)
+        position[order] = np.arange(order.size)
+        sides = np.zeros(len(start), dtype=np.intp)
+        network = Network(nodes, start, end, sides, sides + 1, (21, 21))
+        dense = network.stiffness(nodes).toarray()[np.ix_(order, order)]
+        pairs = np.abs(position[start] - position[end])[(position[start] >= 0) & (position[end] >= 0)]
+        width = int(pairs.max()) if pairs.size else 0
+        band = np.zeros((order.size, width + 1))
+        _kernels.h1_band(nodes, start, end, position, band)
+        for j in range(order.size):
+            for i in range(max(0, j - width), j + 1):
+                assert band[j, width + i - j] == pytest.approx(dense[i, j], rel=1e-12, abs=1e-12)
+        assert np.all(np.abs(dense[np.abs(np.subtract.outer(np.arange(order.size), np.arange(order.size)))
+                                   > width]) == 0)
