@@ -253,20 +253,8 @@ class Network:
         cycles of that permutation are the lines there and back, and the loops once each way.
         """
         chosen = np.flatnonzero(self.interface)
-        start, end = self._interface_ends
-        count = len(chosen)
-        degree = np.bincount(np.concatenate([start, end]), minlength=len(self.nodes))
-        branch = (degree != 2) | ~(self.free[0] & self.free[1])
-        tail, head = np.empty(2 * count, dtype=np.intp), np.empty(2 * count, dtype=np.intp)
-        tail[0::2], tail[1::2] = start, end  # half-edge 2 i + d: segment i forward (d = 0) or back
-        head[0::2], head[1::2] = end, start
-        following = np.arange(2 * count) ^ 1  # turn back at a branch node
-        leaving = np.argsort(tail, kind="stable")
-        leaving = leaving[~branch[tail[leaving]]].reshape(-1, 2)  # the two half-edges leaving a node
-        following[leaving[:, 0] ^ 1], following[leaving[:, 1] ^ 1] = leaving[:, 1], leaving[:, 0]
-        order, offsets = np.empty(2 * count, dtype=np.intp), np.empty(2 * count + 1, dtype=np.intp)
-        cycles = _kernels.cycles(following, order, offsets)
-        offsets = offsets[:cycles + 1]
+        branch, tail, head, order, offsets = self._half_edge_cycles()
+        cycles = len(offsets) - 1
         cycle = np.repeat(np.arange(cycles), np.diff(offsets))
         # a line's cycle turns twice (positions p < q): its runs start after each turn
         turns = np.flatnonzero(branch[head[order]]).reshape(-1, 2)
@@ -305,6 +293,26 @@ class Network:
         inner = np.where(forward, self.inner[segment], self.outer[segment])
         outer = np.where(forward, self.outer[segment], self.inner[segment])
         return path, path_offsets, inner, outer, closed
+
+    def _half_edge_cycles(self):
+        """The cycles of :meth:`polylines`' half-edges: ``(branch, tail, head, order, offsets)``,
+        ``branch`` per node, the half-edges' end nodes (half-edge ``2 i + d``: interface segment i
+        forward, d = 0, or backward), and cycle c the half-edges ``order[offsets[c]:offsets[c + 1]]``
+        (each from its smallest, in the order of those)."""
+        start, end = self._interface_ends
+        count = len(start)
+        degree = np.bincount(np.concatenate([start, end]), minlength=len(self.nodes))
+        branch = (degree != 2) | ~(self.free[0] & self.free[1])
+        tail, head = np.empty(2 * count, dtype=np.intp), np.empty(2 * count, dtype=np.intp)
+        tail[0::2], tail[1::2] = start, end
+        head[0::2], head[1::2] = end, start
+        following = np.arange(2 * count) ^ 1  # turn back at a branch node
+        leaving = np.argsort(tail, kind="stable")
+        leaving = leaving[~branch[tail[leaving]]].reshape(-1, 2)  # the two half-edges leaving a node
+        following[leaving[:, 0] ^ 1], following[leaving[:, 1] ^ 1] = leaving[:, 1], leaving[:, 0]
+        order, offsets = np.empty(2 * count, dtype=np.intp), np.empty(2 * count + 1, dtype=np.intp)
+        cycles = _kernels.cycles(following, order, offsets)
+        return branch, tail, head, order, offsets[:cycles + 1]
 
     def resampled(self, nodes, spacing):
         """The network with every interface resampled at equal arc-length steps of about
@@ -455,7 +463,7 @@ class Network:
     def closed_loops(self, nodes):
         """The interfaces that are closed loops (no junction, off the border), each as
         ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
-        the interface segments, joined at the nodes of degree two."""
+        the interface segments, joined at the nodes of degree two (:meth:`_interface_pieces`)."""
         if self._pieces is None:
             self._pieces = self._interface_pieces()
         chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
@@ -469,22 +477,22 @@ class Network:
     def _interface_pieces(self):
         """The graph part of :meth:`closed_loops`: the interface segments, the piece of each, the
         number of pieces, the closed ones, each segment's orientation against its piece's first,
-        the segments in order of their piece and where each piece's begin."""
-        import scipy.sparse
-        from scipy.sparse.csgraph import connected_components
+        the segments in order of their piece and where each piece's begin.
 
+        A piece is the half-edge cycles (:meth:`_half_edge_cycles`) of its segments: one for a
+        line (there and back), two for a loop (one each way).  Pieces are numbered in the order of
+        their smallest segment, the first of its cycles (it holds that segment's forward half)."""
         chosen = np.flatnonzero(self.interface)
         if chosen.size == 0:
             return chosen, chosen, 0, chosen, chosen, chosen, chosen
-        ends = np.concatenate([self.start[chosen], self.end[chosen]])
-        owner = np.tile(np.arange(chosen.size), 2)
-        degree = np.bincount(ends, minlength=len(self.nodes))
-        branch = (degree != 2) | ~(self.free[0] & self.free[1])
-        order = np.argsort(ends, kind="stable")
-        pairs = order[~branch[ends[order]]].reshape(-1, 2)  # the two segments at a degree-two node
-        graph = scipy.sparse.coo_matrix((np.ones(len(pairs)), (owner[pairs[:, 0]], owner[pairs[:, 1]])),
-                                        shape=(chosen.size, chosen.size))
-        count, piece = connected_components(graph, directed=False)
+        branch, _, _, order, offsets = self._half_edge_cycles()
+        cycle = np.empty(len(order), dtype=np.intp)
+        cycle[order] = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+        first_cycle = np.minimum(cycle[0::2], cycle[1::2])  # a loop's, either way
+        used = np.zeros(len(offsets) - 1, dtype=bool)
+        used[first_cycle] = True
+        piece = (np.cumsum(used) - 1)[first_cycle]
+        count = int(used.sum())
         open_piece = np.zeros(count, dtype=bool)
         open_piece[piece[branch[self.start[chosen]] | branch[self.end[chosen]]]] = True
         # a loop's segments are oriented either way, their sides named accordingly: orient them
