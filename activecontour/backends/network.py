@@ -162,7 +162,8 @@ class Network:
     def boundary(self, nodes=None):
         """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
         nodes = self.nodes if nodes is None else nodes
-        return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
+        return Boundary(nodes.take(self.start, axis=0), nodes.take(self.end, axis=0), self.inner, self.outer,
+                        self.sides)
 
     def moving_boundary(self, nodes):
         """:meth:`boundary` without the segments that neither count in J nor move: the image's
@@ -175,7 +176,8 @@ class Network:
             inner, outer = self.inner[kept], self.outer[kept]
             self._moving = (self.start[kept], self.end[kept], inner, outer, Sides(inner, outer))
         start, end, inner, outer, sides = self._moving
-        return Boundary(nodes[start], nodes[end], inner, outer, sides)
+        # (take: a gather of rows ten times faster than fancy indexing, on every evaluation)
+        return Boundary(nodes.take(start, axis=0), nodes.take(end, axis=0), inner, outer, sides)
 
     def relabelled(self, mapping):
         """The same network with region k renamed ``mapping[k]``."""
@@ -332,7 +334,7 @@ class Network:
         ring = np.insert(path, offsets[1:][closed], path[offsets[:-1][closed]])
         ring_sizes = sizes + closed
         ring_offsets = np.concatenate([[0], np.cumsum(ring_sizes)])
-        points = nodes[ring]
+        points = nodes.take(ring, axis=0)
         step = np.hypot(*(points[1:] - points[:-1]).T)
         step[ring_offsets[1:-1] - 1] = 0.0  # no step from one line to the next
         arc = np.concatenate([[0.0], np.cumsum(step)])[:len(points)]
@@ -354,7 +356,8 @@ class Network:
         piece = np.clip(piece, ring_offsets[:-1][owner], ring_offsets[1:][owner] - 2)
         with np.errstate(invalid="ignore", divide="ignore"):
             fraction = np.where(step[piece] > 0, (at - arc[piece]) / step[piece], 0.0)
-        new = points[piece] + np.clip(fraction, 0.0, 1.0)[:, None] * (points[piece + 1] - points[piece])
+        base = points.take(piece, axis=0)
+        new = base + np.clip(fraction, 0.0, 1.0)[:, None] * (points.take(piece + 1, axis=0) - base)
         # the segments: the border's, then each line's chain of nodes: a line's [start, samples,
         # end] (its ends the kept branch nodes), a loop's [samples, its first sample]
         chain_sizes = new_count + 1 + ~closed
@@ -375,7 +378,7 @@ class Network:
         end = np.concatenate([index[self.end[border]], chain_end]).astype(np.intp)
         inner = np.concatenate([self.inner[border], left[line_of]]).astype(np.intp)
         outer = np.concatenate([self.outer[border], right[line_of]]).astype(np.intp)
-        nodes = np.vstack([nodes[kept], new])
+        nodes = np.vstack([nodes.take(kept, axis=0), new])
         return Network(nodes, start, end, inner, outer, self.shape), nodes
 
     def meeting_pairs(self, nodes, limit=16):
@@ -469,7 +472,7 @@ class Network:
         chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
         if chosen.size == 0:
             return []
-        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        a, b = nodes.take(self.start[chosen], axis=0), nodes.take(self.end[chosen], axis=0)
         twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
                                  minlength=count)
         return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k])) for k in closed]
@@ -705,9 +708,10 @@ class Network:
     def swept(self, before, after):
         """The interfaces' mean normal displacement from ``before`` to ``after`` (px)."""
         a, b = self.start[self.interface], self.end[self.interface]
-        tangent = before[b] - before[a]
+        before_a, before_b = before.take(a, axis=0), before.take(b, axis=0)
+        tangent = before_b - before_a
         length = np.linalg.norm(tangent, axis=1)
-        shift = 0.5 * ((after[a] - before[a]) + (after[b] - before[b]))
+        shift = 0.5 * ((after.take(a, axis=0) - before_a) + (after.take(b, axis=0) - before_b))
         normal = np.abs(shift[:, 0] * tangent[:, 1] - shift[:, 1] * tangent[:, 0])  # |shift . nu| h
         return float(normal.sum() / max(length.sum(), 1e-12))
 
@@ -915,7 +919,7 @@ class _Flow:
         pairs = network.meeting_pairs(crossed)
         ends = np.unique(np.concatenate([network.start[pairs], network.end[pairs]], axis=None))
         near = network.interface & (np.isin(network.start, ends) | np.isin(network.end, ends))
-        lengths = np.linalg.norm(nodes[network.end] - nodes[network.start], axis=1)
+        lengths = np.linalg.norm(nodes.take(network.end, axis=0) - nodes.take(network.start, axis=0), axis=1)
         for changed in (lambda: network.reconnected(pairs, nodes),
                         lambda: network.collapsed(np.flatnonzero(near & (lengths < _TINY)), nodes)):
             candidate = changed()
@@ -940,7 +944,8 @@ class _Flow:
     def unhealthy(self):
         network, nodes = self.network, self.nodes
         chosen = network.interface
-        lengths = np.linalg.norm(nodes[network.end[chosen]] - nodes[network.start[chosen]], axis=1)
+        step = nodes.take(network.end[chosen], axis=0) - nodes.take(network.start[chosen], axis=0)
+        lengths = np.linalg.norm(step, axis=1)
         return lengths.size and (lengths.min() < 0.5 * _SPACING or lengths.max() > 2.0 * _SPACING)
 
     def run(self, max_num_iter, tol, callback, n_iter):
