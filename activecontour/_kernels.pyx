@@ -1283,7 +1283,7 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     return length + length_carry
 
 
-def band_cholesky(double[:, ::1] band):
+def band_cholesky(double[:, ::1] band, Py_ssize_t[:, ::1] envelope):
     """Cholesky factorisation ``A = U^T U`` of a symmetric positive definite band matrix, in place.
 
     ``band[j, w + i - j] = A[i, j]`` for ``j - w <= i <= j`` (column j's entries on and above the
@@ -1292,25 +1292,29 @@ def band_cholesky(double[:, ::1] band):
 
     The factor has no entry above a column's first nonzero of A (its envelope, which the reverse
     Cuthill-McKee order keeps narrow: a few rows where the band is about ten), so the sums run
-    over the envelopes only: the products left out are zeros, the result the same.
+    over the envelopes only: the products left out are zeros, the result the same.  ``envelope``
+    (n, 2) receives each column's first row and each row's last column with an entry in it, for
+    :func:`band_solve`.
     """
     cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, low, failed = 0
     cdef double total
     cdef double *column_j
-    cdef Py_ssize_t *first = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
-    if first == NULL:
-        raise MemoryError()
+    if envelope.shape[0] != n or envelope.shape[1] != 2:
+        raise ValueError(f"envelope must have shape ({n}, 2)")
     with nogil:
         for j in range(n):
-            first[j] = j  # the first row of column j's envelope
+            envelope[j, 0] = j  # the first row of column j's envelope
+            envelope[j, 1] = j
             for k in range(w - min(j, w), w):
                 if band[j, k] != 0.0:
-                    first[j] = j - w + k
+                    envelope[j, 0] = j - w + k
                     break
+            for i in range(envelope[j, 0], j):
+                envelope[i, 1] = j  # the last column with row i in its envelope, so far
             column_j = &band[j, w - j]  # column_j[i] = A[i, j]
-            for i in range(first[j], j + 1):
+            for i in range(envelope[j, 0], j + 1):
                 total = column_j[i]
-                low = max(first[j], first[i])
+                low = max(envelope[j, 0], envelope[i, 0])
                 for k in range(low, i):
                     total -= band[i, w + k - i] * column_j[k]
                 if i < j:
@@ -1322,7 +1326,6 @@ def band_cholesky(double[:, ::1] band):
                     break
             if failed:
                 break
-    free(first)
     return failed
 
 
@@ -1362,19 +1365,22 @@ def h1_band(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ss
     free(ending)
 
 
-def band_solve(const double[:, ::1] factor, double[::1] rhs):
-    """Solve ``U^T U x = rhs`` in place with the factor of :func:`band_cholesky`."""
+def band_solve(const double[:, ::1] factor, const Py_ssize_t[:, ::1] envelope, double[::1] rhs):
+    """Solve ``U^T U x = rhs`` in place with the factor and the envelope of :func:`band_cholesky`
+    (the sums over its entries only: the products left out are zeros)."""
     cdef Py_ssize_t n = factor.shape[0], w = factor.shape[1] - 1, i, j, k
     cdef double total
+    if envelope.shape[0] != n or envelope.shape[1] != 2:
+        raise ValueError(f"envelope must have shape ({n}, 2)")
     with nogil:
         for j in range(n):  # U^T y = rhs
             total = rhs[j]
-            for k in range(j - w if j > w else 0, j):
+            for k in range(envelope[j, 0], j):
                 total -= factor[j, w + k - j] * rhs[k]
             rhs[j] = total / factor[j, w]
         for i in range(n - 1, -1, -1):  # U x = y
             total = rhs[i]
-            for j in range(i + 1, min(n, i + w + 1)):
+            for j in range(i + 1, envelope[i, 1] + 1):
                 total -= factor[j, w + i - j] * rhs[j]
             rhs[i] = total / factor[i, w]
 

@@ -607,9 +607,10 @@ class Network:
                 continue
             band = np.zeros((size, width + 1))  # band[j, width + i - j] = A[i, j] for i <= j
             _kernels.h1_band(nodes, start, end, position, band)
-            if _kernels.band_cholesky(band) != 0:
+            envelope = np.empty((size, 2), dtype=np.intp)
+            if _kernels.band_cholesky(band, envelope) != 0:
                 raise np.linalg.LinAlgError("the H^1 form is not positive definite")
-            factors.append((order, band))
+            factors.append((order, (band, envelope)))
         return factors
 
     def _band(self, component):
@@ -676,8 +677,8 @@ class Network:
             if factor is None:
                 continue
             rhs = -force[order, component]
-            if isinstance(factor, np.ndarray):
-                _kernels.band_solve(factor, rhs)
+            if isinstance(factor, tuple):  # a band and its envelope
+                _kernels.band_solve(*factor, rhs)
             else:
                 rhs = factor.solve(rhs)
             velocity[order, component] = rhs

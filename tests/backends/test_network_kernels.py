@@ -163,20 +163,30 @@ def test_band_cholesky_within_the_envelopes_is_the_factor():
         for j in range(n):
             for i in range(max(0, j - w), j + 1):
                 band[j, w + i - j] = a[i, j]
-        assert _kernels.band_cholesky(band) == 0
+        envelope = np.empty((n, 2), dtype=np.intp)
+        assert _kernels.band_cholesky(band, envelope) == 0
         upper = np.linalg.cholesky(a).T
         for j in range(n):
             for i in range(max(0, j - w), j + 1):
                 assert band[j, w + i - j] == pytest.approx(upper[i, j], rel=1e-12, abs=1e-12)
         x = rng.normal(size=n)
         rhs = a @ x
-        _kernels.band_solve(band, rhs)
+        _kernels.band_solve(band, envelope, rhs)
         np.testing.assert_allclose(rhs, x, rtol=1e-10, atol=1e-10)
+        # the envelope: each column's first row with an entry of A, and each row's last column
+        # whose envelope reaches it (where U can have entries: fill stays within the envelopes)
+        nonzero = (a != 0) & (np.arange(n)[:, None] <= np.arange(n)[None, :])
+        first = np.argmax(nonzero, axis=0)
+        np.testing.assert_array_equal(envelope[:, 0], first)
+        rows = np.arange(n)
+        within = (first[None, :] <= rows[:, None]) & (rows[None, :] >= rows[:, None])
+        np.testing.assert_array_equal(envelope[:, 1], n - 1 - np.argmax(within[:, ::-1], axis=1))
+        assert np.all(np.abs(upper)[~within] < 1e-12)  # U within the envelopes
 
 
 def test_band_cholesky_reports_a_matrix_that_is_not_positive_definite():
     band = np.array([[0.0, 1.0], [2.0, 1.0]])  # [[1, 2], [2, 1]]: the second leading minor is -3
-    assert _kernels.band_cholesky(band) == 2
+    assert _kernels.band_cholesky(band, np.empty((2, 2), dtype=np.intp)) == 2
 
 
 def test_h1_band_is_the_stiffness_matrix_in_band_form():
