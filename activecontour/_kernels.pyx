@@ -2147,13 +2147,18 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
     edge ``[-0.5, high]``; inf when none.  Per face f of the entries ``(face, segment, sign)``
     (grouped by face): ``areas[f]`` its signed area (the shoelace sum, each segment's cross
     product times its sign), ``perimeter[f]`` its length and ``speed[f]`` its fastest vertex's
-    speed.
+    speed (the square root of the largest squared speed of its vertices, each found once).
     """
     cdef Py_ssize_t count = start.shape[0], points = nodes.shape[0], entries = face.shape[0], k, s, f, d
     cdef double reverse = INFINITY, inside = INFINITY, old_r, old_c, along, room, value, fast
     cdef double high[2]
+    cdef double *squared = <double *> malloc(max(points, 1) * sizeof(double))
+    if squared == NULL:
+        raise MemoryError()
     high[0], high[1] = high_r, high_c
     with nogil:
+        for k in range(points):
+            squared[k] = velocity[k, 0] * velocity[k, 0] + velocity[k, 1] * velocity[k, 1]
         for s in range(count):
             old_r = nodes[end[s], 0] - nodes[start[s], 0]
             old_c = nodes[end[s], 1] - nodes[start[s], 1]
@@ -2184,12 +2189,13 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
             areas[f] += sign[k] * (nodes[start[s], 0] * nodes[end[s], 1]
                                    - nodes[end[s], 0] * nodes[start[s], 1])
             perimeter[f] += sqrt(old_r * old_r + old_c * old_c)
-            fast = max(hypot(velocity[start[s], 0], velocity[start[s], 1]),
-                       hypot(velocity[end[s], 0], velocity[end[s], 1]))
+            fast = max(squared[start[s]], squared[end[s]])
             if fast > speed[f]:
                 speed[f] = fast
         for f in range(areas.shape[0]):
             areas[f] *= 0.5
+            speed[f] = sqrt(speed[f])
+    free(squared)
     return reverse, inside
 
 
