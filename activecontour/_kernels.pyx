@@ -36,7 +36,9 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport INFINITY, M_PI, fabs, hypot, isnan, sin, sqrt
+from libc.stdint cimport uint64_t
 from libc.stdlib cimport calloc, free, malloc, realloc
+from libc.string cimport memcpy
 
 cdef Py_ssize_t _POLL_ROWS = 256
 
@@ -1035,7 +1037,11 @@ def mask_contours(const unsigned char[:, ::1] mask):
     the Py_ssize_t start of every curve (one more than the curves).
     """
     cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], r, c, k, node, total, count
-    cdef int case, top_r, top_c, bottom_r, left_r, left_c, right_c
+    cdef int case, top_r, top_c, bottom_r, left_r, left_c, right_c, upper_left, lower_left, upper, lower
+    cdef uint64_t above, below, uniform
+    cdef const unsigned char *upper_row
+    cdef const unsigned char *lower_row
+    cdef unsigned char *blank = <unsigned char *> calloc(n + 1, 1)  # the padding's rows: False
     cdef Tracer tracer
     cdef double *points
     cdef Py_ssize_t *offsets
@@ -1048,32 +1054,53 @@ def mask_contours(const unsigned char[:, ::1] mask):
     tracer.end_v = <Py_ssize_t *> malloc((n + 2) * sizeof(Py_ssize_t))
     tracer.first, tracer.last, tracer.following, tracer.point_r, tracer.point_c = NULL, NULL, NULL, NULL, NULL
     tracer.contours, tracer.contour_capacity, tracer.nodes, tracer.node_capacity = 0, 0, 0, 0
-    if tracer.start_h == NULL or tracer.end_h == NULL or tracer.start_v == NULL or tracer.end_v == NULL:
+    if (blank == NULL or tracer.start_h == NULL or tracer.end_h == NULL or tracer.start_v == NULL
+            or tracer.end_v == NULL):
+        free(blank)
         _free_tracer(&tracer)
         raise MemoryError()
     for k in range(2 * (n + 2)):
         tracer.start_h[k] = -1
         tracer.end_h[k] = -1
+    for k in range(n + 2):
+        tracer.start_v[k] = -1
+        tracer.end_v[k] = -1
     try:
         for r in range(m + 1):  # square rows of the padded mask: padded rows r and r + 1
             if r % _POLL_ROWS == 0:
                 PyErr_CheckSignals()
             with nogil:
+                # No slot needs clearing: each crossing lies on two segments, of the two squares
+                # beside it (the same square row for a vertical one, this row and the one before
+                # for one on the top line), and the second pops the end the first left, so every
+                # slot of the vertical points and of the line before is -1 again here.
                 tracer.row = r
-                for k in range((n + 2) * ((r + 1) % 2), (n + 2) * ((r + 1) % 2 + 1)):
-                    tracer.start_h[k] = -1  # the bottom line's slots held the line of row r - 1
-                    tracer.end_h[k] = -1
-                for k in range(n + 2):
-                    tracer.start_v[k] = -1
-                    tracer.end_v[k] = -1
-                for c in range(n + 1):
-                    # corners upper left 1, upper right 2, lower left 4, lower right 8 (padded
-                    # (i, j) is mask[i - 1, j - 1], outside it False)
-                    case = ((1 if 0 < r and 0 < c and mask[r - 1, c - 1] else 0)
-                            | (2 if 0 < r and c < n and mask[r - 1, c] else 0)
-                            | (4 if r < m and 0 < c and mask[r, c - 1] else 0)
-                            | (8 if r < m and c < n and mask[r, c] else 0))
+                # padded rows r and r + 1 are mask rows r - 1 and r, False beyond the mask; the
+                # corners of square c: upper left 1, upper right 2, lower left 4, lower right 8
+                # (padded (i, j) is mask[i - 1, j - 1]); the right ones of square c are the left
+                # ones of square c + 1
+                upper_row = &mask[r - 1, 0] if 0 < r else blank
+                lower_row = &mask[r, 0] if r < m else blank
+                upper_left, lower_left = 0, 0
+                c = 0
+                while c <= n:
+                    if c < n:
+                        upper, lower = (1 if upper_row[c] else 0), (1 if lower_row[c] else 0)
+                    else:  # the padding's column
+                        upper, lower = 0, 0
+                    case = upper_left | (upper << 1) | (lower_left << 2) | (lower << 3)
+                    upper_left, lower_left = upper, lower
                     if case == 0 or case == 15:
+                        # whole words of 8 squares alike ahead (every corner 0, or every one 1) are
+                        # skipped: no segment
+                        uniform = 0 if case == 0 else 0x0101010101010101
+                        while c + 8 < n:
+                            memcpy(&above, upper_row + c + 1, 8)
+                            memcpy(&below, lower_row + c + 1, 8)
+                            if above != uniform or below != uniform:
+                                break
+                            c += 8
+                        c += 1
                         continue
                     # doubled coordinates: top (2r, 2c + 1), bottom (2r + 2, 2c + 1),
                     # left (2r + 1, 2c), right (2r + 1, 2c + 2)
@@ -1113,6 +1140,7 @@ def mask_contours(const unsigned char[:, ::1] mask):
                         failed = _segment(&tracer, left_r, left_c, top_r, top_c)
                     if failed != 0:
                         break
+                    c += 1
             if failed != 0:
                 raise MemoryError()
         # every live contour in the order of creation, reversed (positive_orientation="high"),
@@ -1148,6 +1176,7 @@ def mask_contours(const unsigned char[:, ::1] mask):
             count += 1
         return points_out, offsets_out[:(count + 1) * sizeof(Py_ssize_t)]
     finally:
+        free(blank)
         _free_tracer(&tracer)
 
 
