@@ -101,7 +101,7 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_
     cdef Py_ssize_t width = n + 2, a, j, ch, c_lo, c_hi, index
     cdef const double *lo
     cdef const double *hi
-    cdef double p_lo, p_hi, q_lo, q_hi, diagonal, same, following
+    cdef double diagonal, same, following
     cdef double *acc = <double *> malloc(width * channels * 3 * sizeof(double))
     if acc == NULL:
         raise MemoryError()
@@ -117,22 +117,22 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_
             lo = &values[_clamp(a - 1, m), 0, 0]
             hi = &values[_clamp(a, m), 0, 0]
             with nogil:
-                for j in range(width):
-                    c_lo = _clamp(j - 1, n) * channels
-                    c_hi = _clamp(j, n) * channels  # the right neighbour j + 1 in padded columns
-                    for ch in range(channels):
-                        p_lo, p_hi = lo[c_lo + ch], hi[c_lo + ch]
-                        q_lo, q_hi = lo[c_hi + ch], hi[c_hi + ch]
-                        index = (j * channels + ch) * 3
-                        acc[index] += 0.5 * (p_lo + p_hi)
-                        acc[index + 1] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
-                        acc[index + 2] += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo
-                                           + 2.0 * p_hi * q_hi) / 6.0
+                if channels == 1:  # gray: t1, t2, t3 each in a row of its own (the loop vectorises)
+                    _gray_row(lo, hi, n, acc, acc + width, acc + 2 * width)
+                else:
+                    for j in range(width):
+                        c_lo = _clamp(j - 1, n) * channels
+                        c_hi = _clamp(j, n) * channels  # the right neighbour j + 1 in padded columns
+                        for ch in range(channels):
+                            index = (j * channels + ch) * 3
+                            _accumulate(lo[c_lo + ch], hi[c_lo + ch], lo[c_hi + ch], hi[c_hi + ch],
+                                        acc + index, acc + index + 1, acc + index + 2)
             if (a + 1) % anchor == 0:
                 for j in range(width):
                     for ch in range(channels):
                         for index in range(3):
-                            table[(a + 1) // anchor, j, ch, index] = acc[(j * channels + ch) * 3 + index]
+                            table[(a + 1) // anchor, j, ch, index] = (
+                                acc[index * width + j] if channels == 1 else acc[(j * channels + ch) * 3 + index])
         for ch in range(channels):
             table[:, width - 1, ch, 2] = 0.0  # t3 of the last column has no right neighbour
         for a in range(m):  # domain totals, image row by image row
@@ -144,6 +144,27 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_
                 total2[ch] += diagonal * same + following / 3.0
     finally:
         free(acc)
+
+
+cdef inline void _accumulate(double p_lo, double p_hi, double q_lo, double q_hi, double *t1, double *t2,
+                             double *t3) noexcept nogil:
+    """Add one padded row step of a column's profile P (and its right neighbour Q) to the
+    column's (t1, t2, t3) of :func:`build_tables`: the exact integrals of P, P^2 and P Q over it."""
+    t1[0] += 0.5 * (p_lo + p_hi)
+    t2[0] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
+    t3[0] += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo + 2.0 * p_hi * q_hi) / 6.0
+
+
+cdef inline void _gray_row(const double *lo, const double *hi, Py_ssize_t n, double *t1, double *t2,
+                           double *t3) noexcept nogil:
+    """:func:`_accumulate` of the n + 2 padded columns of a gray row step (columns 0, n and n + 1
+    replicate the image's first and last)."""
+    cdef Py_ssize_t j
+    _accumulate(lo[0], hi[0], lo[0], hi[0], t1, t2, t3)
+    for j in range(1, n):
+        _accumulate(lo[j - 1], hi[j - 1], lo[j], hi[j], t1 + j, t2 + j, t3 + j)
+    for j in range(n, n + 2):
+        _accumulate(lo[n - 1], hi[n - 1], lo[n - 1], hi[n - 1], t1 + j, t2 + j, t3 + j)
 
 
 cdef (double, double) _row_forms(const double[:, :, ::1] values, Py_ssize_t a, Py_ssize_t ch,
