@@ -36,7 +36,9 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport INFINITY, M_PI, fabs, hypot, isnan, sin, sqrt
+from libc.stdint cimport uint64_t
 from libc.stdlib cimport calloc, free, malloc, realloc
+from libc.string cimport memcpy
 
 cdef Py_ssize_t _POLL_ROWS = 256
 
@@ -99,7 +101,7 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_
     cdef Py_ssize_t width = n + 2, a, j, ch, c_lo, c_hi, index
     cdef const double *lo
     cdef const double *hi
-    cdef double p_lo, p_hi, q_lo, q_hi, diagonal, same, following
+    cdef double diagonal, same, following
     cdef double *acc = <double *> malloc(width * channels * 3 * sizeof(double))
     if acc == NULL:
         raise MemoryError()
@@ -115,22 +117,22 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_
             lo = &values[_clamp(a - 1, m), 0, 0]
             hi = &values[_clamp(a, m), 0, 0]
             with nogil:
-                for j in range(width):
-                    c_lo = _clamp(j - 1, n) * channels
-                    c_hi = _clamp(j, n) * channels  # the right neighbour j + 1 in padded columns
-                    for ch in range(channels):
-                        p_lo, p_hi = lo[c_lo + ch], hi[c_lo + ch]
-                        q_lo, q_hi = lo[c_hi + ch], hi[c_hi + ch]
-                        index = (j * channels + ch) * 3
-                        acc[index] += 0.5 * (p_lo + p_hi)
-                        acc[index + 1] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
-                        acc[index + 2] += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo
-                                           + 2.0 * p_hi * q_hi) / 6.0
+                if channels == 1:  # gray: t1, t2, t3 each in a row of its own (the loop vectorises)
+                    _gray_row(lo, hi, n, acc, acc + width, acc + 2 * width)
+                else:
+                    for j in range(width):
+                        c_lo = _clamp(j - 1, n) * channels
+                        c_hi = _clamp(j, n) * channels  # the right neighbour j + 1 in padded columns
+                        for ch in range(channels):
+                            index = (j * channels + ch) * 3
+                            _accumulate(lo[c_lo + ch], hi[c_lo + ch], lo[c_hi + ch], hi[c_hi + ch],
+                                        acc + index, acc + index + 1, acc + index + 2)
             if (a + 1) % anchor == 0:
                 for j in range(width):
                     for ch in range(channels):
                         for index in range(3):
-                            table[(a + 1) // anchor, j, ch, index] = acc[(j * channels + ch) * 3 + index]
+                            table[(a + 1) // anchor, j, ch, index] = (
+                                acc[index * width + j] if channels == 1 else acc[(j * channels + ch) * 3 + index])
         for ch in range(channels):
             table[:, width - 1, ch, 2] = 0.0  # t3 of the last column has no right neighbour
         for a in range(m):  # domain totals, image row by image row
@@ -142,6 +144,27 @@ def build_tables(const double[:, :, ::1] values, double[:, :, :, ::1] table, Py_
                 total2[ch] += diagonal * same + following / 3.0
     finally:
         free(acc)
+
+
+cdef inline void _accumulate(double p_lo, double p_hi, double q_lo, double q_hi, double *t1, double *t2,
+                             double *t3) noexcept nogil:
+    """Add one padded row step of a column's profile P (and its right neighbour Q) to the
+    column's (t1, t2, t3) of :func:`build_tables`: the exact integrals of P, P^2 and P Q over it."""
+    t1[0] += 0.5 * (p_lo + p_hi)
+    t2[0] += (p_lo * p_lo + p_lo * p_hi + p_hi * p_hi) / 3.0
+    t3[0] += (2.0 * p_lo * q_lo + p_lo * q_hi + p_hi * q_lo + 2.0 * p_hi * q_hi) / 6.0
+
+
+cdef inline void _gray_row(const double *lo, const double *hi, Py_ssize_t n, double *t1, double *t2,
+                           double *t3) noexcept nogil:
+    """:func:`_accumulate` of the n + 2 padded columns of a gray row step (columns 0, n and n + 1
+    replicate the image's first and last)."""
+    cdef Py_ssize_t j
+    _accumulate(lo[0], hi[0], lo[0], hi[0], t1, t2, t3)
+    for j in range(1, n):
+        _accumulate(lo[j - 1], hi[j - 1], lo[j], hi[j], t1 + j, t2 + j, t3 + j)
+    for j in range(n, n + 2):
+        _accumulate(lo[n - 1], hi[n - 1], lo[n - 1], hi[n - 1], t1 + j, t2 + j, t3 + j)
 
 
 cdef (double, double) _row_forms(const double[:, :, ::1] values, Py_ssize_t a, Py_ssize_t ch,
@@ -1035,7 +1058,11 @@ def mask_contours(const unsigned char[:, ::1] mask):
     the Py_ssize_t start of every curve (one more than the curves).
     """
     cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], r, c, k, node, total, count
-    cdef int case, top_r, top_c, bottom_r, left_r, left_c, right_c
+    cdef int case, top_r, top_c, bottom_r, left_r, left_c, right_c, upper_left, lower_left, upper, lower
+    cdef uint64_t above, below, uniform
+    cdef const unsigned char *upper_row
+    cdef const unsigned char *lower_row
+    cdef unsigned char *blank = <unsigned char *> calloc(n + 1, 1)  # the padding's rows: False
     cdef Tracer tracer
     cdef double *points
     cdef Py_ssize_t *offsets
@@ -1048,32 +1075,53 @@ def mask_contours(const unsigned char[:, ::1] mask):
     tracer.end_v = <Py_ssize_t *> malloc((n + 2) * sizeof(Py_ssize_t))
     tracer.first, tracer.last, tracer.following, tracer.point_r, tracer.point_c = NULL, NULL, NULL, NULL, NULL
     tracer.contours, tracer.contour_capacity, tracer.nodes, tracer.node_capacity = 0, 0, 0, 0
-    if tracer.start_h == NULL or tracer.end_h == NULL or tracer.start_v == NULL or tracer.end_v == NULL:
+    if (blank == NULL or tracer.start_h == NULL or tracer.end_h == NULL or tracer.start_v == NULL
+            or tracer.end_v == NULL):
+        free(blank)
         _free_tracer(&tracer)
         raise MemoryError()
     for k in range(2 * (n + 2)):
         tracer.start_h[k] = -1
         tracer.end_h[k] = -1
+    for k in range(n + 2):
+        tracer.start_v[k] = -1
+        tracer.end_v[k] = -1
     try:
         for r in range(m + 1):  # square rows of the padded mask: padded rows r and r + 1
             if r % _POLL_ROWS == 0:
                 PyErr_CheckSignals()
             with nogil:
+                # No slot needs clearing: each crossing lies on two segments, of the two squares
+                # beside it (the same square row for a vertical one, this row and the one before
+                # for one on the top line), and the second pops the end the first left, so every
+                # slot of the vertical points and of the line before is -1 again here.
                 tracer.row = r
-                for k in range((n + 2) * ((r + 1) % 2), (n + 2) * ((r + 1) % 2 + 1)):
-                    tracer.start_h[k] = -1  # the bottom line's slots held the line of row r - 1
-                    tracer.end_h[k] = -1
-                for k in range(n + 2):
-                    tracer.start_v[k] = -1
-                    tracer.end_v[k] = -1
-                for c in range(n + 1):
-                    # corners upper left 1, upper right 2, lower left 4, lower right 8 (padded
-                    # (i, j) is mask[i - 1, j - 1], outside it False)
-                    case = ((1 if 0 < r and 0 < c and mask[r - 1, c - 1] else 0)
-                            | (2 if 0 < r and c < n and mask[r - 1, c] else 0)
-                            | (4 if r < m and 0 < c and mask[r, c - 1] else 0)
-                            | (8 if r < m and c < n and mask[r, c] else 0))
+                # padded rows r and r + 1 are mask rows r - 1 and r, False beyond the mask; the
+                # corners of square c: upper left 1, upper right 2, lower left 4, lower right 8
+                # (padded (i, j) is mask[i - 1, j - 1]); the right ones of square c are the left
+                # ones of square c + 1
+                upper_row = &mask[r - 1, 0] if 0 < r else blank
+                lower_row = &mask[r, 0] if r < m else blank
+                upper_left, lower_left = 0, 0
+                c = 0
+                while c <= n:
+                    if c < n:
+                        upper, lower = (1 if upper_row[c] else 0), (1 if lower_row[c] else 0)
+                    else:  # the padding's column
+                        upper, lower = 0, 0
+                    case = upper_left | (upper << 1) | (lower_left << 2) | (lower << 3)
+                    upper_left, lower_left = upper, lower
                     if case == 0 or case == 15:
+                        # whole words of 8 squares alike ahead (every corner 0, or every one 1) are
+                        # skipped: no segment
+                        uniform = 0 if case == 0 else 0x0101010101010101
+                        while c + 8 < n:
+                            memcpy(&above, upper_row + c + 1, 8)
+                            memcpy(&below, lower_row + c + 1, 8)
+                            if above != uniform or below != uniform:
+                                break
+                            c += 8
+                        c += 1
                         continue
                     # doubled coordinates: top (2r, 2c + 1), bottom (2r + 2, 2c + 1),
                     # left (2r + 1, 2c), right (2r + 1, 2c + 2)
@@ -1113,6 +1161,7 @@ def mask_contours(const unsigned char[:, ::1] mask):
                         failed = _segment(&tracer, left_r, left_c, top_r, top_c)
                     if failed != 0:
                         break
+                    c += 1
             if failed != 0:
                 raise MemoryError()
         # every live contour in the order of creation, reversed (positive_orientation="high"),
@@ -1148,6 +1197,7 @@ def mask_contours(const unsigned char[:, ::1] mask):
             count += 1
         return points_out, offsets_out[:(count + 1) * sizeof(Py_ssize_t)]
     finally:
+        free(blank)
         _free_tracer(&tracer)
 
 

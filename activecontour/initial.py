@@ -164,10 +164,8 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
     values = smooth if values is None else values
     m, n, channels = smooth.shape
     step = max(1, int(np.ceil(m * n / _SPLIT_SAMPLE)))
-    rows = np.arange(0, m, step)
-    paired = rows[rows + 1 < m]  # the rows with a row below
-    top, below = smooth[rows], smooth[paired + 1]
-    fit = values[rows].reshape(-1, channels)
+    top, below = smooth[::step], smooth[1::step]  # every step-th row, and the rows below them
+    fit = values[::step].reshape(-1, channels)
     squares = float(np.einsum("ij,ij->", fit, fit))  # the same for every split
     if channels == 1:
         axes = np.ones((1, 1))
@@ -177,8 +175,8 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
         axes = np.linalg.svd(centred, full_matrices=False)[2]
     best = (axes[0], -np.inf, np.inf)
     for axis in axes:
-        upper, lower = top @ axis, below @ axis
-        upper_paired = upper[: len(paired)]
+        # gray: the values themselves (the direction is 1), no product
+        upper, lower = (top[:, :, 0], below[:, :, 0]) if channels == 1 else (top @ axis, below @ axis)
         low, high = float(upper.min()), float(upper.max())
         if not high > low:
             continue
@@ -187,18 +185,22 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
         def index(x, low=low, scale=scale):
             # clipped at both ends: the rows below the sampled ones can lie outside [low, high]
             # (truncated first, then clipped as integers: the same bins, one float temporary)
-            where = ((x - low) * scale).astype(np.intp).ravel()
+            shifted = x - low
+            shifted *= scale
+            where = shifted.astype(np.intp)
             return np.clip(where, 0, bins - 1, out=where)
 
         where = index(upper)
-        count = np.bincount(where, minlength=bins).astype(np.float64)
-        sums = np.stack([np.bincount(where, fit[:, ch], minlength=bins) for ch in range(channels)])
-        # pairs separated by the threshold after bin k: lower bin <= k < upper bin
+        count = np.bincount(where.ravel(), minlength=bins).astype(np.float64)
+        sums = np.stack([np.bincount(where.ravel(), fit[:, ch], minlength=bins) for ch in range(channels)])
+        # pairs separated by the threshold after bin k: lower bin <= k < upper bin.  The bin of
+        # the larger value is the larger bin (the binning is monotone: rounding is), so a pair's
+        # bins are those of its values, and the rows below are binned once
         separated = np.zeros(bins)
-        pairs = [(upper[:, 1:], upper[:, :-1]), (upper_paired, lower)]
+        pairs = [(where[:, 1:], where[:, :-1]), (where[: len(lower)], index(lower))]
         for a, b in pairs:
-            a, b = np.maximum(a, b), np.minimum(a, b)
-            separated += np.bincount(index(b), minlength=bins) - np.bincount(index(a), minlength=bins)
+            a, b = np.maximum(a, b).ravel(), np.minimum(a, b).ravel()
+            separated += np.bincount(b, minlength=bins) - np.bincount(a, minlength=bins)
         below_count, below_sums = np.cumsum(count)[:-1], np.cumsum(sums, axis=1)[:, :-1]
         above_count = count.sum() - below_count
         above_sums = sums.sum(axis=1)[:, None] - below_sums

@@ -427,6 +427,33 @@ def _link(kept, nodes, n_points):
     return curves
 
 
+#: the float32 filters' error on a disk's mean of g, relative to the size of its terms (k taps
+#: in float32 err by ~k 6e-8 of it: 3e-6 for the 49 of radius 4): :func:`_band_range` widens its
+#: range by this much
+_FILTER_SLACK = 1e-3
+
+
+def _band_range(channels, form):
+    """A range that holds ``g`` (the quadratic form) at every pixel of a band (its float32
+    channels) and every float32 filter's mean of it there: the least and the largest g over
+    each channel's [min, max] (at the ends, or where the parabola turns), summed, widened by
+    ``_FILTER_SLACK`` of the terms' size."""
+    import cv2
+
+    least = largest = form.constant
+    size = abs(form.constant)
+    for channel, linear, square in zip(channels, form.linear, form.square, strict=True):
+        low, high = cv2.minMaxLoc(channel)[:2]
+        points = [low, high]
+        if square != 0 and low < -linear / (2.0 * square) < high:
+            points.append(-linear / (2.0 * square))
+        g = [linear * x + square * x * x for x in points]
+        least, largest = least + min(g), largest + max(g)
+        reach = max(abs(low), abs(high))
+        size += abs(linear) * reach + abs(square) * reach * reach
+    return least - _FILTER_SLACK * size, largest + _FILTER_SLACK * size
+
+
 def nucleation_sites(values, inside, form, mu, radius):
     """Where a small disk should change sides: the topological derivative of (6.38).
 
@@ -470,9 +497,17 @@ def nucleation_sites(values, inside, form, mu, radius):
         stop = min(m, start + band)
         low, high = max(0, start - size), min(m, stop + size)  # margins: the filters see real data
         keep = slice(start - low, stop - low)
+        channels = [np.ascontiguousarray(values[low:high, :, ch], dtype=np.float32)
+                    for ch in range(values.shape[2])]
+        # a disk's mean of g lies between the least and the largest g of the band's pixels (the
+        # filters read no other): a band where no pixel passes a threshold holds no candidate of
+        # it, and needs neither the filters nor that region's morphology
+        least, largest = _band_range(channels, form)
+        wanted = {True: largest > threshold, False: least < -threshold}
+        if not (wanted[True] or wanted[False]):
+            continue
         mean = None
-        for ch in range(values.shape[2]):
-            channel = np.ascontiguousarray(values[low:high, :, ch], dtype=np.float32)
+        for ch, channel in enumerate(channels):
             terms = [(channel, linear[ch])] + ([(channel * channel, square[ch])] if square[ch] != 0 else [])
             for data, factor in terms:
                 part = cv2.filter2D(data, -1, kernel * np.float32(factor), delta=0.0 if mean is not None
@@ -480,18 +515,30 @@ def nucleation_sites(values, inside, form, mu, radius):
                 mean = part if mean is None else cv2.add(mean, part)
         mean = mean[keep]
         region = inside_u8[low:high]
-        # pixels whose whole disk lies inside (erosion) or outside (no dilation reaches them); the
-        # image's outside counts as either region, as for a disk cut by the border
-        room = {True: cv2.erode(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=1)[keep],
-                False: cv2.dilate(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=0)[keep]}
         for hole, sign in ((True, 1.0), (False, -1.0)):
-            room_ok = room[hole].view(bool)  # 0/1 bytes
-            chosen = (mean > threshold) & room_ok if hole else (mean < -threshold) & ~room_ok
-            where = np.flatnonzero(chosen)
+            if not wanted[hole]:
+                continue
+            passed = (mean > threshold) if hole else (mean < -threshold)
+            # on its own side (a disk inside holds its centre, one outside too): the morphology
+            # only where such a pixel is (noise passes on the other side, never a candidate)
+            own = region[keep].view(bool)
+            passed &= own if hole else ~own
+            if not passed.any():
+                continue
+            # pixels whose whole disk lies inside (erosion) or outside (no dilation reaches them);
+            # the image's outside counts as either region, as for a disk cut by the border
+            if hole:
+                room = cv2.erode(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=1)[keep]
+            else:
+                room = cv2.dilate(region, footprint, borderType=cv2.BORDER_CONSTANT, borderValue=0)[keep]
+            room_ok = room.view(bool)  # 0/1 bytes
+            where = np.flatnonzero(passed & room_ok if hole else passed & ~room_ok)
             found[hole][0].append(where + start * n)
             found[hole][1].append(sign * mean.ravel()[where].astype(np.float64) - threshold)
     sites = []
     for hole in (True, False):
+        if not found[hole][0]:
+            continue
         index, gain = np.concatenate(found[hole][0]), np.concatenate(found[hole][1])
         if index.size == 0:
             continue

@@ -10,6 +10,7 @@ import numpy as np
 
 __all__ = [
     "CHANNEL_COUNTS",
+    "byte_levels",
     "channels_last",
     "intensity_scale",
     "normalize_image",
@@ -131,22 +132,62 @@ def normalize_image(image, *, color="gray", normalize="range"):
         raise ValueError(f"image must have shape (M, N) or (M, N, C), got shape {image.shape}")
     if channels.shape[0] < 2 or channels.shape[1] < 2:
         raise ValueError(f"image must be at least 2 x 2 pixels, got shape {image.shape}")
-    values = channels.astype(np.float64)  # this function's own copy: scaled in place below
-    if not np.all(np.isfinite(values)):
-        raise ValueError("image contains NaN or infinite values")
-    offset, scale = _affine(values, image.dtype, normalize)
-    if not np.isfinite(scale):  # intensities spanning more than the float range: halve first
-        values *= 0.5
+    # 8-bit levels: one pass through the table of the 256 (no check), in C order, which the
+    # luminance's product below then reads in the same order as a copy of the channels
+    in_order = channels.ndim == 2 or color != "gray" or channels.flags.c_contiguous
+    if channels.dtype in _BYTE_DTYPES and in_order:
+        import cv2
+
+        codes, table = _byte_levels(channels, image.dtype, normalize)
+        values = cv2.LUT(codes, table)
+    else:
+        values = channels.astype(np.float64)  # this function's own copy: scaled in place below
+        if not np.all(np.isfinite(values)):
+            raise ValueError("image contains NaN or infinite values")
         offset, scale = _affine(values, image.dtype, normalize)
-    if offset != 0.0:
-        values -= offset
-    if scale != 1.0:
-        values /= scale
+        if not np.isfinite(scale):  # intensities spanning more than the float range: halve first
+            values *= 0.5
+            offset, scale = _affine(values, image.dtype, normalize)
+        _scale(values, offset, scale)
     if values.ndim == 3 and color == "gray":
         values = values @ np.array([0.2125, 0.7154, 0.0721])
     if values.ndim == 2:
         values = values[:, :, np.newaxis]
     return np.ascontiguousarray(values)
+
+
+#: The dtypes whose intensities :func:`byte_levels` maps through a table of their 256 levels.
+_BYTE_DTYPES = (np.dtype(np.uint8), np.dtype(np.bool_))
+
+
+def byte_levels(image, normalize="range"):
+    """``(codes, table)`` for an image of 8-bit (or bool) intensities, else None.
+
+    ``codes`` are its intensity channels (alpha dropped) as uint8, (M, N) or (M, N, 3), and
+    ``table`` the 256 normalised values of the levels, so that ``table[codes]`` is
+    :func:`normalize_image` with ``color="vector"`` and this ``normalize``, bit for bit: the same
+    affine map on the same float64 values, taken once per level instead of once per pixel.
+    """
+    image = np.asarray(image)
+    channels = _intensity_channels(image)
+    return _byte_levels(channels, image.dtype, normalize) if channels.dtype in _BYTE_DTYPES else None
+
+
+def _byte_levels(channels, dtype, normalize):
+    """:func:`byte_levels` of the intensity channels of an image of ``dtype``."""
+    codes = np.ascontiguousarray(channels).view(np.uint8)  # bool: 0 and 1
+    table = np.arange(256, dtype=np.float64)
+    # the minimum and maximum of the levels present, as _affine takes them from the float values
+    _scale(table, *_affine(codes, dtype, normalize))
+    return codes, table
+
+
+def _scale(values, offset, scale):
+    """``(values - offset) / scale`` in place, each step skipped where it is the identity."""
+    if offset != 0.0:
+        values -= offset
+    if scale != 1.0:
+        values /= scale
 
 
 def intensity_scale(image, normalize="range"):

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from activecontour.geometry.curve import to_xy
-from activecontour.imaging.normalize import normalize_image
+from activecontour.imaging.normalize import byte_levels, normalize_image
 from activecontour.io.atomic import write_atomically
 from activecontour.io.contours import curve_list
 from activecontour.io.images import MAX_PIXELS, load_image
@@ -129,7 +129,7 @@ def encode_mask(path, mask):
         if not (np.issubdtype(mask.dtype, np.number) and np.all(np.isfinite(mask))):
             raise ValueError("mask must be a bool array (or numbers, nonzero = inside) without NaN")
         mask = mask != 0
-    ok, buffer = cv2.imencode(suffix, np.where(mask, 255, 0).astype(np.uint8))
+    ok, buffer = cv2.imencode(suffix, mask.view(np.uint8) * np.uint8(255))  # bool: bytes 0 and 1
     if not ok:
         raise ValueError(f"OpenCV could not encode a mask as {suffix}")
     return buffer.tobytes()
@@ -262,11 +262,21 @@ def display_rgb(image):
     images are repeated on three channels; alpha is dropped; a channel-first (3 or 4, M, N) image
     is read as channel-last.
     """
-    values = normalize_image(image, color="vector", normalize="dtype")  # a fresh float64 copy
-    pixels = values.reshape(-1, values.shape[2])
-    lowest, highest = pixels.min(axis=0), pixels.max(axis=0)
-    if np.any(highest > lowest):
+    import cv2
+
+    levels = byte_levels(image, normalize="dtype")
+    if levels is None:
+        values = normalize_image(image, color="vector", normalize="dtype")  # a fresh float64 copy
+        pixels = values.reshape(-1, values.shape[2])
+        lowest, highest = pixels.min(axis=0), pixels.max(axis=0)
         sample = pixels[:: max(1, len(pixels) // 1_000_000)]
+    else:  # 8 bits: the 256 levels' normalised values (the same), shown through a table below
+        codes, values = levels
+        pixels = codes.reshape(len(codes) * codes.shape[1], -1)
+        # the table is increasing: the extreme levels' values are the values' extremes
+        lowest, highest = values[pixels.min(axis=0)], values[pixels.max(axis=0)]
+        sample = values[pixels[:: max(1, len(pixels) // 1_000_000)]]
+    if np.any(highest > lowest):
         low, high = np.percentile(sample, DISPLAY_PERCENTILES)
         if high <= low:  # the percentiles meet (a few pixels differ from the rest): the plain range
             low, high = float(lowest.min()), float(highest.max())
@@ -278,8 +288,10 @@ def display_rgb(image):
     np.rint(values, out=values)
     display = values.astype(np.uint8)
     del values
-    if display.shape[2] == 1:
-        display = np.repeat(display, 3, axis=2)
+    if levels is not None:
+        display = cv2.LUT(codes, display)
+    if display.ndim == 2 or display.shape[2] == 1:
+        display = cv2.cvtColor(display, cv2.COLOR_GRAY2RGB)
     return np.ascontiguousarray(display)
 
 

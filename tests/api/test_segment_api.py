@@ -104,6 +104,20 @@ def test_normalisation_of_dtypes():
     assert normalize_image(rgb, color="vector").shape == (2, 2, 3)
 
 
+def test_8_bit_images_are_normalised_as_their_float_values():
+    # the 256 levels' table gives the values the per-pixel float path gives, bit for bit
+    rng = np.random.default_rng(3)
+    gray = rng.integers(17, 231, size=(30, 41), dtype=np.uint8)
+    for image in (gray, np.dstack([gray, gray[::-1], gray[:, ::-1]]), gray > 120):
+        as_float = image.astype(np.float64)
+        for keywords in ({}, {"color": "vector"}, {"normalize": None}):
+            expected = normalize_image(as_float, **keywords)
+            assert normalize_image(image, **keywords).tobytes() == expected.tobytes()
+        by_dtype = normalize_image(image, color="vector", normalize="dtype")
+        scale = 1.0 if image.dtype == bool else 255.0
+        assert by_dtype.tobytes() == (as_float / scale).reshape(by_dtype.shape).tobytes()
+
+
 def test_load_image_errors(tmp_path):
     with pytest.raises(FileNotFoundError, match="image file not found"):
         load_image(tmp_path / "missing.png")

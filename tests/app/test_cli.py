@@ -279,6 +279,16 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
     assert len(calls) == 2
 
 
+def test_the_executable_turns_numpys_huge_pages_off_unless_told(monkeypatch):
+    seen = []
+    monkeypatch.setattr(cli, "main", lambda: seen.append(os.environ.get("NUMPY_MADVISE_HUGEPAGE")) or 0)
+    monkeypatch.delenv("NUMPY_MADVISE_HUGEPAGE", raising=False)
+    assert cli.console_script() == 0
+    monkeypatch.setenv("NUMPY_MADVISE_HUGEPAGE", "1")  # the caller's environment wins
+    assert cli.console_script() == 0
+    assert seen == ["0", "1"]
+
+
 def test_installed_console_script(small, tmp_path):
     executable = shutil.which("activecontour")
     if executable is None:

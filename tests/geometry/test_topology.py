@@ -164,3 +164,27 @@ def test_per_channel_weights_select_channels():
     assert synthetic.dice(blind.mask, truth) < 0.9
     with pytest.raises(ValueError, match="lambda_in has 2 weights"):
         ac.segment(image, color="vector", lambda_in=[1.0, 1.0])
+
+
+def test_nucleation_sites_skip_no_band_that_holds_a_candidate(monkeypatch):
+    from activecontour.imaging.normalize import normalize_image
+    from activecontour.models.base import QuadraticForm
+
+    # a region at its constant 0.7 on a background at 0.3, a dark patch deep inside it and a
+    # bright one far outside: g = (I - 0.7)^2 - (I - 0.3)^2 is +-0.16, and a 7 x 7 patch holds
+    # 45 of a radius-4 disk's 49 pixels, so the disk's mean there is +-41 * 0.16 / 49, far beyond
+    # 2 mu / radius; nowhere else does a disk's mean pass on its own side
+    image = np.full((120, 50), 0.3)
+    inside = np.zeros(image.shape, dtype=bool)
+    inside[10:70, 5:45] = True
+    image[inside] = 0.7
+    image[30:37, 20:27] = 0.3
+    image[95:102, 20:27] = 0.7
+    values = normalize_image(image, normalize=None)
+    form = QuadraticForm.of_fit([1.0], [0.7]) - QuadraticForm.of_fit([1.0], [0.3])
+    whole = topology.nucleation_sites(values, inside, form, 0.05, 4.0)
+    assert [(tuple(center), hole) for center, hole in whole] == [((33.0, 23.0), True), ((98.0, 23.0), False)]
+    # in bands of 6 rows most are skipped (no pixel's g passes there, or none on its own side)
+    monkeypatch.setattr(topology, "_BAND_PIXELS", 6 * image.shape[1])
+    banded = topology.nucleation_sites(values, inside, form, 0.05, 4.0)
+    assert [(tuple(center), hole) for center, hole in banded] == [((33.0, 23.0), True), ((98.0, 23.0), False)]

@@ -170,6 +170,21 @@ def test_overlay_background_is_normalised_like_the_library(tmp_path):
     assert np.all(rgb == round(32768 / 65535 * 255))
 
 
+def test_8_bit_images_are_displayed_as_their_float_values(tmp_path):
+    # display_rgb maps an 8-bit image through a table of its levels: the same bytes as the float
+    # values dtype normalisation gives (a hot pixel stretches by the percentiles, not the range)
+    rng = np.random.default_rng(4)
+    gray = rng.integers(40, 200, size=(300, 200), dtype=np.uint8)
+    gray[7, 9] = 255
+    for image in (gray, np.dstack([gray, gray[::-1], gray[:, ::-1]])):
+        shown = io.display_rgb(image)
+        assert shown.dtype == np.uint8 and shown.shape == (300, 200, 3)
+        assert shown.tobytes() == io.display_rgb(image / 255.0).tobytes()
+    assert shown[..., 0].max() == 255 and shown[..., 0].min() == 0
+    mask = gray > 128
+    assert io.read_mask(io.write_mask(tmp_path / "m.png", mask)).tobytes() == mask.tobytes()
+
+
 def test_overlay_keeps_the_colours_of_an_rgb_image(tmp_path):
     image = np.empty((20, 24, 3), np.uint8)
     image[...] = (10, 120, 250)
