@@ -159,8 +159,9 @@ class _Problem:
         band only, so that no pixel far from Gamma (at +-band) flips on its own; when
         ``tau mu <= 1/4`` the explicit step ``phi + tau mu Laplace(phi) - tau f`` is stable and its
         fixed point is that of (6.41) for every tau (:meth:`explicit_limit`), so it is taken on the
-        band's pixels alone (O(band) instead of a DCT pair over the image), and otherwise S is solved on the band (:meth:`_band_smooth`) when
-        that is cheaper than the DCT pair.  ``force``: the constants from :meth:`force`.
+        band's pixels alone (O(band) instead of a DCT pair over the image), and otherwise S is
+        solved on the band (:meth:`_band_smooth`) when that is cheaper than the DCT pair.
+        ``force``: the constants from :meth:`force`.
         """
         if not smooth_force and tau * self.params.mu <= _EXPLICIT:
             return self._explicit_step(state, force, tau)
