@@ -17,7 +17,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :func:`fill_holes` (an object's window without holes),
   :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
-* :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
+* :func:`segment_integrals`, :func:`segment_loads`, :func:`h1_band`, :func:`band_cholesky`, :func:`band_solve`,
   :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
   :mod:`activecontour.geometry.partition`,
   :mod:`activecontour.backends.network` (the N-region network: its integrals, load (6.41), H^1
@@ -1283,24 +1283,42 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     return length + length_carry
 
 
-def band_cholesky(double[:, ::1] band):
+def band_cholesky(double[:, ::1] band, Py_ssize_t[:, ::1] envelope):
     """Cholesky factorisation ``A = U^T U`` of a symmetric positive definite band matrix, in place.
 
     ``band[j, w + i - j] = A[i, j]`` for ``j - w <= i <= j`` (column j's entries on and above the
     diagonal, w the half bandwidth) becomes U in the same layout.  O(n w^2), no fill outside the
     band.  Returns 0, or ``j + 1`` where the leading minor of order ``j + 1`` is not positive.
+
+    The factor has no entry above a column's first nonzero of A (its envelope, which the reverse
+    Cuthill-McKee order keeps narrow: a few rows where the band is about ten), so the sums run
+    over the envelopes only: the products left out are zeros, the result the same.  ``envelope``
+    (n, 2) receives each column's first row and each row's last column with an entry in it, for
+    :func:`band_solve`.
     """
-    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, first, failed = 0
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, low, failed = 0
     cdef double total
+    cdef double *column_j
+    if envelope.shape[0] != n or envelope.shape[1] != 2:
+        raise ValueError(f"envelope must have shape ({n}, 2)")
     with nogil:
         for j in range(n):
-            first = j - w if j > w else 0
-            for i in range(first, j + 1):
-                total = band[j, w + i - j]
-                for k in range(max(first, i - w), i):
-                    total -= band[i, w + k - i] * band[j, w + k - j]
+            envelope[j, 0] = j  # the first row of column j's envelope
+            envelope[j, 1] = j
+            for k in range(w - min(j, w), w):
+                if band[j, k] != 0.0:
+                    envelope[j, 0] = j - w + k
+                    break
+            for i in range(envelope[j, 0], j):
+                envelope[i, 1] = j  # the last column with row i in its envelope, so far
+            column_j = &band[j, w - j]  # column_j[i] = A[i, j]
+            for i in range(envelope[j, 0], j + 1):
+                total = column_j[i]
+                low = max(envelope[j, 0], envelope[i, 0])
+                for k in range(low, i):
+                    total -= band[i, w + k - i] * column_j[k]
                 if i < j:
-                    band[j, w + i - j] = total / band[i, w]
+                    column_j[i] = total / band[i, w]
                 elif total > 0.0:
                     band[j, w] = sqrt(total)
                 else:
@@ -1311,19 +1329,58 @@ def band_cholesky(double[:, ::1] band):
     return failed
 
 
-def band_solve(const double[:, ::1] factor, double[::1] rhs):
-    """Solve ``U^T U x = rhs`` in place with the factor of :func:`band_cholesky`."""
+def h1_band(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+            const Py_ssize_t[::1] position, double[:, ::1] band):
+    """The matrix ``M + K`` of the H^1 form (6.39) of P1 functions on segments, in
+    :func:`band_cholesky`'s layout (``band`` zeros, of shape (n, w + 1)), restricted to the nodes
+    with ``position >= 0`` and ordered by it: a segment of length h adds ``h / 3 + 1 / h`` to the
+    diagonal at each end and puts ``h / 6 - 1 / h`` between them (one segment per pair of nodes).
+    Each diagonal entry is its sum over the segments starting there plus its sum over those
+    ending there, each in segment order."""
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, e, i, j
+    cdef double h, dr, dc, diagonal
+    cdef double *ending = <double *> calloc(max(n, 1), sizeof(double))
+    if ending == NULL:
+        raise MemoryError()
+    with nogil:
+        for e in range(start.shape[0]):
+            i, j = position[start[e]], position[end[e]]
+            if i < 0 and j < 0:
+                continue
+            dr = nodes[end[e], 0] - nodes[start[e], 0]
+            dc = nodes[end[e], 1] - nodes[start[e], 1]
+            h = hypot(dr, dc)
+            diagonal = h / 3.0 + 1.0 / h
+            if i >= 0:
+                band[i, w] += diagonal
+            if j >= 0:
+                ending[j] += diagonal
+            if i >= 0 and j >= 0:
+                if i < j:
+                    band[j, w + i - j] = h / 6.0 - 1.0 / h
+                else:
+                    band[i, w + j - i] = h / 6.0 - 1.0 / h
+        for i in range(n):
+            band[i, w] += ending[i]
+    free(ending)
+
+
+def band_solve(const double[:, ::1] factor, const Py_ssize_t[:, ::1] envelope, double[::1] rhs):
+    """Solve ``U^T U x = rhs`` in place with the factor and the envelope of :func:`band_cholesky`
+    (the sums over its entries only: the products left out are zeros)."""
     cdef Py_ssize_t n = factor.shape[0], w = factor.shape[1] - 1, i, j, k
     cdef double total
+    if envelope.shape[0] != n or envelope.shape[1] != 2:
+        raise ValueError(f"envelope must have shape ({n}, 2)")
     with nogil:
         for j in range(n):  # U^T y = rhs
             total = rhs[j]
-            for k in range(j - w if j > w else 0, j):
+            for k in range(envelope[j, 0], j):
                 total -= factor[j, w + k - j] * rhs[k]
             rhs[j] = total / factor[j, w]
         for i in range(n - 1, -1, -1):  # U x = y
             total = rhs[i]
-            for j in range(i + 1, min(n, i + w + 1)):
+            for j in range(i + 1, envelope[i, 1] + 1):
                 total -= factor[j, w + i - j] * rhs[j]
             rhs[i] = total / factor[i, w]
 
@@ -1351,6 +1408,68 @@ def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::
         offsets[count] = position
     free(seen)
     return count
+
+
+def follow(const Py_ssize_t[::1] start_ids, const Py_ssize_t[::1] end_ids, Py_ssize_t distinct,
+           Py_ssize_t[::1] following):
+    """The chaining of :func:`activecontour.geometry.partition.loop_order` for dense point ids
+    (0..distinct-1): the i-th element (in index order) ending at a point is followed by the i-th
+    starting there, in O(n + distinct) (a counting sort of the starts by id).  Raises ValueError
+    when a point has more ends than starts."""
+    cdef Py_ssize_t n = start_ids.shape[0], e, k, failed = 0
+    cdef Py_ssize_t *first = <Py_ssize_t *> calloc(distinct + 1, sizeof(Py_ssize_t))
+    cdef Py_ssize_t *cursor = <Py_ssize_t *> malloc(max(distinct, 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *slots = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
+    if first == NULL or cursor == NULL or slots == NULL:
+        free(first)
+        free(cursor)
+        free(slots)
+        raise MemoryError()
+    with nogil:
+        for e in range(n):
+            first[start_ids[e] + 1] += 1
+        for k in range(distinct):
+            first[k + 1] += first[k]
+            cursor[k] = first[k]
+        for e in range(n):  # the starts by id, each id's in index order
+            k = start_ids[e]
+            slots[cursor[k]] = e
+            cursor[k] += 1
+        for k in range(distinct):
+            cursor[k] = first[k]
+        for e in range(n):
+            k = end_ids[e]
+            if cursor[k] >= first[k + 1]:
+                failed = 1
+                break
+            following[e] = slots[cursor[k]]
+            cursor[k] += 1
+    free(first)
+    free(cursor)
+    free(slots)
+    if failed:
+        raise ValueError("a point where more segments end than start")
+
+
+def passes_twice(const Py_ssize_t[::1] order, const Py_ssize_t[::1] offsets, const Py_ssize_t[::1] ids,
+                 Py_ssize_t distinct, unsigned char[::1] twice):
+    """``twice[c] = 1`` for the loops ``order[offsets[c]:offsets[c + 1]]`` that pass a point
+    (dense ids 0..distinct-1 of their elements) more than once, in O(n + distinct)."""
+    cdef Py_ssize_t count = offsets.shape[0] - 1, c, k, key
+    cdef Py_ssize_t *stamp = <Py_ssize_t *> malloc(max(distinct, 1) * sizeof(Py_ssize_t))
+    if stamp == NULL:
+        raise MemoryError()
+    with nogil:
+        for k in range(distinct):
+            stamp[k] = -1
+        for c in range(count):
+            twice[c] = 0
+            for k in range(offsets[c], offsets[c + 1]):
+                key = ids[order[k]]
+                if stamp[key] == c:
+                    twice[c] = 1
+                stamp[key] = c
+    free(stamp)
 
 
 ctypedef fused real:
@@ -2040,13 +2159,18 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
     edge ``[-0.5, high]``; inf when none.  Per face f of the entries ``(face, segment, sign)``
     (grouped by face): ``areas[f]`` its signed area (the shoelace sum, each segment's cross
     product times its sign), ``perimeter[f]`` its length and ``speed[f]`` its fastest vertex's
-    speed.
+    speed (the square root of the largest squared speed of its vertices, each found once).
     """
     cdef Py_ssize_t count = start.shape[0], points = nodes.shape[0], entries = face.shape[0], k, s, f, d
     cdef double reverse = INFINITY, inside = INFINITY, old_r, old_c, along, room, value, fast
     cdef double high[2]
+    cdef double *squared = <double *> malloc(max(points, 1) * sizeof(double))
+    if squared == NULL:
+        raise MemoryError()
     high[0], high[1] = high_r, high_c
     with nogil:
+        for k in range(points):
+            squared[k] = velocity[k, 0] * velocity[k, 0] + velocity[k, 1] * velocity[k, 1]
         for s in range(count):
             old_r = nodes[end[s], 0] - nodes[start[s], 0]
             old_c = nodes[end[s], 1] - nodes[start[s], 1]
@@ -2077,12 +2201,13 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
             areas[f] += sign[k] * (nodes[start[s], 0] * nodes[end[s], 1]
                                    - nodes[end[s], 0] * nodes[start[s], 1])
             perimeter[f] += sqrt(old_r * old_r + old_c * old_c)
-            fast = max(hypot(velocity[start[s], 0], velocity[start[s], 1]),
-                       hypot(velocity[end[s], 0], velocity[end[s], 1]))
+            fast = max(squared[start[s]], squared[end[s]])
             if fast > speed[f]:
                 speed[f] = fast
         for f in range(areas.shape[0]):
             areas[f] *= 0.5
+            speed[f] = sqrt(speed[f])
+    free(squared)
     return reverse, inside
 
 
