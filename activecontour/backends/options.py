@@ -237,7 +237,8 @@ class LevelSetOptions:
         "regions (but not below dt_min)."), typical=(_DT_MIN, _DT_MAX))
     dt_min: float | None = option(None, (
         "Below this ceiling the smoothed-force stages end and the unsmoothed stage runs, with steps "
-        "up to dt_min and the force within the band only (no single pixel far from Gamma flips).  "
+        "up to dt_min and the force within the band only (no single pixel far from Gamma flips), "
+        "then, once it moves less than tol per iteration, up to band (its tail).  "
         f"None (default): {_DT_MIN:g} px, or dt when dt is smaller."))
     dt_max: float | None = option(None, (
         "Largest step (pixels), the ceiling of the first stage.  None (default): "

@@ -136,6 +136,21 @@ def test_converged_result_is_stationary(case):
     assert np.count_nonzero(again.mask ^ first.mask) <= 1e-3 * first.mask.sum()
 
 
+def test_a_slow_tail_is_not_converged():
+    # astronaut's boundary has many weak stretches (the force hardly outweighs the length term):
+    # at steps of dt_min they crept by a fraction of a pixel per iteration, under tol, and a run
+    # with tol/100 moved 124 more pixels over 121 iterations (0.12 % of the mask).  The tail's
+    # larger steps take that travel before the run calls itself converged.
+    import skimage.data
+
+    image = skimage.data.astronaut()
+    first = ac.segment(image, backend="levelset")
+    assert first.success
+    again = ac.segment(image, first, backend="levelset", tol=DEFAULT_TOL / 100)
+    assert abs(again.energy - first.energy) <= 1e-3 * abs(first.energy)
+    assert np.count_nonzero(again.mask ^ first.mask) < 1e-3 * first.mask.sum()
+
+
 # ---------------------------------------------------------------------------------------------
 # The same scene at every size
 

@@ -61,9 +61,16 @@ up to a ceiling (first ``dt_max``) and has settled when Gamma moves less than 2 
 descent; the ceiling is then divided by 4, and below ``dt_min`` stage (b) follows, with steps
 ``<= dt_min`` and the force applied within the band only, so that no pixel far from Gamma (at
 ``+-band``) flips on its own.
-Stage (b) converges (status 0) when Gamma moves less than ``tol`` pixels per iteration on average
-over 3 iterations, or ends with status 4 when ``max_backtracks`` halvings find no descent.  Its
-steps are explicit on the band when ``tau mu <= 1/4`` (stable, no DCT).  The unsmoothed flow can
+Once Gamma moves less than ``tol`` pixels per iteration on average over 3 iterations, stage (b)
+runs on as its tail: the step doubles until a rejection, up to ``band`` pixels (the width the force
+acts over) and to the largest explicit step.  A step of ``dt_min`` moves a weak front (where f
+hardly outweighs the length term) by a small fraction of a pixel per iteration: below ``tol`` per
+iteration, yet with dozens of iterations of travel left, which a run with a smaller tol would
+make (astronaut: 124 pixels in 121 iterations).  The tail converges (status 0) when it too moves
+less than ``tol`` per iteration, and stage (b) ends with status 4 when ``max_backtracks`` halvings
+find no descent.  Its steps are explicit on the band when ``tau mu <= 1/4`` (stable, no DCT): the
+explicit step's fixed point, ``mu Laplace(phi) = f``, does not depend on tau, while the implicit
+form's is ``mu Laplace(phi) = f - tau mu Laplace(f)``, so the tail stays explicit.  The unsmoothed flow can
 stop in a pixel-scale local minimum that a smoothed step leaves (a continued run would then move
 on), so when it ends a smoothed stage of the first step size is tried, up to twice: if its first
 step finds no descent the end stands, otherwise the stages run on from there.

@@ -55,7 +55,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
     tol : float
         Pixels: the flow has converged (status 0) when the zero level set moves less than
         ``tol`` pixels per iteration (swept area over length, the mean normal displacement),
-        averaged over the last three iterations of the final, unsmoothed stage.  The run also ends
+        averaged over the last three iterations of the final, unsmoothed stage's tail (its steps
+        grown past ``dt_min``; see :mod:`activecontour.backends.levelset`).  The run also ends
         when no step, down to the current one halved ``max_backtracks`` times, decreases the
         energy (status 4: stationary to working precision).  Either way, continuing with a
         smaller tol changes neither the energy nor the mask measurably.
@@ -111,11 +112,16 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
     # When the unsmoothed stage ends, one smoothed step of the first size is tried (a recheck):
     # the unsmoothed flow stops at pixel-scale local minima that a smoothed step can leave.
     rechecks, pending = 0, None  # pending: the end status while a recheck runs
+    # The unsmoothed stage's steps are <= dt_min until its motion falls below tol; then its tail
+    # runs with steps up to the band, explicit only (see below), and converges when it too is slow.
+    tail = False
     for _ in range(max_num_iter):
         if not state.positive.any():
             status = 3
             break
         force, scale = problem.force(current.c_in, current.c_out)
+        if tail:
+            step = min(step, max(settings["dt_min"], problem.explicit_limit(scale)))
         tau = problem.time_step(step, scale)
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
@@ -163,12 +169,20 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
             if evaluation is None:
                 ended = 4  # no descent down to max_backtracks halvings: stationary
             elif len(window) == _WINDOW and np.mean(window) < tol:
-                ended = 0  # converged
+                if tail or min(settings["band"], problem.explicit_limit(scale)) <= step:
+                    ended = 0  # converged
+                else:
+                    # Steps of dt_min move a weak front (a small force against the length term)
+                    # by a fraction of a pixel per iteration for dozens of iterations: less than
+                    # tol per iteration is not stationary at that step.  The tail grows the step,
+                    # doubling until a rejection, up to the band (where the force acts) and to the
+                    # explicit limit (whose fixed point does not depend on the step).
+                    tail, grow, stage_start, streak = True, True, len(moves), 0
         if ended is not None:
             if rechecks >= _RECHECKS:
                 status = ended
                 break
-            rechecks, pending, smooth_force = rechecks + 1, ended, True
+            rechecks, pending, smooth_force, tail = rechecks + 1, ended, True, False
             step = ceiling = first_step
             stage_start, streak = len(moves), 0
         elif smooth_force:
@@ -188,8 +202,8 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
             elif grow or streak >= 2:
                 # accepted at once: speed up, doubling until the first rejection
                 step = min(step * (2.0 if grow else 1.25), ceiling)
-        elif streak >= 2:
-            step = min(1.25 * step, settings["dt_min"])
+        elif grow or streak >= 2:
+            step = min(step * (2.0 if grow else 1.25), settings["band"] if tail else settings["dt_min"])
     phi = state.phi
     if isinstance(init, str) and init == "checkerboard" and _symmetric(params):
         # The checkerboard has no preferred phase and the symmetric functional prefers one only

@@ -10,6 +10,8 @@ from activecontour.backends.levelset.redistancing import _locate, _Located, _red
 from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
 
+_EXPLICIT = 0.25  # step (b) is explicit (stable, on the band alone) up to tau mu = 1/4
+
 
 def heaviside(phi, epsilon=1.0):
     """The cosine-regularised Heaviside ``H_eps``: 0 below -eps, 1 above eps, smooth between."""
@@ -142,18 +144,26 @@ class _Problem:
         tau = step / scale
         return min(tau, step * step / self.params.mu) if self.params.mu > 0 else tau
 
+    def explicit_limit(self, scale):
+        """The largest step (pixels, at the force ``scale``) that step (b) takes explicitly: ``tau mu
+        <= 1/4`` (:meth:`step`).  Its fixed point ``mu Laplace(phi) = f`` does not depend on tau;
+        the implicit form's, ``mu Laplace(phi) = f - tau mu Laplace(f)``, leans on the pixel-scale
+        roughness of f more the larger tau is."""
+        return _EXPLICIT * scale / self.params.mu if self.params.mu > 0 else np.inf
+
     def step(self, state, force, tau, smooth_force):
         """Step (a) ``S (phi - tau f)`` with ``smooth_force``, else (b) ``S phi - tau f``.
 
         ``S = (1 - tau mu Laplace)^{-1}`` by DCT-II in float32 (phi is a distance of a few pixels:
         its rounding, ~1e-6 px, is far below what matters).  In step (b) the force acts within the
         band only, so that no pixel far from Gamma (at +-band) flips on its own; when
-        ``tau mu <= 1/4`` the explicit step ``phi + tau mu Laplace(phi) - tau f`` is stable and has
-        the same fixed point, so it is taken on the band's pixels alone (O(band) instead of a DCT
-        pair over the image), and otherwise S is solved on the band (:meth:`_band_smooth`) when
-        that is cheaper than the DCT pair.  ``force``: the constants from :meth:`force`.
+        ``tau mu <= 1/4`` the explicit step ``phi + tau mu Laplace(phi) - tau f`` is stable and its
+        fixed point is that of (6.41) for every tau (:meth:`explicit_limit`), so it is taken on the
+        band's pixels alone (O(band) instead of a DCT pair over the image), and otherwise S is
+        solved on the band (:meth:`_band_smooth`) when that is cheaper than the DCT pair.
+        ``force``: the constants from :meth:`force`.
         """
-        if not smooth_force and tau * self.params.mu <= 0.25:
+        if not smooth_force and tau * self.params.mu <= _EXPLICIT:
             return self._explicit_step(state, force, tau)
         if not smooth_force:
             weight = tau * self.params.mu
