@@ -1039,8 +1039,10 @@ def _concave_corners(outline, depth=None):
     h = edge_lengths(outline)
     ds = 0.5 * (h + np.roll(h, 1))  # the arc length each vertex stands for
     width = CORNER_SMOOTHING / h.mean()
-    kappa = _cyclic_gaussian(curvature(outline) * ds, width) / _cyclic_gaussian(ds, width)
-    normals = _cyclic_gaussian(vertex_normals(outline), width)
+    # (the three smoothings in one: each column is smoothed on its own)
+    smooth = _cyclic_gaussian(np.column_stack([curvature(outline) * ds, ds, vertex_normals(outline)]), width)
+    kappa = smooth[:, 0] / smooth[:, 1]
+    normals = np.ascontiguousarray(smooth[:, 2:])
     normals /= np.maximum(np.hypot(normals[:, 0], normals[:, 1]), 1e-12)[:, None]
     concave = kappa < 0
     if concave.all() or not concave.any():
