@@ -420,8 +420,8 @@ def _may_split_by_contrast(region, min_radius):
     pixel outside the region: the region needs two such pixels, and more than twice pi
     ``min_radius``^2 pixels (:func:`_contrast_split`'s least part).  On grass, 172 of the 395
     objects tried by contrast have no two."""
-    return (np.count_nonzero(region) > 2 * np.pi * min_radius ** 2
-            and np.count_nonzero(_near_distance(region, min_radius) >= min_radius) >= 2)
+    return bool(np.count_nonzero(region) > 2 * np.pi * min_radius ** 2
+                and np.count_nonzero(_near_distance(region, min_radius) >= min_radius) >= 2)
 
 
 def _contrast_parts(parts, values, least, min_radius):
@@ -1096,23 +1096,18 @@ def _cuts(outline, cycle, is_corner, flat, normals):
     for a, b in _ray_hits(outline, cycle, edges, positions, normals):
         if flat[cycle[b]]:
             candidates.add((min(a, b), max(a, b)))
-    least = np.cos(np.radians(CUT_ALIGN))
-    centred = part - part.mean(axis=0)
-    cuts = []
-    for a, b in candidates:
-        direction = part[b] - part[a]
-        length = np.hypot(*direction)
-        if length == 0:
-            continue
-        direction /= length
-        if -normals[cycle[a]] @ direction < least or normals[cycle[b]] @ direction < least:
-            continue
-        along = centred @ direction
-        extent = min(np.ptp(along[a:b + 1]), np.ptp(np.concatenate([along[b:], along[:a + 1]])))
-        ratio = length / max(extent, 1e-12)
-        if ratio <= CUT_NECK:
-            cuts.append((ratio, a, b))
-    for ratio, a, b in sorted(cuts):
+    if not candidates:
+        return
+    # each cut's neck ratio, compiled: with ``direction`` its unit vector and ``along`` the
+    # part's offsets from their mean projected on it, ``length / min(ptp(along[a:b + 1]),
+    # ptp(along[b:] and along[:a + 1]))``, infinite where a normal does not face it
+    first, second = np.array(sorted(candidates), dtype=np.intp).T.copy()
+    ratios = np.empty(len(first))
+    _kernels.cut_ratios(part, part - part.mean(axis=0), normals[cycle], first, second,
+                        float(np.cos(np.radians(CUT_ALIGN))), ratios)
+    keep = ratios <= CUT_NECK
+    for ratio, a, b in sorted(zip(ratios[keep].tolist(), first[keep].tolist(), second[keep].tolist(),
+                                  strict=True)):
         if _segment_inside(edges, a, b):
             yield ratio, a, b
 
@@ -1143,16 +1138,12 @@ def _ray_hits(outline, cycle, edges, positions, normals):
     away = (index[None, :] != positions[:, None]) & ((index[None, :] + 1) % count != positions[:, None])
     hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
            & away[:, None, :])
-    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)
-    pairs = []
-    for i, a in enumerate(positions):
-        for k in range(len(turns)):
-            j = nearest[i, k]
-            if hit[i, k, j] and original[j]:
-                b = j if along_edge[i, k, j] < 0.5 else (j + 1) % count
-                if b != a:
-                    pairs.append((int(a), int(b)))
-    return pairs
+    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)  # (corners, angles)
+    corner, angle = np.indices(nearest.shape)
+    b = np.where(along_edge[corner, angle, nearest] < 0.5, nearest, (nearest + 1) % count)
+    a = positions[corner]
+    chosen = hit[corner, angle, nearest] & original[nearest] & (b != a)
+    return list(zip(a[chosen].tolist(), b[chosen].tolist(), strict=True))
 
 
 def _segment_inside(edges, a, b):
