@@ -18,7 +18,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside`, :func:`cut_ratios` (the corner stage's
   ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
-* :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
+* :func:`segment_integrals`, :func:`segment_loads`, :func:`h1_band`, :func:`band_cholesky`, :func:`band_solve`,
   :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
   :mod:`activecontour.geometry.partition`,
   :mod:`activecontour.backends.network` (the N-region network: its integrals, load (6.41), H^1
@@ -1284,24 +1284,42 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     return length + length_carry
 
 
-def band_cholesky(double[:, ::1] band):
+def band_cholesky(double[:, ::1] band, Py_ssize_t[:, ::1] envelope):
     """Cholesky factorisation ``A = U^T U`` of a symmetric positive definite band matrix, in place.
 
     ``band[j, w + i - j] = A[i, j]`` for ``j - w <= i <= j`` (column j's entries on and above the
     diagonal, w the half bandwidth) becomes U in the same layout.  O(n w^2), no fill outside the
     band.  Returns 0, or ``j + 1`` where the leading minor of order ``j + 1`` is not positive.
+
+    The factor has no entry above a column's first nonzero of A (its envelope, which the reverse
+    Cuthill-McKee order keeps narrow: a few rows where the band is about ten), so the sums run
+    over the envelopes only: the products left out are zeros, the result the same.  ``envelope``
+    (n, 2) receives each column's first row and each row's last column with an entry in it, for
+    :func:`band_solve`.
     """
-    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, first, failed = 0
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, i, j, k, low, failed = 0
     cdef double total
+    cdef double *column_j
+    if envelope.shape[0] != n or envelope.shape[1] != 2:
+        raise ValueError(f"envelope must have shape ({n}, 2)")
     with nogil:
         for j in range(n):
-            first = j - w if j > w else 0
-            for i in range(first, j + 1):
-                total = band[j, w + i - j]
-                for k in range(max(first, i - w), i):
-                    total -= band[i, w + k - i] * band[j, w + k - j]
+            envelope[j, 0] = j  # the first row of column j's envelope
+            envelope[j, 1] = j
+            for k in range(w - min(j, w), w):
+                if band[j, k] != 0.0:
+                    envelope[j, 0] = j - w + k
+                    break
+            for i in range(envelope[j, 0], j):
+                envelope[i, 1] = j  # the last column with row i in its envelope, so far
+            column_j = &band[j, w - j]  # column_j[i] = A[i, j]
+            for i in range(envelope[j, 0], j + 1):
+                total = column_j[i]
+                low = max(envelope[j, 0], envelope[i, 0])
+                for k in range(low, i):
+                    total -= band[i, w + k - i] * column_j[k]
                 if i < j:
-                    band[j, w + i - j] = total / band[i, w]
+                    column_j[i] = total / band[i, w]
                 elif total > 0.0:
                     band[j, w] = sqrt(total)
                 else:
@@ -1312,19 +1330,58 @@ def band_cholesky(double[:, ::1] band):
     return failed
 
 
-def band_solve(const double[:, ::1] factor, double[::1] rhs):
-    """Solve ``U^T U x = rhs`` in place with the factor of :func:`band_cholesky`."""
+def h1_band(const double[:, ::1] nodes, const Py_ssize_t[::1] start, const Py_ssize_t[::1] end,
+            const Py_ssize_t[::1] position, double[:, ::1] band):
+    """The matrix ``M + K`` of the H^1 form (6.39) of P1 functions on segments, in
+    :func:`band_cholesky`'s layout (``band`` zeros, of shape (n, w + 1)), restricted to the nodes
+    with ``position >= 0`` and ordered by it: a segment of length h adds ``h / 3 + 1 / h`` to the
+    diagonal at each end and puts ``h / 6 - 1 / h`` between them (one segment per pair of nodes).
+    Each diagonal entry is its sum over the segments starting there plus its sum over those
+    ending there, each in segment order."""
+    cdef Py_ssize_t n = band.shape[0], w = band.shape[1] - 1, e, i, j
+    cdef double h, dr, dc, diagonal
+    cdef double *ending = <double *> calloc(max(n, 1), sizeof(double))
+    if ending == NULL:
+        raise MemoryError()
+    with nogil:
+        for e in range(start.shape[0]):
+            i, j = position[start[e]], position[end[e]]
+            if i < 0 and j < 0:
+                continue
+            dr = nodes[end[e], 0] - nodes[start[e], 0]
+            dc = nodes[end[e], 1] - nodes[start[e], 1]
+            h = hypot(dr, dc)
+            diagonal = h / 3.0 + 1.0 / h
+            if i >= 0:
+                band[i, w] += diagonal
+            if j >= 0:
+                ending[j] += diagonal
+            if i >= 0 and j >= 0:
+                if i < j:
+                    band[j, w + i - j] = h / 6.0 - 1.0 / h
+                else:
+                    band[i, w + j - i] = h / 6.0 - 1.0 / h
+        for i in range(n):
+            band[i, w] += ending[i]
+    free(ending)
+
+
+def band_solve(const double[:, ::1] factor, const Py_ssize_t[:, ::1] envelope, double[::1] rhs):
+    """Solve ``U^T U x = rhs`` in place with the factor and the envelope of :func:`band_cholesky`
+    (the sums over its entries only: the products left out are zeros)."""
     cdef Py_ssize_t n = factor.shape[0], w = factor.shape[1] - 1, i, j, k
     cdef double total
+    if envelope.shape[0] != n or envelope.shape[1] != 2:
+        raise ValueError(f"envelope must have shape ({n}, 2)")
     with nogil:
         for j in range(n):  # U^T y = rhs
             total = rhs[j]
-            for k in range(j - w if j > w else 0, j):
+            for k in range(envelope[j, 0], j):
                 total -= factor[j, w + k - j] * rhs[k]
             rhs[j] = total / factor[j, w]
         for i in range(n - 1, -1, -1):  # U x = y
             total = rhs[i]
-            for j in range(i + 1, min(n, i + w + 1)):
+            for j in range(i + 1, envelope[i, 1] + 1):
                 total -= factor[j, w + i - j] * rhs[j]
             rhs[i] = total / factor[i, w]
 
@@ -1352,6 +1409,68 @@ def cycles(const Py_ssize_t[::1] following, Py_ssize_t[::1] order, Py_ssize_t[::
         offsets[count] = position
     free(seen)
     return count
+
+
+def follow(const Py_ssize_t[::1] start_ids, const Py_ssize_t[::1] end_ids, Py_ssize_t distinct,
+           Py_ssize_t[::1] following):
+    """The chaining of :func:`activecontour.geometry.partition.loop_order` for dense point ids
+    (0..distinct-1): the i-th element (in index order) ending at a point is followed by the i-th
+    starting there, in O(n + distinct) (a counting sort of the starts by id).  Raises ValueError
+    when a point has more ends than starts."""
+    cdef Py_ssize_t n = start_ids.shape[0], e, k, failed = 0
+    cdef Py_ssize_t *first = <Py_ssize_t *> calloc(distinct + 1, sizeof(Py_ssize_t))
+    cdef Py_ssize_t *cursor = <Py_ssize_t *> malloc(max(distinct, 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *slots = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
+    if first == NULL or cursor == NULL or slots == NULL:
+        free(first)
+        free(cursor)
+        free(slots)
+        raise MemoryError()
+    with nogil:
+        for e in range(n):
+            first[start_ids[e] + 1] += 1
+        for k in range(distinct):
+            first[k + 1] += first[k]
+            cursor[k] = first[k]
+        for e in range(n):  # the starts by id, each id's in index order
+            k = start_ids[e]
+            slots[cursor[k]] = e
+            cursor[k] += 1
+        for k in range(distinct):
+            cursor[k] = first[k]
+        for e in range(n):
+            k = end_ids[e]
+            if cursor[k] >= first[k + 1]:
+                failed = 1
+                break
+            following[e] = slots[cursor[k]]
+            cursor[k] += 1
+    free(first)
+    free(cursor)
+    free(slots)
+    if failed:
+        raise ValueError("a point where more segments end than start")
+
+
+def passes_twice(const Py_ssize_t[::1] order, const Py_ssize_t[::1] offsets, const Py_ssize_t[::1] ids,
+                 Py_ssize_t distinct, unsigned char[::1] twice):
+    """``twice[c] = 1`` for the loops ``order[offsets[c]:offsets[c + 1]]`` that pass a point
+    (dense ids 0..distinct-1 of their elements) more than once, in O(n + distinct)."""
+    cdef Py_ssize_t count = offsets.shape[0] - 1, c, k, key
+    cdef Py_ssize_t *stamp = <Py_ssize_t *> malloc(max(distinct, 1) * sizeof(Py_ssize_t))
+    if stamp == NULL:
+        raise MemoryError()
+    with nogil:
+        for k in range(distinct):
+            stamp[k] = -1
+        for c in range(count):
+            twice[c] = 0
+            for k in range(offsets[c], offsets[c + 1]):
+                key = ids[order[k]]
+                if stamp[key] == c:
+                    twice[c] = 1
+                stamp[key] = c
+    free(stamp)
 
 
 ctypedef fused real:
@@ -1867,6 +1986,45 @@ def segment_table(const double[:, :, ::1] segments, double far, double[:, ::1] c
                 columns32[k, i] = <float> row[k]
 
 
+cdef Py_ssize_t _lower_envelope(const long long *g, Py_ssize_t count, Py_ssize_t stride, long long far,
+                                Py_ssize_t *vertex, long long *height) noexcept nogil:
+    """The lower envelope of the parabolas ``(x - q)^2 + g_q^2`` over q < ``count`` with
+    ``g_q = g[q * stride] < far`` (Felzenszwalb and Huttenlocher), its breakpoints compared as
+    integers: parabola ``vertex[k]`` with ``height[k] = g^2 + q^2`` is lowest from its breakpoint
+    with ``vertex[k - 1]`` to its breakpoint with ``vertex[k + 1]``, the breakpoint of u < p lying
+    at ``(height_p - height_u) / (2 (p - u))``.  Returns the last index k (-1: no parabola)."""
+    cdef Py_ssize_t k = -1, q, p, u
+    cdef long long h
+    for q in range(count):
+        h = g[q * stride]
+        if h >= far:
+            continue
+        h = h * h + <long long> q * q
+        while k >= 1:
+            p, u = vertex[k], vertex[k - 1]
+            # drop p when q's breakpoint with it comes no later than p's with u
+            if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (q - p):
+                k -= 1
+            else:
+                break
+        if k == 0 and h - height[0] <= 0:
+            k = -1  # q is as low as vertex[0] from x = 0 on
+        k += 1
+        vertex[k] = q
+        height[k] = h
+    return k
+
+
+cdef inline long long _envelope_at(const Py_ssize_t *vertex, const long long *height, Py_ssize_t k,
+                                   Py_ssize_t *last, Py_ssize_t x) noexcept nogil:
+    """The envelope of :func:`_lower_envelope` (last index ``k``) at ``x``, the squared distance;
+    ``last`` is the parabola that was lowest at the previous, smaller x (start at 0)."""
+    while last[0] < k and height[last[0] + 1] - height[last[0]] <= 2 * x * (vertex[last[0] + 1] - vertex[last[0]]):
+        last[0] += 1
+    return (<long long> (x - vertex[last[0]]) * (x - vertex[last[0]]) + height[last[0]]
+            - <long long> vertex[last[0]] * vertex[last[0]])
+
+
 def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, const int[::1] direction,
                      Py_ssize_t rows, Py_ssize_t cols, Py_ssize_t step, double[:, ::1] out):
     """The Euclidean distance transform (as ``scipy.ndimage.distance_transform_edt``: from each
@@ -1880,12 +2038,11 @@ def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, con
     Separable and exact, without drawing the mask: per row, the runs of inside pixels from its
     crossings, and the distance h along the row from each sampled column to the nearest pixel
     outside; per sampled column, the lower envelope of the parabolas ``(x - r)^2 + h_r^2`` over
-    the rows r (Felzenszwalb and Huttenlocher), its breakpoints compared as fractions of
-    integers, read at the sampled rows: the least squared distance as an integer, then one square
-    root (the transform's own values).  O(rows x sampled columns + crossings)."""
+    the rows r (:func:`_lower_envelope`), read at the sampled rows: the least squared distance
+    as an integer, then one square root (the transform's own values).  O(rows x sampled columns + crossings)."""
     cdef Py_ssize_t m = out.shape[0], n = out.shape[1], count = row.shape[0]
-    cdef Py_ssize_t r, c, i, j, k, x, p, u, at = 0, start, stop, winding, before, last
-    cdef long long far = (rows + cols) * (rows + cols) + 1, h, best
+    cdef Py_ssize_t r, c, i, j, k, at = 0, start, stop, winding, before, last
+    cdef long long far = (rows + cols) * (rows + cols) + 1
     cdef long long *across = <long long *> malloc(max(rows * n, 1) * sizeof(long long))
     cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(rows, 1) * sizeof(Py_ssize_t))
     cdef long long *height = <long long *> malloc(max(rows, 1) * sizeof(long long))
@@ -1916,40 +2073,14 @@ def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, con
             if winding != 0:
                 _run_distances(across, r, n, step, start, cols, cols, far)
         for j in range(n):
-            # the envelope: parabola vertex[k] (row) with height[k] = h^2 + row^2 is lowest from
-            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
-            # breakpoint of rows u < p lies at (height_p - height_u) / (2 (p - u))
-            k = -1
-            for r in range(rows):
-                h = across[r * n + j]
-                if h >= far:
-                    continue
-                h = h * h + <long long> r * r
-                while k >= 1:
-                    p, u = vertex[k], vertex[k - 1]
-                    # drop p when r's breakpoint with it comes no later than p's with u
-                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (r - p):
-                        k -= 1
-                    else:
-                        break
-                if k == 0 and h - height[0] <= 0:
-                    k = -1  # r is as low as vertex[0] from x = 0 on
-                k += 1
-                vertex[k] = r
-                height[k] = h
+            k = _lower_envelope(&across[j], rows, n, far, vertex, height)
             if k < 0:
                 for i in range(m):
                     out[i, j] = sqrt(<double> far)
                 continue
             last = 0
             for i in range(m):
-                x = i * step
-                # move right while the next parabola takes over at or before x
-                while last < k and height[last + 1] - height[last] <= 2 * x * (vertex[last + 1] - vertex[last]):
-                    last += 1
-                best = (<long long> (x - vertex[last]) * (x - vertex[last]) + height[last]
-                        - <long long> vertex[last] * vertex[last])
-                out[i, j] = sqrt(<double> best)
+                out[i, j] = sqrt(<double> _envelope_at(vertex, height, k, &last, i * step))
     free(across)
     free(vertex)
     free(height)
@@ -2029,13 +2160,18 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
     edge ``[-0.5, high]``; inf when none.  Per face f of the entries ``(face, segment, sign)``
     (grouped by face): ``areas[f]`` its signed area (the shoelace sum, each segment's cross
     product times its sign), ``perimeter[f]`` its length and ``speed[f]`` its fastest vertex's
-    speed.
+    speed (the square root of the largest squared speed of its vertices, each found once).
     """
     cdef Py_ssize_t count = start.shape[0], points = nodes.shape[0], entries = face.shape[0], k, s, f, d
     cdef double reverse = INFINITY, inside = INFINITY, old_r, old_c, along, room, value, fast
     cdef double high[2]
+    cdef double *squared = <double *> malloc(max(points, 1) * sizeof(double))
+    if squared == NULL:
+        raise MemoryError()
     high[0], high[1] = high_r, high_c
     with nogil:
+        for k in range(points):
+            squared[k] = velocity[k, 0] * velocity[k, 0] + velocity[k, 1] * velocity[k, 1]
         for s in range(count):
             old_r = nodes[end[s], 0] - nodes[start[s], 0]
             old_c = nodes[end[s], 1] - nodes[start[s], 1]
@@ -2066,12 +2202,13 @@ def step_bounds(const double[:, ::1] nodes, const double[:, ::1] velocity, const
             areas[f] += sign[k] * (nodes[start[s], 0] * nodes[end[s], 1]
                                    - nodes[end[s], 0] * nodes[start[s], 1])
             perimeter[f] += sqrt(old_r * old_r + old_c * old_c)
-            fast = max(hypot(velocity[start[s], 0], velocity[start[s], 1]),
-                       hypot(velocity[end[s], 0], velocity[end[s], 1]))
+            fast = max(squared[start[s]], squared[end[s]])
             if fast > speed[f]:
                 speed[f] = fast
         for f in range(areas.shape[0]):
             areas[f] *= 0.5
+            speed[f] = sqrt(speed[f])
+    free(squared)
     return reverse, inside
 
 
@@ -2394,11 +2531,11 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
 
     Separable and exact: per column the distance g to the nearest 0 in it (two passes down the
     rows, row by row), then per row the lower envelope of the parabolas ``(j - q)^2 + g_q^2``
-    over the columns q (Felzenszwalb and Huttenlocher), its breakpoints compared as integers.
+    over the columns q (:func:`_lower_envelope`).
     O(pixels); the peaks' pieces by a flood fill over the peaks alone."""
-    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, q, p, u, last, di, dj, at
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, p, last, di, dj, at
     cdef Py_ssize_t size = 0, capacity = 1024, pieces = 0
-    cdef long long far = m + 1, g, h, value
+    cdef long long far = m + 1, value
     cdef bint peak
     cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
     cdef long long *height = <long long *> malloc(max(n, 1) * sizeof(long long))
@@ -2423,32 +2560,10 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
                 if out[i + 1, j] + 1 < out[i, j]:
                     out[i, j] = out[i + 1, j] + 1
         for i in range(m):
-            # the envelope: parabola vertex[k] (column) with height[k] = g^2 + q^2 is lowest from
-            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
-            # breakpoint of columns u < p lies at (height_p - height_u) / (2 (p - u))
-            k = -1
-            for q in range(n):
-                g = out[i, q]
-                if g >= far:
-                    continue
-                h = g * g + <long long> q * q
-                while k >= 1:
-                    p, u = vertex[k], vertex[k - 1]
-                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (q - p):
-                        k -= 1
-                    else:
-                        break
-                if k == 0 and h - height[0] <= 0:
-                    k = -1
-                k += 1
-                vertex[k] = q
-                height[k] = h
+            k = _lower_envelope(&out[i, 0], n, 1, far, vertex, height)
             last = 0
             for j in range(n):
-                while last < k and height[last + 1] - height[last] <= 2 * j * (vertex[last + 1] - vertex[last]):
-                    last += 1
-                out[i, j] = (<long long> (j - vertex[last]) * (j - vertex[last]) + height[last]
-                             - <long long> vertex[last] * vertex[last])
+                out[i, j] = _envelope_at(vertex, height, k, &last, j)
         # the peaks (flag 1), then their pieces (a piece's pixels flagged 2 as the fill reaches them)
         for i in range(m):
             for j in range(n):

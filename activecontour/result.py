@@ -11,7 +11,7 @@ from activecontour.geometry.curve import clean_curves, stack_curves
 from activecontour.geometry.raster import rasterize
 from activecontour.geometry.topology import region_problem, region_union
 
-__all__ = ["STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
+__all__ = ["ENDED", "STATUS_MESSAGES", "FlowState", "SegmentationResult", "build_result"]
 
 #: Status codes and their messages, shared by every backend.
 STATUS_MESSAGES = {
@@ -20,7 +20,11 @@ STATUS_MESSAGES = {
     2: "Stopped by the callback.",
     3: "The contour collapsed: nothing left inside (try a smaller mu or another init).",
     4: "Line search found no descent step: stationary to working precision.",
+    5: ("Stalled: steps in a row were held back where interfaces meet, at a pinch the flow cannot "
+        "resolve (a region thinning between two others); J no longer decreases there."),
 }
+#: The statuses of a flow that ended where it can go no further (``success``).
+ENDED = (0, 4, 5)
 
 
 @dataclass
@@ -47,7 +51,7 @@ class SegmentationResult:
     n_iter : int
         Iterations performed.
     success : bool
-        True when the flow converged (status 0 or 4).
+        True when the flow ended where it can go no further (status 0, 4 or 5: :data:`ENDED`).
     status : int
         Key of :data:`STATUS_MESSAGES`.
     message : str
@@ -121,7 +125,7 @@ class SegmentationResult:
     message: str = field(init=False)
 
     def __post_init__(self):
-        self.success = self.status in (0, 4)
+        self.success = self.status in ENDED
         self.message = STATUS_MESSAGES[self.status]
         self.energies = np.asarray(self.energies, dtype=np.float64)
         self.c_in = scalar_if_gray(self.c_in)
@@ -207,7 +211,7 @@ def build_result(model, params, contours, *, energies, n_iter, status, backend, 
     empty = _evaluate(model, params, [])
     # a collapse the backend reports is taken at equal energy; a converged flow keeps its curves then
     if cleaned and ((status == 3 and empty.energy <= final.energy)
-                    or (status in (0, 4) and empty.energy < final.energy)):
+                    or (status in ENDED and empty.energy < final.energy)):
         cleaned, final = [], empty
     if not cleaned:
         status = 3

@@ -15,7 +15,11 @@ drawn a pixel off); the largest and the median CPU time of one run; the runs tha
 targets (Dice >= 0.95 against the full run's object, as issue 23 measures it; no pixel of another
 object; <= 0.2 s), of those tried; with a truth, the median Dice against it and the runs passing
 against it (no pixel of another object farther than 2 px).  Truth objects the full run misses
-are left out (counted).
+are left out (counted).  The failures by cause: ``wrong``, the runs that gave another object (empty,
+or most of the result on another object of the truth, else of the full run); ``slow``, the runs
+that met the other two targets but not the time; with a truth, ``off the full run only``, the runs
+of Dice >= 0.95 against the truth but not against the full run's object (the reference is off,
+e.g. the full run merged the object with a neighbour or missed a dim rim).
 ``--specks``: item 4 instead (:func:`specks`).
 
 Families: ``coins`` (scikit-image's, 303 x 384, no truth), ``field`` (:func:`blob_field`: ~28 disks
@@ -123,7 +127,9 @@ def counterpart(labels, mask):
 
 def point(image, full, truth, label, centre, half, shape):
     """(Dice against the full run's counterpart, Dice against the truth object (nan without a
-    truth), foreign pixels, foreign pixels beyond 2 px of the object, CPU seconds) of one curve."""
+    truth), foreign pixels, foreign pixels beyond 2 px of the object, CPU seconds, whether the
+    result is another object: empty, or most of it on another object of the reference) of one
+    curve."""
     import scipy.ndimage
 
     start = time.process_time()
@@ -135,7 +141,8 @@ def point(image, full, truth, label, centre, half, shape):
     dice_full = synthetic.dice(res.mask, counterpart(full.labels, mine))
     foreign = res.mask & (reference > 0) & ~mine
     beyond = foreign & (scipy.ndimage.distance_transform_edt(~mine) > 2)
-    return dice_full, dice_truth, int(foreign.sum()), int(beyond.sum()), seconds
+    wrong = not (counterpart(reference, res.mask) & mine).any()
+    return dice_full, dice_truth, int(foreign.sum()), int(beyond.sum()), seconds, wrong
 
 
 def main():
@@ -154,7 +161,7 @@ def main():
           "of CPU at 512^2 (pass: all three)", flush=True)
     print(f"{'family':8s}{'drawn':7s}{'f':>4s}{'tried':>6s}{'Dice full':>10s}{'Dice truth':>11s}"
           f"{'full/truth':>11s}{'< 0.95':>7s}{'foreign':>8s}{'> 2 px':>7s}{'max px':>7s}{'max s':>7s}"
-          f"{'median s':>9s}{'pass':>10s}", flush=True)
+          f"{'median s':>9s}{'pass':>10s}{'wrong':>6s}{'slow':>5s}", flush=True)
     rows, last, baseline, missed = {}, None, {}, {}
     for family, image, truth in families(args.quick, args.families.split(",")):
         if last is not None and family != last:
@@ -184,17 +191,21 @@ def report(rows, family, baseline, missed):
     for (name, shape, f), entries in rows.items():
         if name != family:
             continue
-        dice_full, dice_truth, foreign, beyond, seconds = (np.array(c) for c in zip(*entries, strict=True))
+        columns = (np.array(c) for c in zip(*entries, strict=True))
+        dice_full, dice_truth, foreign, beyond, seconds, wrong = columns
         truth_text = f"{'-':>11s}" if np.isnan(dice_truth).all() else f"{np.nanmin(dice_truth):11.3f}"
-        passing = np.sum((dice_full >= TARGET_DICE) & (foreign == 0) & (seconds <= TARGET_SECONDS))
+        good = (dice_full >= TARGET_DICE) & (foreign == 0)
+        passing = np.sum(good & (seconds <= TARGET_SECONDS))
         low = np.sum(dice_full < TARGET_DICE)
         by_truth = "" if np.isnan(dice_truth).all() else (  # against the truth: median, and passing
             f"  truth: median Dice {np.median(dice_truth):.3f}, "
-            f"{np.sum((dice_truth >= TARGET_DICE) & (beyond == 0) & (seconds <= TARGET_SECONDS))} pass")
+            f"{np.sum((dice_truth >= TARGET_DICE) & (beyond == 0) & (seconds <= TARGET_SECONDS))} pass, "
+            f"{np.sum((dice_truth >= TARGET_DICE) & (dice_full < TARGET_DICE))} off the full run only")
         print(f"{family:8s}{shape:7s}{f:4.1f}{len(entries):6d}{dice_full.min():10.3f}{truth_text}{full_truth}"
               f"{low:7d}{np.count_nonzero(foreign):8d}{np.count_nonzero(beyond):7d}"
               f"{foreign.max():7d}{seconds.max():7.2f}{np.median(seconds):9.2f}{passing:5d}/{len(entries):<4d}"
-              f"{by_truth}", flush=True)
+              f"{np.count_nonzero(wrong):6d}{np.sum(good & (seconds > TARGET_SECONDS)):5d}{by_truth}",
+              flush=True)
     if missed.get(family):
         print(f"{family:8s}{missed[family]} truth objects left out: the full run has no object there",
               flush=True)

@@ -43,7 +43,7 @@ changed where the flow pinches it: a step held back because two interface segmen
 or a finger's sides cut, a spike's tip dropped), or collapses a vanishing segment there, or drops
 the closed loops through them; each is kept only if J does not rise.  A pinch between three
 regions (a region thinning between two others, whose cut would make two junctions) is not
-resolved: two steps in a row held back by such a pinch end the flow with status 4, a stall, not
+resolved: two steps in a row held back by such a pinch end the flow with status 5, a stall, not
 convergence.
 
 The step: dt by Armijo backtracking on J, at most the dt that moves the vertices ``max_step`` px
@@ -69,7 +69,7 @@ from activecontour.energy import (
     energy_of_moments,
     evaluate_partition,
     partition_load,
-    soup_moments,
+    partition_moments,
 )
 from activecontour.geometry.partition import (
     Boundary,
@@ -162,7 +162,8 @@ class Network:
     def boundary(self, nodes=None):
         """The partition's :class:`~activecontour.geometry.partition.Boundary`, vertices at ``nodes``."""
         nodes = self.nodes if nodes is None else nodes
-        return Boundary(nodes[self.start], nodes[self.end], self.inner, self.outer, self.sides)
+        return Boundary(nodes.take(self.start, axis=0), nodes.take(self.end, axis=0), self.inner, self.outer,
+                        self.sides)
 
     def moving_boundary(self, nodes):
         """:meth:`boundary` without the segments that neither count in J nor move: the image's
@@ -175,7 +176,8 @@ class Network:
             inner, outer = self.inner[kept], self.outer[kept]
             self._moving = (self.start[kept], self.end[kept], inner, outer, Sides(inner, outer))
         start, end, inner, outer, sides = self._moving
-        return Boundary(nodes[start], nodes[end], inner, outer, sides)
+        # (take: a gather of rows ten times faster than fancy indexing, on every evaluation)
+        return Boundary(nodes.take(start, axis=0), nodes.take(end, axis=0), inner, outer, sides)
 
     def relabelled(self, mapping):
         """The same network with region k renamed ``mapping[k]``."""
@@ -196,11 +198,14 @@ class Network:
             segment = np.concatenate([np.arange(len(self.start)), backward])
             region = np.concatenate([self.inner, self.outer[backward]])
             forward = np.arange(len(segment)) < len(self.start)
-            entries = np.lexsort((segment, ~forward, region))
+            # (a stable sort of small integers is a radix sort: O(n))
+            entries = np.argsort((2 * region + ~forward).astype(np.int16), kind="stable")
             segment, region, forward = segment[entries], region[entries], forward[entries]
             tails = np.where(forward, self.start[segment], self.end[segment])
             heads = np.where(forward, self.end[segment], self.start[segment])
-            order, offsets = loop_order(region * len(self.nodes) + tails, region * len(self.nodes) + heads)
+            count = len(self.nodes)
+            order, offsets = loop_order(region * count + tails, region * count + heads,
+                                        (int(region.max()) + 1) * count if region.size else 0)
             face = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
             self._faces = (face.astype(np.intp), segment[order].astype(np.intp),
                            np.where(forward[order], 1.0, -1.0))
@@ -234,7 +239,7 @@ class Network:
         forward, backward = inner & ~outer, outer & ~inner
         starts = np.concatenate([self.start[forward], self.end[backward]])
         ends = np.concatenate([self.end[forward], self.start[backward]])
-        return [self.nodes[starts[loop]] for loop in chain_loops(starts, ends)]
+        return [self.nodes[starts[loop]] for loop in chain_loops(starts, ends, len(self.nodes))]
 
     def polylines(self):
         """The interfaces as polylines of nodes between branch nodes (junctions and nodes on the
@@ -250,20 +255,8 @@ class Network:
         cycles of that permutation are the lines there and back, and the loops once each way.
         """
         chosen = np.flatnonzero(self.interface)
-        start, end = self._interface_ends
-        count = len(chosen)
-        degree = np.bincount(np.concatenate([start, end]), minlength=len(self.nodes))
-        branch = (degree != 2) | ~(self.free[0] & self.free[1])
-        tail, head = np.empty(2 * count, dtype=np.intp), np.empty(2 * count, dtype=np.intp)
-        tail[0::2], tail[1::2] = start, end  # half-edge 2 i + d: segment i forward (d = 0) or back
-        head[0::2], head[1::2] = end, start
-        following = np.arange(2 * count) ^ 1  # turn back at a branch node
-        leaving = np.argsort(tail, kind="stable")
-        leaving = leaving[~branch[tail[leaving]]].reshape(-1, 2)  # the two half-edges leaving a node
-        following[leaving[:, 0] ^ 1], following[leaving[:, 1] ^ 1] = leaving[:, 1], leaving[:, 0]
-        order, offsets = np.empty(2 * count, dtype=np.intp), np.empty(2 * count + 1, dtype=np.intp)
-        cycles = _kernels.cycles(following, order, offsets)
-        offsets = offsets[:cycles + 1]
+        branch, tail, head, order, offsets = self._half_edge_cycles()
+        cycles = len(offsets) - 1
         cycle = np.repeat(np.arange(cycles), np.diff(offsets))
         # a line's cycle turns twice (positions p < q): its runs start after each turn
         turns = np.flatnonzero(branch[head[order]]).reshape(-1, 2)
@@ -303,6 +296,26 @@ class Network:
         outer = np.where(forward, self.outer[segment], self.inner[segment])
         return path, path_offsets, inner, outer, closed
 
+    def _half_edge_cycles(self):
+        """The cycles of :meth:`polylines`' half-edges: ``(branch, tail, head, order, offsets)``,
+        ``branch`` per node, the half-edges' end nodes (half-edge ``2 i + d``: interface segment i
+        forward, d = 0, or backward), and cycle c the half-edges ``order[offsets[c]:offsets[c + 1]]``
+        (each from its smallest, in the order of those)."""
+        start, end = self._interface_ends
+        count = len(start)
+        degree = np.bincount(np.concatenate([start, end]), minlength=len(self.nodes))
+        branch = (degree != 2) | ~(self.free[0] & self.free[1])
+        tail, head = np.empty(2 * count, dtype=np.intp), np.empty(2 * count, dtype=np.intp)
+        tail[0::2], tail[1::2] = start, end
+        head[0::2], head[1::2] = end, start
+        following = np.arange(2 * count) ^ 1  # turn back at a branch node
+        leaving = np.argsort(tail, kind="stable")
+        leaving = leaving[~branch[tail[leaving]]].reshape(-1, 2)  # the two half-edges leaving a node
+        following[leaving[:, 0] ^ 1], following[leaving[:, 1] ^ 1] = leaving[:, 1], leaving[:, 0]
+        order, offsets = np.empty(2 * count, dtype=np.intp), np.empty(2 * count + 1, dtype=np.intp)
+        cycles = _kernels.cycles(following, order, offsets)
+        return branch, tail, head, order, offsets[:cycles + 1]
+
     def resampled(self, nodes, spacing):
         """The network with every interface resampled at equal arc-length steps of about
         ``spacing`` px, its branch nodes kept (mesh health, as the two-region flow's
@@ -321,7 +334,7 @@ class Network:
         ring = np.insert(path, offsets[1:][closed], path[offsets[:-1][closed]])
         ring_sizes = sizes + closed
         ring_offsets = np.concatenate([[0], np.cumsum(ring_sizes)])
-        points = nodes[ring]
+        points = nodes.take(ring, axis=0)
         step = np.hypot(*(points[1:] - points[:-1]).T)
         step[ring_offsets[1:-1] - 1] = 0.0  # no step from one line to the next
         arc = np.concatenate([[0.0], np.cumsum(step)])[:len(points)]
@@ -343,7 +356,8 @@ class Network:
         piece = np.clip(piece, ring_offsets[:-1][owner], ring_offsets[1:][owner] - 2)
         with np.errstate(invalid="ignore", divide="ignore"):
             fraction = np.where(step[piece] > 0, (at - arc[piece]) / step[piece], 0.0)
-        new = points[piece] + np.clip(fraction, 0.0, 1.0)[:, None] * (points[piece + 1] - points[piece])
+        base = points.take(piece, axis=0)
+        new = base + np.clip(fraction, 0.0, 1.0)[:, None] * (points.take(piece + 1, axis=0) - base)
         # the segments: the border's, then each line's chain of nodes: a line's [start, samples,
         # end] (its ends the kept branch nodes), a loop's [samples, its first sample]
         chain_sizes = new_count + 1 + ~closed
@@ -364,7 +378,7 @@ class Network:
         end = np.concatenate([index[self.end[border]], chain_end]).astype(np.intp)
         inner = np.concatenate([self.inner[border], left[line_of]]).astype(np.intp)
         outer = np.concatenate([self.outer[border], right[line_of]]).astype(np.intp)
-        nodes = np.vstack([nodes[kept], new])
+        nodes = np.vstack([nodes.take(kept, axis=0), new])
         return Network(nodes, start, end, inner, outer, self.shape), nodes
 
     def meeting_pairs(self, nodes, limit=16):
@@ -452,13 +466,13 @@ class Network:
     def closed_loops(self, nodes):
         """The interfaces that are closed loops (no junction, off the border), each as
         ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
-        the interface segments, joined at the nodes of degree two."""
+        the interface segments, joined at the nodes of degree two (:meth:`_interface_pieces`)."""
         if self._pieces is None:
             self._pieces = self._interface_pieces()
         chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
         if chosen.size == 0:
             return []
-        a, b = nodes[self.start[chosen]], nodes[self.end[chosen]]
+        a, b = nodes.take(self.start[chosen], axis=0), nodes.take(self.end[chosen], axis=0)
         twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
                                  minlength=count)
         return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k])) for k in closed]
@@ -466,22 +480,22 @@ class Network:
     def _interface_pieces(self):
         """The graph part of :meth:`closed_loops`: the interface segments, the piece of each, the
         number of pieces, the closed ones, each segment's orientation against its piece's first,
-        the segments in order of their piece and where each piece's begin."""
-        import scipy.sparse
-        from scipy.sparse.csgraph import connected_components
+        the segments in order of their piece and where each piece's begin.
 
+        A piece is the half-edge cycles (:meth:`_half_edge_cycles`) of its segments: one for a
+        line (there and back), two for a loop (one each way).  Pieces are numbered in the order of
+        their smallest segment, the first of its cycles (it holds that segment's forward half)."""
         chosen = np.flatnonzero(self.interface)
         if chosen.size == 0:
             return chosen, chosen, 0, chosen, chosen, chosen, chosen
-        ends = np.concatenate([self.start[chosen], self.end[chosen]])
-        owner = np.tile(np.arange(chosen.size), 2)
-        degree = np.bincount(ends, minlength=len(self.nodes))
-        branch = (degree != 2) | ~(self.free[0] & self.free[1])
-        order = np.argsort(ends, kind="stable")
-        pairs = order[~branch[ends[order]]].reshape(-1, 2)  # the two segments at a degree-two node
-        graph = scipy.sparse.coo_matrix((np.ones(len(pairs)), (owner[pairs[:, 0]], owner[pairs[:, 1]])),
-                                        shape=(chosen.size, chosen.size))
-        count, piece = connected_components(graph, directed=False)
+        branch, _, _, order, offsets = self._half_edge_cycles()
+        cycle = np.empty(len(order), dtype=np.intp)
+        cycle[order] = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+        first_cycle = np.minimum(cycle[0::2], cycle[1::2])  # a loop's, either way
+        used = np.zeros(len(offsets) - 1, dtype=bool)
+        used[first_cycle] = True
+        piece = (np.cumsum(used) - 1)[first_cycle]
+        count = int(used.sum())
         open_piece = np.zeros(count, dtype=bool)
         open_piece[piece[branch[self.start[chosen]] | branch[self.end[chosen]]]] = True
         # a loop's segments are oriented either way, their sides named accordingly: orient them
@@ -579,8 +593,7 @@ class Network:
         from scipy.sparse.linalg import splu
 
         start, end = self._interface_ends
-        h = np.hypot(*(nodes[end] - nodes[start]).T)
-        diagonal, off = h / 3.0 + 1.0 / h, h / 6.0 - 1.0 / h
+        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
         factors = []
         for component in range(2):
             order, position, width = self._band(component)
@@ -588,20 +601,16 @@ class Network:
             if size == 0:
                 factors.append((order, None))
                 continue
-            i, j = position[start], position[end]
-            inside = (i >= 0) & (j >= 0)
             if width > _BAND_LIMIT:
                 matrix = self.stiffness(nodes)
                 factors.append((order, splu(matrix[order][:, order].tocsc())))
                 continue
             band = np.zeros((size, width + 1))  # band[j, width + i - j] = A[i, j] for i <= j
-            band[:, width] = (np.bincount(i[i >= 0], weights=diagonal[i >= 0], minlength=size)
-                              + np.bincount(j[j >= 0], weights=diagonal[j >= 0], minlength=size))
-            low, high = np.minimum(i[inside], j[inside]), np.maximum(i[inside], j[inside])
-            band[high, width + low - high] = off[inside]  # one segment per pair of nodes
-            if _kernels.band_cholesky(band) != 0:
+            _kernels.h1_band(nodes, start, end, position, band)
+            envelope = np.empty((size, 2), dtype=np.intp)
+            if _kernels.band_cholesky(band, envelope) != 0:
                 raise np.linalg.LinAlgError("the H^1 form is not positive definite")
-            factors.append((order, band))
+            factors.append((order, (band, envelope)))
         return factors
 
     def _band(self, component):
@@ -648,7 +657,7 @@ class Network:
     def _interfaces_within(self, index):
         """Each node's position in ``index`` (-1: not in it), and the positions of the two ends of
         every interface with both ends in it."""
-        position = np.full(len(self.nodes), -1)
+        position = np.full(len(self.nodes), -1, dtype=np.intp)
         position[index] = np.arange(index.size)
         start, end = self._interface_ends
         i, j = position[start], position[end]
@@ -668,8 +677,8 @@ class Network:
             if factor is None:
                 continue
             rhs = -force[order, component]
-            if isinstance(factor, np.ndarray):
-                _kernels.band_solve(factor, rhs)
+            if isinstance(factor, tuple):  # a band and its envelope
+                _kernels.band_solve(*factor, rhs)
             else:
                 rhs = factor.solve(rhs)
             velocity[order, component] = rhs
@@ -700,9 +709,10 @@ class Network:
     def swept(self, before, after):
         """The interfaces' mean normal displacement from ``before`` to ``after`` (px)."""
         a, b = self.start[self.interface], self.end[self.interface]
-        tangent = before[b] - before[a]
+        before_a, before_b = before.take(a, axis=0), before.take(b, axis=0)
+        tangent = before_b - before_a
         length = np.linalg.norm(tangent, axis=1)
-        shift = 0.5 * ((after[a] - before[a]) + (after[b] - before[b]))
+        shift = 0.5 * ((after.take(a, axis=0) - before_a) + (after.take(b, axis=0) - before_b))
         normal = np.abs(shift[:, 0] * tangent[:, 1] - shift[:, 1] * tangent[:, 0])  # |shift . nu| h
         return float(normal.sum() / max(length.sum(), 1e-12))
 
@@ -848,7 +858,17 @@ class _Flow:
         if not candidates:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
-        # move from the region inside to the one around it, and its loop leaves the length
+        # move from the region inside to the one around it, and its loop leaves the length.  The
+        # islands' moments in one pass, each loop's segments oriented as its first one and
+        # counted for its own label (1 + its index; 0 the unused background)
+        sizes = np.array([len(loop) for loop in candidates])
+        segments, owner = np.concatenate(candidates), np.repeat(np.arange(len(candidates)), sizes)
+        flip = network.inner[segments] != network.inner[[loop[0] for loop in candidates]][owner]
+        starts = np.where(flip[:, None], nodes[network.end[segments]], nodes[network.start[segments]])
+        ends = np.where(flip[:, None], nodes[network.start[segments]], nodes[network.end[segments]])
+        islands = partition_moments(self.model, Boundary(starts, ends, owner + 1, np.full(len(owner), -1)),
+                                    len(candidates) + 1)
+        loop_lengths = np.bincount(owner, weights=np.hypot(*(ends - starts).T), minlength=len(candidates))
         areas, first, second = self.current.areas, self.current.first, self.current.second
         length, energy = self.current.length, self.current.energy
         keep = np.ones(len(network.start), dtype=bool)
@@ -856,11 +876,8 @@ class _Flow:
         by_row = np.argsort(nodes[:, 0], kind="stable")
         boxed = network.boxes_hold_nodes(nodes, candidates, uses > 0, by_row)
         # one at a time: a loop may hold another part until that is gone
-        for loop, holds in zip(candidates, boxed, strict=True):
-            flip = network.inner[loop] != network.inner[loop[0]]  # orient them all as the first
-            starts = np.where(flip[:, None], nodes[network.end[loop]], nodes[network.start[loop]])
-            ends = np.where(flip[:, None], nodes[network.start[loop]], nodes[network.end[loop]])
-            area, moment_1, moment_2 = soup_moments(self.model, starts, ends)
+        for k, (loop, holds) in enumerate(zip(candidates, boxed, strict=True)):
+            area, moment_1, moment_2 = (part[k + 1] for part in islands)
             sides = (network.inner[loop[0]], network.outer[loop[0]])
             inside, around = sides if area > 0 else sides[::-1]
             sign = 1.0 if area > 0 else -1.0
@@ -868,7 +885,7 @@ class _Flow:
             for part, island in zip(trial, (area, moment_1, moment_2), strict=True):
                 part[inside] -= sign * island
                 part[around] += sign * island
-            loop_length = float(np.linalg.norm(ends - starts, axis=1).sum())
+            loop_length = loop_lengths[k]
             candidate = energy_of_moments(self.model, self.params, *trial, length - loop_length)
             if candidate.energy > energy:
                 continue
@@ -903,7 +920,7 @@ class _Flow:
         pairs = network.meeting_pairs(crossed)
         ends = np.unique(np.concatenate([network.start[pairs], network.end[pairs]], axis=None))
         near = network.interface & (np.isin(network.start, ends) | np.isin(network.end, ends))
-        lengths = np.linalg.norm(nodes[network.end] - nodes[network.start], axis=1)
+        lengths = np.linalg.norm(nodes.take(network.end, axis=0) - nodes.take(network.start, axis=0), axis=1)
         for changed in (lambda: network.reconnected(pairs, nodes),
                         lambda: network.collapsed(np.flatnonzero(near & (lengths < _TINY)), nodes)):
             candidate = changed()
@@ -928,12 +945,13 @@ class _Flow:
     def unhealthy(self):
         network, nodes = self.network, self.nodes
         chosen = network.interface
-        lengths = np.linalg.norm(nodes[network.end[chosen]] - nodes[network.start[chosen]], axis=1)
+        step = nodes.take(network.end[chosen], axis=0) - nodes.take(network.start[chosen], axis=0)
+        lengths = np.linalg.norm(step, axis=1)
         return lengths.size and (lengths.min() < 0.5 * _SPACING or lengths.max() > 2.0 * _SPACING)
 
     def run(self, max_num_iter, tol, callback, n_iter):
-        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step or
-        a stall at a pinch that cannot be resolved) and the iteration count."""
+        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step, 5 a
+        stall at a pinch that cannot be resolved) and the iteration count."""
         dt_next, block_start, block_network, still, held = None, self.nodes, self.network, 0, 0
         factors = None
         for iteration in range(1, max_num_iter + 1):
@@ -986,7 +1004,7 @@ class _Flow:
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
                 return 2, n_iter
             if held == _HELD:  # a stall: each step held back by a pinch that cannot be resolved
-                return 4, n_iter
+                return 5, n_iter
             if iteration % _BLOCK == 0:
                 slow = block_network is network and network.swept(block_start, trial) / _BLOCK < tol
                 still = still + 1 if slow else 0

@@ -60,15 +60,9 @@ class Boundary:
 
 
 class Sides:
-    """The segments on each class's boundary, and the segments of each (inner, outer) pair."""
+    """The segments on each class's boundary, found when first asked."""
 
     def __init__(self, inner, outer):
-        order = np.lexsort((outer, inner))
-        pairs = np.column_stack([inner[order], outer[order]])
-        cuts = np.flatnonzero(np.any(np.diff(pairs, axis=0) != 0, axis=1)) + 1
-        self.pairs = [(int(group_pairs[0, 0]), int(group_pairs[0, 1]), group)
-                      for group_pairs, group in zip(np.split(pairs, cuts), np.split(order, cuts), strict=True)
-                      if len(group)]
         self._inner, self._outer = inner, outer
         self._soups = {}
 
@@ -202,16 +196,19 @@ def chain(starts, ends):
     return [_corners(starts[loop]) for loop in chain_loops(lattice_keys(starts), lattice_keys(ends))]
 
 
-def chain_loops(start_keys, end_keys):
+def chain_loops(start_keys, end_keys, distinct=None):
     """The closed loops of oriented segments given by the keys of their ends (equal keys: the same
     point), each as the indices of its segments in order (:func:`loop_order`)."""
-    order, offsets = loop_order(start_keys, end_keys)
+    order, offsets = loop_order(start_keys, end_keys, distinct)
     return np.split(order, offsets[1:-1]) if len(offsets) > 1 else []
 
 
-def loop_order(start_keys, end_keys):
+def loop_order(start_keys, end_keys, distinct=None):
     """:func:`chain_loops` as one array: ``(order, offsets)``, loop l the segments
-    ``order[offsets[l]:offsets[l + 1]]``.
+    ``order[offsets[l]:offsets[l + 1]]``.  Given ``distinct``, the keys are dense ids
+    0..distinct-1 (a node's index): the loops are then found in O(n + distinct)
+    (:func:`activecontour._kernels.follow`, :func:`~activecontour._kernels.passes_twice`), the same
+    as by sorting.
 
     The i-th segment ending at a point continues with the i-th starting there.  Where a region
     is pinched at a point (two of its corners meet at a junction), that pairing can make one
@@ -225,6 +222,15 @@ def loop_order(start_keys, end_keys):
     if len(start_keys) == 0:
         offsets[0] = 0
         return order, offsets
+    if distinct is not None:
+        ids = np.ascontiguousarray(start_keys, dtype=np.intp)
+        following = np.empty(len(ids), dtype=np.intp)
+        _kernels.follow(ids, np.ascontiguousarray(end_keys, dtype=np.intp), distinct, following)
+        count = _kernels.cycles(following, order, offsets)
+        offsets = offsets[:count + 1]
+        twice = np.empty(count, dtype=np.uint8)
+        _kernels.passes_twice(order, offsets, ids, distinct, twice)
+        return _untwisted(order, offsets, twice, ids, distinct)
     sorted_order = np.argsort(start_keys, kind="stable")
     sorted_keys = start_keys[sorted_order]
     end_order = np.argsort(end_keys, kind="stable")
@@ -243,10 +249,17 @@ def loop_order(start_keys, end_keys):
     twice[loop_of[by_key[1:]][same]] = 1
     if not twice.any():
         return order, offsets
-    distinct, ids = np.unique(start_keys, return_inverse=True)
+    keys, ids = np.unique(start_keys, return_inverse=True)
+    return _untwisted(order, offsets, twice, ids.astype(np.intp).ravel(), len(keys))
+
+
+def _untwisted(order, offsets, twice, ids, distinct):
+    """:func:`loop_order`'s loops cut where they pass a point twice (``twice``), the points' dense
+    ids ``ids`` (0..distinct-1, in the order of their keys)."""
+    if not twice.any():
+        return order, offsets
     out, out_offsets = np.empty_like(order), np.empty(len(order) + 1, dtype=np.intp)
-    ids = ids.astype(np.intp).ravel()
-    loops = _kernels.untwist(order, offsets, twice, ids, len(distinct), out, out_offsets)
+    loops = _kernels.untwist(order, offsets, twice, ids, distinct, out, out_offsets)
     return out, out_offsets[:loops + 1]
 
 

@@ -11,7 +11,8 @@ import numpy as np
 
 __all__ = ["STATUS_WORDS", "Session"]
 
-STATUS_WORDS = {0: "converged", 1: "max_num_iter reached", 2: "paused", 3: "collapsed", 4: "stationary"}
+STATUS_WORDS = {0: "converged", 1: "max_num_iter reached", 2: "paused", 3: "collapsed", 4: "stationary",
+                5: "stalled"}
 
 
 class Session:

@@ -477,3 +477,50 @@ def test_collapsing_a_vanishing_segment_keeps_the_partition():
     # a segment between two branch nodes (junctions, the border) is not collapsed
     branch = np.flatnonzero(network.interface & ~plain[network.start] & ~plain[network.end])
     assert network.collapsed(branch, network.nodes) is None
+
+
+def test_a_stall_at_a_pinch_says_so():
+    # a crop of scikit-image's camera where a region thins between two others: the flow's steps are
+    # held back there, J still falling, and the run ends as a stall (status 5), not as a flow that
+    # found no descent step (status 4: J no longer falls) nor as converged
+    import skimage.data
+
+    from activecontour.result import STATUS_MESSAGES
+
+    crop = skimage.data.camera()[230:263, 199:240]
+    res = ac.segment(crop, n_regions=3, separate=False)
+    assert res.status == 5 and res.message == STATUS_MESSAGES[5]
+    assert res.message.startswith("Stalled") and "pinch" in res.message
+    assert res.success and res.n_iter < 500  # before the default max_num_iter
+    assert res.energies[-1] < res.energies[-2]  # still descending when it stopped
+    assert all("stall" not in STATUS_MESSAGES[k].lower() for k in STATUS_MESSAGES if k != 5)
+
+
+def test_interface_pieces_are_the_connected_components_at_plain_nodes():
+    # the interface segments joined where two of them meet at a free node of degree two: scipy's
+    # connected components (numbered from segment 0 on) are closed_loops' pieces, and a piece is
+    # closed when none of its segments ends at another node
+    import scipy.sparse
+    from scipy.sparse.csgraph import connected_components
+
+    checked = 0
+    for network, _, _ in _moved_networks(20, 17):
+        chosen = np.flatnonzero(network.interface)
+        ends = np.concatenate([network.start[chosen], network.end[chosen]])
+        degree = np.bincount(ends, minlength=len(network.nodes))
+        plain = (degree == 2) & network.free[0] & network.free[1]
+        owner = np.tile(np.arange(chosen.size), 2)
+        rows, cols = [], []
+        for node in np.flatnonzero(plain):
+            a, b = owner[ends == node]
+            rows.append(a)
+            cols.append(b)
+        graph = scipy.sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(chosen.size,) * 2)
+        count, piece = connected_components(graph, directed=False)
+        found = network._interface_pieces()
+        np.testing.assert_array_equal(found[1], piece)
+        assert found[2] == count
+        closed = [k for k in range(count) if plain[ends[np.tile(piece == k, 2)]].all()]
+        np.testing.assert_array_equal(found[3], closed)
+        checked += count > len(closed) > 0
+    assert checked >= 3

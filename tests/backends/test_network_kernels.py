@@ -144,3 +144,76 @@ def test_normal_part_is_the_numpy_definition():
     along = np.column_stack([normal[:, 1], -normal[:, 0]])
     np.testing.assert_allclose(np.einsum("ij,ij->i", out[plain], along), 0.0, atol=1e-12)
     np.testing.assert_array_equal(out[10:], velocity[10:])
+
+
+def test_band_cholesky_within_the_envelopes_is_the_factor():
+    # symmetric positive definite band matrices whose columns start at scattered rows (an
+    # envelope narrower than the band, as chains in reverse Cuthill-McKee order): U^T U = A with U
+    # numpy's upper Cholesky factor, zero above every column's envelope; a solve returns x
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        n, w = int(rng.integers(1, 60)), int(rng.integers(1, 9))
+        a = np.zeros((n, n))
+        for j in range(n):
+            reach = int(rng.integers(0, min(j, w) + 1))  # column j's nonzeros: rows j - reach .. j
+            a[j - reach:j, j] = rng.normal(size=reach) * (rng.random(reach) < 0.7)
+        a = a + a.T
+        a += np.diag(np.abs(a).sum(axis=1) + 0.5 + rng.random(n))  # diagonally dominant
+        band = np.zeros((n, w + 1))
+        for j in range(n):
+            for i in range(max(0, j - w), j + 1):
+                band[j, w + i - j] = a[i, j]
+        envelope = np.empty((n, 2), dtype=np.intp)
+        assert _kernels.band_cholesky(band, envelope) == 0
+        upper = np.linalg.cholesky(a).T
+        for j in range(n):
+            for i in range(max(0, j - w), j + 1):
+                assert band[j, w + i - j] == pytest.approx(upper[i, j], rel=1e-12, abs=1e-12)
+        x = rng.normal(size=n)
+        rhs = a @ x
+        _kernels.band_solve(band, envelope, rhs)
+        np.testing.assert_allclose(rhs, x, rtol=1e-10, atol=1e-10)
+        # the envelope: each column's first row with an entry of A, and each row's last column
+        # whose envelope reaches it (where U can have entries: fill stays within the envelopes)
+        nonzero = (a != 0) & (np.arange(n)[:, None] <= np.arange(n)[None, :])
+        first = np.argmax(nonzero, axis=0)
+        np.testing.assert_array_equal(envelope[:, 0], first)
+        rows = np.arange(n)
+        within = (first[None, :] <= rows[:, None]) & (rows[None, :] >= rows[:, None])
+        np.testing.assert_array_equal(envelope[:, 1], n - 1 - np.argmax(within[:, ::-1], axis=1))
+        assert np.all(np.abs(upper)[~within] < 1e-12)  # U within the envelopes
+
+
+def test_band_cholesky_reports_a_matrix_that_is_not_positive_definite():
+    band = np.array([[0.0, 1.0], [2.0, 1.0]])  # [[1, 2], [2, 1]]: the second leading minor is -3
+    assert _kernels.band_cholesky(band, np.empty((2, 2), dtype=np.intp)) == 2
+
+
+def test_h1_band_is_the_stiffness_matrix_in_band_form():
+    # chains and a junction of segments between random nodes, some nodes held (position -1), the
+    # rest in a shuffled order: the band is Network.stiffness's matrix restricted and reordered
+    from activecontour.backends.network import Network
+
+    rng = np.random.default_rng(6)
+    for _ in range(10):
+        count = int(rng.integers(6, 40))
+        nodes = rng.uniform(0.0, 20.0, (count, 2))
+        start = np.arange(count - 1, dtype=np.intp)
+        end = np.arange(1, count, dtype=np.intp)
+        start, end = np.append(start, [0, count // 2]), np.append(end, [count // 2, count - 1])  # loops
+        keep = np.flatnonzero(rng.random(count) < 0.8)
+        order = rng.permutation(keep).astype(np.intp)
+        position = np.full(count, -1, dtype=np.intp)
+        position[order] = np.arange(order.size)
+        sides = np.zeros(len(start), dtype=np.intp)
+        network = Network(nodes, start, end, sides, sides + 1, (21, 21))
+        dense = network.stiffness(nodes).toarray()[np.ix_(order, order)]
+        pairs = np.abs(position[start] - position[end])[(position[start] >= 0) & (position[end] >= 0)]
+        width = int(pairs.max()) if pairs.size else 0
+        band = np.zeros((order.size, width + 1))
+        _kernels.h1_band(nodes, start, end, position, band)
+        for j in range(order.size):
+            for i in range(max(0, j - width), j + 1):
+                assert band[j, width + i - j] == pytest.approx(dense[i, j], rel=1e-12, abs=1e-12)
+        assert np.all(np.abs(dense[np.abs(np.subtract.outer(np.arange(order.size), np.arange(order.size)))
+                                   > width]) == 0)

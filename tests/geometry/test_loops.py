@@ -64,3 +64,24 @@ def test_no_segments_no_loops():
     assert chain_loops(empty, empty) == []
     order, offsets = loop_order(empty, empty)
     assert order.size == 0 and list(offsets) == [0]
+
+
+def test_dense_ids_chain_as_sorting_does():
+    # random closed walks over a few points (so that most pass some point several times, and
+    # points have several segments leaving them), their segments shuffled: loop_order on the
+    # points' dense ids (counting) gives the loops the sorting of their keys gives
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        walks = [rng.integers(0, 8, rng.integers(2, 12)) for _ in range(rng.integers(1, 5))]
+        starts = np.concatenate(walks)
+        ends = np.concatenate([np.roll(walk, -1) for walk in walks])
+        shuffle = rng.permutation(len(starts))
+        starts, ends = starts[shuffle], ends[shuffle]
+        order, offsets = loop_order(starts * 7 + 3, ends * 7 + 3)  # sparse keys: sorted
+        dense_order, dense_offsets = loop_order(starts, ends, 8)
+        np.testing.assert_array_equal(dense_order, order)
+        np.testing.assert_array_equal(dense_offsets, offsets)
+        for a, b in zip(offsets[:-1], offsets[1:], strict=True):  # closed, each point once
+            loop = order[a:b]
+            np.testing.assert_array_equal(ends[loop], starts[np.roll(loop, -1)])
+            assert len(np.unique(starts[loop])) == len(loop)
