@@ -15,7 +15,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
   transform up to a few pixels, for the split's tests against a radius), :func:`distance_peaks`
   (an object's distance transform and its pieces of peaks: the first test for necks),
   :func:`fill_holes` (an object's window without holes),
-  :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
+  :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside`, :func:`cut_ratios` (the corner stage's
+  ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`segment_loads`, :func:`h1_band`, :func:`band_cholesky`, :func:`band_solve`,
   :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
@@ -35,7 +36,7 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 """
 
 from cpython.exc cimport PyErr_CheckSignals
-from libc.math cimport INFINITY, M_PI, fabs, hypot, isnan, sin, sqrt
+from libc.math cimport INFINITY, M_PI, fabs, fma, hypot, isnan, sin, sqrt
 from libc.stdint cimport uint64_t
 from libc.stdlib cimport calloc, free, malloc, realloc
 from libc.string cimport memcpy
@@ -2520,6 +2521,49 @@ def segment_inside(const double[:, ::1] start, const double[:, ::1] end, Py_ssiz
         elif start[i, 0] > m0 and end[i, 0] <= m0 and turn < 0:
             down += 1
     return up != down
+
+
+
+def cut_ratios(const double[:, ::1] part, const double[:, ::1] centred, const double[:, ::1] normals,
+               const Py_ssize_t[::1] first, const Py_ssize_t[::1] second, double least, double[::1] out):
+    """The neck ratio of each candidate cut ``(first[k], second[k])`` (a < b) of a part of the
+    corner stage (:func:`activecontour.objects.split._cuts`): the cut's length over the smaller of
+    the part's extents along it, on each side of the cut (its vertices ``part``, their offsets
+    from the mean ``centred``); infinity for a cut of no length or one that does not face the
+    inward normal (``-normals``, the outward unit normals at the part's vertices) within
+    ``acos(least)`` at both ends.
+
+    The same arithmetic as the definition in numpy, to the bit: the dot product of two
+    2-vectors as numpy's BLAS computes it (``x @ y = fma(x1, y1, x0 y0)``) and the rows of a
+    matrix times a 2-vector (``(A @ y)_i = fma(A_i0, y0, A_i1 y1)``)."""
+    cdef Py_ssize_t k, i, a, b, n = part.shape[0]
+    cdef double d0, d1, length, value, low1, high1, low2, high2, extent
+    for k in range(first.shape[0]):
+        a = first[k]
+        b = second[k]
+        out[k] = INFINITY
+        d0 = part[b, 0] - part[a, 0]
+        d1 = part[b, 1] - part[a, 1]
+        length = hypot(d0, d1)
+        if length == 0:
+            continue
+        d0 = d0 / length
+        d1 = d1 / length
+        if (fma(-normals[a, 1], d1, (-normals[a, 0]) * d0) < least
+                or fma(normals[b, 1], d1, normals[b, 0] * d0) < least):
+            continue
+        low1 = high1 = fma(centred[a, 0], d0, centred[a, 1] * d1)
+        for i in range(a + 1, b + 1):
+            value = fma(centred[i, 0], d0, centred[i, 1] * d1)
+            low1 = value if value < low1 else low1
+            high1 = value if value > high1 else high1
+        low2 = high2 = fma(centred[b, 0], d0, centred[b, 1] * d1)
+        for i in range(b + 1, n + a + 1):
+            value = fma(centred[i % n, 0], d0, centred[i % n, 1] * d1)
+            low2 = value if value < low2 else low2
+            high2 = value if value > high2 else high2
+        extent = high1 - low1 if high1 - low1 < high2 - low2 else high2 - low2
+        out[k] = length / (extent if extent > 1e-12 else 1e-12)
 
 
 # ==== end of split2's kernels ===================================================================

@@ -217,6 +217,10 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, se
     return objects, labels, table
 
 
+#: The denominators of :func:`polygon_moments`' edge sums.
+_GREEN = np.array([2.0, 6.0, 6.0, 12.0, 12.0, 24.0])
+
+
 def polygon_moments(curves):
     """Exact area, first and second moments of the region bounded by oriented polygons.
 
@@ -240,10 +244,10 @@ def polygon_moments(curves):
         q = np.roll(p, -1, axis=0)
         r0, c0, r1, c1 = p[:, 0], p[:, 1], q[:, 0], q[:, 1]
         w = r0 * c1 - r1 * c0
-        sums += [np.sum(w) / 2, np.sum((r0 + r1) * w) / 6, np.sum((c0 + c1) * w) / 6,
-                 np.sum((r0 * r0 + r0 * r1 + r1 * r1) * w) / 12,
-                 np.sum((c0 * c0 + c0 * c1 + c1 * c1) * w) / 12,
-                 np.sum((2 * r0 * c0 + r0 * c1 + r1 * c0 + 2 * r1 * c1) * w) / 24]
+        # the six edge sums in one reduction (each row summed as np.sum sums it alone)
+        sums += np.sum(np.stack([w, (r0 + r1) * w, (c0 + c1) * w, (r0 * r0 + r0 * r1 + r1 * r1) * w,
+                                 (c0 * c0 + c0 * c1 + c1 * c1) * w,
+                                 (2 * r0 * c0 + r0 * c1 + r1 * c0 + 2 * r1 * c1) * w]), axis=1) / _GREEN
     area = sums[0]
     mean = sums[1:3] / area
     central = np.array([[sums[3], sums[5]], [sums[5], sums[4]]]) - area * np.outer(mean, mean)
@@ -353,7 +357,8 @@ def measure(objects, labels, image=None):
         # regionprops' inertia tensor: the moment about each axis is the other coordinate's
         tensor[k] = np.array([[central[1, 1], -central[0, 1]], [-central[0, 1], central[0, 0]]]) / area[k]
         perimeter[k] = sum(np.sum(np.hypot(*np.diff(np.vstack([c, c[:1]]), axis=0).T)) for c in curves)
-        convex[k] = hull_area(np.vstack([c for c in curves if signed_area(c) > 0]))
+        convex[k] = hull_area(curves[0] if len(curves) == 1 else  # (an outer boundary: positive)
+                              np.vstack([c for c in curves if signed_area(c) > 0]))
     eigen = np.linalg.eigvalsh(tensor)[:, ::-1].clip(min=0)  # descending
     table["area"] = area
     table["perimeter"] = perimeter

@@ -408,3 +408,53 @@ def test_the_compiled_segment_test_is_the_numpy_one():
             answers.append(split._segment_inside(edges, a, b))
             assert answers[-1] == _segment_inside_numpy(edges, a, b)
     assert 100 < sum(answers) < len(answers) - 100  # both answers drawn
+
+
+def _cut_ratio_numpy(part, normals, a, b):
+    """The neck ratio of the cut (a, b) of a part as :func:`split._cuts` defines it (infinity
+    when it has no length or a normal does not face it)."""
+    direction = part[b] - part[a]
+    length = np.hypot(*direction)
+    if length == 0:
+        return np.inf
+    direction = direction / length
+    least = np.cos(np.radians(split.CUT_ALIGN))
+    if -normals[a] @ direction < least or normals[b] @ direction < least:
+        return np.inf
+    along = (part - part.mean(axis=0)) @ direction
+    extent = min(np.ptp(along[a:b + 1]), np.ptp(np.concatenate([along[b:], along[:a + 1]])))
+    return length / max(extent, 1e-12)
+
+
+def test_the_compiled_cut_ratios_are_the_numpy_ones():
+    rng = np.random.default_rng(6)
+    finite = 0
+    for seed in range(20):
+        outline = random_outline(seed)
+        _, _, normals = split._concave_corners(outline)
+        pairs = np.sort(np.array([rng.choice(len(outline), 2, replace=False) for _ in range(80)]), axis=1)
+        ratios = np.empty(len(pairs))
+        split._kernels.cut_ratios(outline, outline - outline.mean(axis=0), normals,
+                                  pairs[:, 0].copy(), pairs[:, 1].copy(),
+                                  float(np.cos(np.radians(split.CUT_ALIGN))), ratios)
+        expected = np.array([_cut_ratio_numpy(outline, normals, a, b) for a, b in pairs])
+        np.testing.assert_array_equal(np.isinf(ratios), np.isinf(expected))
+        np.testing.assert_allclose(ratios[np.isfinite(ratios)], expected[np.isfinite(expected)], rtol=1e-13)
+        finite += np.count_nonzero(np.isfinite(expected))
+    assert 50 < finite < 20 * 80 - 50  # cuts facing their normals, and cuts that do not
+
+
+def test_a_split_by_contrast_needs_two_pixels_min_radius_inside():
+    # a bright and a dim disk side by side, without a waist: split by contrast, and the test
+    # before it lets it through; a bar 4 px wide has no pixel 3 px from its outside
+    rows, cols = np.mgrid[:40, :60]
+    bright = (rows - 20) ** 2 + (cols - 20) ** 2 <= 12 ** 2
+    dim = (rows - 20) ** 2 + (cols - 38) ** 2 <= 12 ** 2
+    region = np.pad(bright | dim, 1)
+    values = np.pad(np.where(bright, 1.0, 0.4), 1)
+    assert split._may_split_by_contrast(region, split.MIN_SPLIT_RADIUS)
+    assert split._contrast_parts(region.astype(np.int32), values, 0.2, split.MIN_SPLIT_RADIUS).max() == 2
+    bar = np.zeros((12, 60), dtype=bool)
+    bar[3:7, 2:58] = True
+    assert not split._may_split_by_contrast(bar, split.MIN_SPLIT_RADIUS)
+    assert not split._may_split_by_contrast(np.pad(np.ones((7, 7), dtype=bool), 1), 3.0)  # 49 < 2 pi 9
