@@ -200,7 +200,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if concave:
             # (an object its necks did not cut: its hull depth is known)
             pieces = [cut for piece in pieces for cut in
-                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
+                      ([piece] if len(piece) > 1 else [[part] for part in _outline_parts(
                           piece[0], depth if piece[0] is curves[0] else None)])]
         result.extend(pieces)
     return result
@@ -992,16 +992,17 @@ def _uncuttable(area, good):
     return (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2
 
 
-def _concave_corners(outline, depth=None):
+def _concave_corners(outline, depth=None, turn=CORNER_TURN):
     """The vertices at the concave corners of a polygon, its smoothed curvature and its smoothed
     outward unit normals.
 
     The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
     curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
     maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
-    ``CORNER_TURN`` and it dips ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``:
-    :func:`_hull_depth`, measured here unless given, and only once a stretch turns enough); the
-    corner is its vertex of most negative curvature.
+    ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_parts`) and it dips
+    ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``: :func:`_hull_depth`, measured here
+    unless given, and only once a stretch turns enough); the corner is its vertex of most negative
+    curvature.
     """
     import scipy.ndimage
 
@@ -1021,8 +1022,7 @@ def _concave_corners(outline, depth=None):
     corners = []
     for start, stop in zip(np.flatnonzero(steps == 1), np.flatnonzero(steps == -1), strict=True):
         stretch = order[start:stop]
-        turn = -np.sum(kappa[stretch] * ds[stretch])
-        if np.degrees(turn) < CORNER_TURN:
+        if np.degrees(-np.sum(kappa[stretch] * ds[stretch])) < turn:
             continue
         depth = _hull_depth(outline) if depth is None else depth
         if depth[stretch].max() >= MIN_WAIST_DEPTH:
@@ -1195,3 +1195,226 @@ def _explained(part, fit, region):
     if 1 - shapely.intersection(shape, region).area / shape.area > ELLIPSE_OUTSIDE:
         return area, False
     return area, area >= ELLIPSE_SOLIDITY * hull_area(part)
+
+
+# ---- stage 2, first: the outline's arcs grouped into ellipses -----------------------------------
+
+#: :func:`_arc_parts` cuts the outline into arcs at concave stretches that turn by this many
+#: degrees (and dip ``MIN_WAIST_DEPTH`` inside the hull): lower than ``CORNER_TURN``, since a
+#: stretch of noise only cuts an arc in two that the grouping joins again, while a contact whose
+#: corner the converged contour rounded below ``CORNER_TURN`` is still found.
+ARC_CORNER_TURN = 15.0
+#: Each arc loses this much (pixels of arc length) at both ends (the rounding of the corner is
+#: neither object's outline) and is fitted only when this much of it is left.
+ARC_TRIM, ARC_MIN_LENGTH = 1.5, 4.0
+#: Two groups of arcs join when one ellipse fits their union as well as two fit them apart, up to
+#: the Bayesian information criterion of the five parameters saved: the squared Sampson distances
+#: grow by at most ``5 ln n`` noise variances for n points, the noise variance being the two fits'
+#: own, at least this (pixels) squared.
+ARC_NOISE = 0.2
+#: An arc group's ellipse is an object's when its rms Sampson distance is within
+#: ``ARC_RMS[0] + ARC_RMS[1]`` times its radius (pixels), its aspect at most ``MAX_PART_ASPECT``,
+#: its radius at least ``MIN_SPLIT_RADIUS`` and at most this fraction of it lies outside the
+#: object (the rounded contacts bulge it a little).
+ARC_RMS, ARC_OUTSIDE = (0.5, 0.04), 0.10
+#: The ellipses explain the object when they cover this fraction of its pixels ...
+ARC_COVER = 0.9
+#: ... at most this fraction of its pixels lies in three ellipses (objects pressed together overlap
+#: two by two; the arms of a star, fitted each by an ellipse, all reach into its centre) ...
+ARC_TRIPLE = 0.02
+#: ... no two overlap by more than this fraction of the smaller one (two disks overlapping by a
+#: third of their diameter, the families' most, share 0.22 of a disk; the fits of a contour that
+#: rounded the contacts are larger) ...
+ARC_OVERLAP = 0.45
+#: ... every point where the border between two parts meets the outline lies within this many
+#: pixels of a corner (a waist at both ends: a bent rod or a banana cut across is not two
+#: objects) and no point has four parts within that reach (a star's arms all meet at its centre;
+#: objects pressed together meet two or three at a point).
+ARC_REACH = 3.0
+
+
+def _outline_parts(outline, depth=None):
+    """The parts of a polygon without holes: its arcs grouped into ellipses (:func:`_arc_parts`)
+    where they explain it, else its cuts at concave corners (:func:`_corner_parts`)."""
+    parts = _arc_parts(outline, depth)
+    return _corner_parts(outline, depth) if parts is None else parts
+
+
+def _arc_parts(outline, depth=None):
+    """The parts of a polygon (an outer boundary without holes) as a clump of overlapping
+    ellipses, or None when no such clump explains it.
+
+    The model-based split of overlapping convex objects (nuclei): where two convex objects
+    overlap, their outlines cross at a concave corner (negative curvature kappa of (3.45), turning
+    by ``ARC_CORNER_TURN``, :func:`_concave_corners`), so the corners cut the outline into arcs
+    each of which belongs to one object, and an object of a clump owns one arc (at the clump's
+    end) or several (one on each side, in a chain).  Each arc is fitted with an ellipse
+    (:func:`_ellipse_fits`); arcs are joined, the pair that costs least first, while one ellipse
+    explains their union as well as two do (``ARC_NOISE``) or one of them alone is no object's
+    ellipse (``ARC_RMS``, ``ARC_OUTSIDE``).  Each pixel goes to the ellipse it lies deepest in
+    (its normalised radius least: the truth's rule of :func:`activecontour.synthetic.
+    render_instances` for overlaps), and the cells are cut out of the polygon (:func:`_cut`).
+
+    The clump stands when the ellipses cover ``ARC_COVER`` of the object, three of them at most
+    ``ARC_TRIPLE`` of it, overlap pairwise by at most ``ARC_OVERLAP``, every part holds pi
+    ``MIN_SPLIT_RADIUS``^2 pixels, every border between two parts reaches the outline at corners
+    only and no four parts meet (``ARC_REACH``).  Unlike a cut between two corners, the grouping
+    splits three objects pressed around one point (a trefoil has three corners, one per contact,
+    and three arcs) and takes a corner whose partner was rounded away as the end of two arcs.
+    """
+    import shapely
+
+    area = signed_area(outline)
+    if area < 2 * np.pi * MIN_SPLIT_RADIUS**2:
+        return None
+    corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN)
+    if len(corners) < 2:
+        return None
+    arcs = _arcs(outline, corners)
+    if len(arcs) < 2:
+        return None
+    region = shapely.Polygon(outline)
+    groups = _grouped_arcs(outline, arcs, region)
+    ellipses = [ellipse for _, _, ellipse in groups if ellipse is not None]
+    if len(ellipses) < 2:
+        return None
+    shapes = [_ellipse_polygon(ellipse) for ellipse in ellipses]
+    for i, first in enumerate(shapes):
+        for second in shapes[i + 1:]:
+            if shapely.intersection(first, second).area > ARC_OVERLAP * min(first.area, second.area):
+                return None
+    low = np.floor(outline.min(axis=0)).astype(int) - 1
+    inside = rasterize([outline - low], tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2))
+    rows, cols = np.nonzero(inside)
+    depth_in = np.array([_normalised_radius(ellipse, np.column_stack([rows, cols]) + low)
+                         for ellipse in ellipses])
+    covered = np.count_nonzero(depth_in <= 1, axis=0)
+    if (np.count_nonzero(covered) < ARC_COVER * rows.size
+            or np.count_nonzero(covered >= 3) > ARC_TRIPLE * rows.size):
+        return None
+    parts = np.zeros(inside.shape, dtype=np.int32)
+    parts[rows, cols] = np.argmin(depth_in, axis=0) + 1
+    if (np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:].min() < np.pi * MIN_SPLIT_RADIUS**2
+            or not _meet_at_corners(parts, inside, outline[corners] - low, len(ellipses))):
+        return None
+    pieces = _cut([outline], parts, low)
+    if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):
+        return None  # a cell in pieces, or with a hole: no clump of ellipses
+    return [piece[0] for piece in pieces]
+
+
+def _arcs(outline, corners):
+    """The vertices (indices) of the outline between each two consecutive corners, less
+    ``ARC_TRIM`` of arc length at both ends; arcs shorter than ``ARC_MIN_LENGTH`` left out."""
+    h = edge_lengths(outline)
+    along = np.concatenate([[0.0], np.cumsum(h)])
+    total, count = along[-1], len(outline)
+    arcs = []
+    for a, b in zip(corners, np.roll(corners, -1), strict=True):
+        index = np.arange(a, b if b > a else b + count) % count
+        length = (along[b] - along[a]) % total
+        position = (along[index] - along[a]) % total
+        keep = index[(position >= ARC_TRIM) & (position <= length - ARC_TRIM)]
+        if length - 2 * ARC_TRIM >= ARC_MIN_LENGTH and keep.size >= 6:  # (5 parameters)
+            arcs.append(keep)
+    return arcs
+
+
+def _grouped_arcs(outline, arcs, region):
+    """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None)."""
+    def judged(groups):
+        points = [outline[np.concatenate([arcs[i] for i in group])] for group in groups]
+        return [(group, fit, _arc_ellipse(side, fit, region))
+                for group, side, fit in zip(groups, points, _ellipse_fits(points), strict=True)]
+
+    groups = judged([(i,) for i in range(len(arcs))])
+    joined = {}  # pair of groups: the judged union (a group is a tuple of arcs)
+    while len(groups) > 1:
+        best = None
+        for i, j in zip(*np.triu_indices(len(groups), 1), strict=True):
+            key = (groups[i][0], groups[j][0])
+            if key not in joined:
+                joined[key] = judged([groups[i][0] + groups[j][0]])[0]
+            union = joined[key]
+            if union[2] is None:
+                continue
+            # the excess of the union's squared distances over the two fits', in noise variances
+            # (a group that is no object's ellipse joins whatever it costs, the cheapest first)
+            apart = groups[i][1][1] + groups[j][1][1]
+            points = sum(arcs[k].size for k in union[0])
+            if groups[i][2] is not None and groups[j][2] is not None:
+                noise = max(apart / max(points - 10, 1), ARC_NOISE**2)
+                cost = (union[1][1] - apart) / noise
+                if cost > 5 * np.log(points):
+                    continue
+            else:
+                cost = -np.inf if not np.isfinite(apart) else union[1][1] / points - 1e12
+            if best is None or cost < best[0]:
+                best = (cost, i, j, union)
+        if best is None:
+            break
+        _, i, j, union = best
+        groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
+    return groups
+
+
+def _arc_ellipse(points, fit, region):
+    """The ellipse (centre, semi-axes, axes) of an arc group's fit when it is an object's
+    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS``, ``ARC_OUTSIDE``), else None."""
+    import shapely
+
+    conic, residual = fit
+    ellipse = None if conic is None else _ellipse_axes(conic)
+    if ellipse is None:
+        return None
+    semi_axes = ellipse[1]
+    radius = np.sqrt(semi_axes.prod())
+    if (radius < MIN_SPLIT_RADIUS or semi_axes.max() > MAX_PART_ASPECT * semi_axes.min()
+            or np.sqrt(residual / len(points)) > ARC_RMS[0] + ARC_RMS[1] * radius):
+        return None
+    shape = _ellipse_polygon(ellipse)
+    if 1 - shapely.intersection(shape, region).area / shape.area > ARC_OUTSIDE:
+        return None
+    return ellipse
+
+
+def _ellipse_polygon(ellipse, count=48):
+    """An ellipse (centre, semi-axes, axes as columns) as a shapely polygon of ``count`` vertices."""
+    import shapely
+
+    centre, semi_axes, axes = ellipse
+    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    return shapely.Polygon(centre + np.column_stack([semi_axes[0] * np.cos(angle),
+                                                     semi_axes[1] * np.sin(angle)]) @ axes.T)
+
+
+def _normalised_radius(ellipse, points):
+    """Each point's radius in the ellipse's normalised frame (1 on the ellipse)."""
+    centre, semi_axes, axes = ellipse
+    local = (points - centre) @ axes
+    return np.hypot(local[:, 0] / semi_axes[0], local[:, 1] / semi_axes[1])
+
+
+def _meet_at_corners(parts, inside, corners, count):
+    """Whether the borders between the pixel parts reach the object's edge within ``ARC_REACH``
+    of a corner (window coordinates) only, and no pixel has four parts within that reach."""
+    import scipy.ndimage
+
+    edge = inside & ~scipy.ndimage.binary_erosion(inside)
+    border = np.zeros_like(inside)
+    for axis in (0, 1):
+        for shift in (1, -1):
+            other = np.roll(parts, shift, axis=axis)
+            border |= (other != parts) & (other > 0) & (parts > 0)
+    ends = np.argwhere(edge & border)
+    if ends.size:
+        apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
+        if apart.min(axis=1).max() > ARC_REACH:
+            return False
+    if count < 4:
+        return True
+    reach = int(ARC_REACH)
+    rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    disk = rows**2 + cols**2 <= ARC_REACH**2
+    near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8) for k in range(1, count + 1))
+    return bool(near.max() < 4)
