@@ -185,6 +185,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if not concave and not contrast:
             result.append(curves)
             continue
+        if concave and (clump := _arc_parts(curves, depth)) is not None:
+            result.extend(clump)
+            continue
         import scipy.ndimage  # here: an object with nothing to split need not load it
 
         low = np.array([box[0].start - 1, box[1].start - 1])
@@ -199,9 +202,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
         if concave:
             # (an object its necks did not cut: its hull depth is known)
-            pieces = [cut for piece in pieces for cut in
-                      ([piece] if len(piece) > 1 else [[part] for part in _outline_parts(
-                          piece[0], depth if piece[0] is curves[0] else None)])]
+            pieces = [cut for piece in pieces
+                      for cut in _outline_parts(piece, depth if piece[0] is curves[0] else None)]
         result.extend(pieces)
     return result
 
@@ -1222,6 +1224,10 @@ ARC_COVER = 0.9
 #: ... at most this fraction of its pixels lies in three ellipses (objects pressed together overlap
 #: two by two; the arms of a star, fitted each by an ellipse, all reach into its centre) ...
 ARC_TRIPLE = 0.02
+#: A disk inside the clump that no arc's ellipse covers is an object when its radius is at least
+#: this fraction of the arc ellipses' median radius (an object surrounded by others keeps about
+#: two thirds of its radius outside their ellipses; the gap between three has 0.15 of it).
+ARC_INNER = 0.4
 #: ... no two overlap by more than this fraction of the smaller one (two disks overlapping by a
 #: third of their diameter, the families' most, share 0.22 of a disk; the fits of a contour that
 #: rounded the contacts are larger) ...
@@ -1233,16 +1239,19 @@ ARC_OVERLAP = 0.45
 ARC_REACH = 3.0
 
 
-def _outline_parts(outline, depth=None):
-    """The parts of a polygon without holes: its arcs grouped into ellipses (:func:`_arc_parts`)
-    where they explain it, else its cuts at concave corners (:func:`_corner_parts`)."""
-    parts = _arc_parts(outline, depth)
-    return _corner_parts(outline, depth) if parts is None else parts
+def _outline_parts(curves, depth=None):
+    """The parts of an object (outer boundary, then holes) as lists of curves: its outline's arcs
+    grouped into ellipses (:func:`_arc_parts`) where they explain it, else, without holes, its
+    cuts at concave corners (:func:`_corner_parts`)."""
+    parts = _arc_parts(curves, depth)
+    if parts is None:
+        return [[part] for part in _corner_parts(curves[0], depth)] if len(curves) == 1 else [curves]
+    return parts
 
 
-def _arc_parts(outline, depth=None):
-    """The parts of a polygon (an outer boundary without holes) as a clump of overlapping
-    ellipses, or None when no such clump explains it.
+def _arc_parts(curves, depth=None):
+    """The parts of an object (outer boundary, then holes: a ring of objects around a gap) as a
+    clump of overlapping ellipses (lists of curves), or None when no such clump explains it.
 
     The model-based split of overlapping convex objects (nuclei): where two convex objects
     overlap, their outlines cross at a concave corner (negative curvature kappa of (3.45), turning
@@ -1264,6 +1273,7 @@ def _arc_parts(outline, depth=None):
     """
     import shapely
 
+    outline = curves[0]
     area = signed_area(outline)
     if area < 2 * np.pi * MIN_SPLIT_RADIUS**2:
         return None
@@ -1275,32 +1285,66 @@ def _arc_parts(outline, depth=None):
         return None
     region = shapely.Polygon(outline)
     groups = _grouped_arcs(outline, arcs, region)
-    ellipses = [ellipse for _, _, ellipse in groups if ellipse is not None]
+    # of two ellipses that overlap too much, the one that fits its arcs worse is no object's
+    fitted = sorted(((fit[1] / sum(arcs[k].size for k in group), ellipse) for group, fit, ellipse in groups
+                     if ellipse is not None), key=lambda entry: entry[0])
+    ellipses, shapes = [], []
+    for _, ellipse in fitted:
+        shape = _ellipse_polygon(ellipse)
+        if all(shapely.intersection(shape, other).area <= ARC_OVERLAP * min(shape.area, other.area)
+               for other in shapes):
+            ellipses.append(ellipse)
+            shapes.append(shape)
     if len(ellipses) < 2:
         return None
-    shapes = [_ellipse_polygon(ellipse) for ellipse in ellipses]
-    for i, first in enumerate(shapes):
-        for second in shapes[i + 1:]:
-            if shapely.intersection(first, second).area > ARC_OVERLAP * min(first.area, second.area):
-                return None
     low = np.floor(outline.min(axis=0)).astype(int) - 1
-    inside = rasterize([outline - low], tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2))
-    rows, cols = np.nonzero(inside)
-    depth_in = np.array([_normalised_radius(ellipse, np.column_stack([rows, cols]) + low)
-                         for ellipse in ellipses])
+    shape = tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2)
+    inside = rasterize([curve - low for curve in curves], shape)
+    points = np.argwhere(inside)
+    depth_in = np.array([_normalised_radius(ellipse, points + low) for ellipse in ellipses])
+    # an object inside the clump has no arc: a blob the ellipses leave uncovered
+    inner = _inner_ellipses(inside, np.all(depth_in > 1, axis=0), points,
+                            np.median([np.sqrt(np.prod(semi_axes)) for _, semi_axes, _ in ellipses]))
+    if inner:
+        ellipses += inner
+        depth_in = np.vstack([depth_in] + [_normalised_radius(ellipse, points)[None] for ellipse in inner])
     covered = np.count_nonzero(depth_in <= 1, axis=0)
-    if (np.count_nonzero(covered) < ARC_COVER * rows.size
-            or np.count_nonzero(covered >= 3) > ARC_TRIPLE * rows.size):
+    if (np.count_nonzero(covered) < ARC_COVER * len(points)
+            or np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)):
         return None
     parts = np.zeros(inside.shape, dtype=np.int32)
-    parts[rows, cols] = np.argmin(depth_in, axis=0) + 1
+    parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
+    outer = rasterize([outline - low], shape)
     if (np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:].min() < np.pi * MIN_SPLIT_RADIUS**2
-            or not _meet_at_corners(parts, inside, outline[corners] - low, len(ellipses))):
+            or not _meet_at_corners(parts, outer, outline[corners] - low, len(ellipses))):
         return None
-    pieces = _cut([outline], parts, low)
+    pieces = _cut(curves, parts, low)
     if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):
         return None  # a cell in pieces, or with a hole: no clump of ellipses
-    return [piece[0] for piece in pieces]
+    return pieces
+
+
+def _inner_ellipses(inside, uncovered, points, radius):
+    """Circles (as ellipses, window coordinates) for objects inside a clump, which own no arc of
+    its outline: the largest disk inside the pixels that no ellipse covers, while its radius is
+    at least ``ARC_INNER`` of ``radius`` (the arc ellipses' median radius) and
+    ``MIN_SPLIT_RADIUS``; the pixels of each are taken out before the next is looked for.  The gap
+    between three objects pressed together is no object: it holds a disk of 0.15 of their radius."""
+    import scipy.ndimage
+
+    mask = np.zeros(inside.shape, dtype=bool)
+    mask[tuple(points[uncovered].T)] = True
+    least = max(ARC_INNER * radius, MIN_SPLIT_RADIUS)
+    rows, cols = np.indices(inside.shape)
+    circles = []
+    while mask.any():
+        distance = scipy.ndimage.distance_transform_edt(mask)
+        centre = np.unravel_index(np.argmax(distance), mask.shape)
+        if distance[centre] < least:
+            break
+        circles.append((np.array(centre, dtype=np.float64), np.full(2, distance[centre]), np.eye(2)))
+        mask &= np.hypot(rows - centre[0], cols - centre[1]) > distance[centre]
+    return circles
 
 
 def _arcs(outline, corners):
