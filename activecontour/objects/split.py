@@ -4,8 +4,18 @@
 cut lines are shared by both parts, so the parts tile the object exactly and the label image stays
 the mask with ids.
 
-Three stages, each a model of how touching objects look, each cheap to skip:
+Three stages, each a model of how touching objects look, each cheap to skip, after a model of the
+whole clump:
 
+0. **Arcs grouped into ellipses** (:func:`_arc_parts`, the sub-pixel polygon, holes allowed):
+   the concave corners cut the outline into arcs, the arcs are grouped into ellipses (a group
+   joins while one ellipse fits it about as well as two, by the Bayesian information criterion)
+   and every pixel goes to the ellipse it lies deepest in, the rule by which overlapping
+   objects are drawn.  It decides alone where the ellipses explain the object -- its outline,
+   its pixels, overlaps two by two, borders that end at corners, parts of comparable size, few
+   places where three meet -- which a trefoil of three disks around one point (three corners,
+   no pair of them a cut that leaves ellipses) satisfies and a star, a flower, a bent rod or a
+   horse do not; elsewhere the three stages below decide as they did.
 1. **Necks** (:func:`_neck_parts`, pixels): the watershed of the distance to the outline (an
    inscribed-circle centre per part) whose parts are merged back while the neck between two is
    nearly as wide as the thinner part; a neck must be a waist (a concavity of the outline at both
@@ -30,7 +40,7 @@ Three stages, each a model of how touching objects look, each cheap to skip:
    one, or two separated by a dark seam, without any waist.
 
 Cost: an object whose outline lies within :data:`MIN_WAIST_DEPTH` of its convex hull has no
-waist, no neck and no concave corner: it skips stages 1 and 2 after one convex hull of its polygon
+waist, no neck and no concave corner: it skips stages 0 to 2 after one convex hull of its polygon
 (O(K log K) for K vertices), and stage 3 after a block-averaged look at its intensities
 (:func:`_block_spread`), so an image of convex objects pays almost nothing for the split.
 Past that gate, each stage stops as soon as a consequence of its own criterion shows that it
@@ -56,7 +66,12 @@ Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at
 split                                       touching ellipses  touching disks   singles cut
 ==========================================  =================  ===============  ============
 necks alone (stage 1, the split until now)  0.14 / 0.78        0.48 / 0.91      4 of 120
-necks, then concave corners (this module)   0.28 / 0.83        0.48 / 0.92      5 of 120
+necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      10 of 120
+arcs into ellipses first (this module)      0.28 / 0.85        0.49 / 0.92      10 of 120
+  the same on seeds 20-39 (before: 0.50 /   0.69 / 0.93        0.49 / 0.91      9 of 120
+  0.90, 0.39 / 0.91, 9 of 120)
+  the same on seeds 40-59 (before: 0.50 /   0.50 / 0.91        0.65 / 0.92      4 of 120
+  0.90, 0.53 / 0.90, 4 of 120)
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -202,8 +217,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
         if concave:
             # (an object its necks did not cut: its hull depth is known)
-            pieces = [cut for piece in pieces
-                      for cut in _outline_parts(piece, depth if piece[0] is curves[0] else None)]
+            pieces = [cut for piece in pieces for cut in
+                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
+                          piece[0], depth if piece[0] is curves[0] else None)])]
         result.extend(pieces)
     return result
 
@@ -1221,32 +1237,30 @@ ARC_NOISE = 0.2
 ARC_RMS, ARC_OUTSIDE = (0.5, 0.04), 0.10
 #: The ellipses explain the object when they cover this fraction of its pixels ...
 ARC_COVER = 0.9
+#: ... and this fraction of the outline's vertices lies within ``ARC_GAP`` pixels of one
+#: (normalised radius off 1 by ``ARC_GAP`` over the ellipse's radius) ...
+ARC_GAP = 2.0
 #: ... at most this fraction of its pixels lies in three ellipses (objects pressed together overlap
 #: two by two; the arms of a star, fitted each by an ellipse, all reach into its centre) ...
 ARC_TRIPLE = 0.02
-#: A disk inside the clump that no arc's ellipse covers is an object when its radius is at least
-#: this fraction of the arc ellipses' median radius (an object surrounded by others keeps about
-#: two thirds of its radius outside their ellipses; the gap between three has 0.15 of it).
-ARC_INNER = 0.4
-#: ... no two overlap by more than this fraction of the smaller one (two disks overlapping by a
-#: third of their diameter, the families' most, share 0.22 of a disk; the fits of a contour that
-#: rounded the contacts are larger) ...
-ARC_OVERLAP = 0.45
+#: Two ellipses may overlap by this fraction of the smaller one (two disks overlapping by a third
+#: of their diameter, the families' most, share 0.22 of a disk; a small disk pressed as deep into
+#: a large object, 0.29); of two that overlap more, the one that fits its arcs worse is dropped
+#: (an ellipse across a star's centre, through two opposite arms).
+ARC_OVERLAP = 0.3
 #: ... every point where the border between two parts meets the outline lies within this many
 #: pixels of a corner (a waist at both ends: a bent rod or a banana cut across is not two
-#: objects) and no point has four parts within that reach (a star's arms all meet at its centre;
-#: objects pressed together meet two or three at a point).
+#: objects), no point has four parts within that reach (a star's arms all meet at its centre;
+#: objects pressed together meet two or three at a point) ...
 ARC_REACH = 3.0
-
-
-def _outline_parts(curves, depth=None):
-    """The parts of an object (outer boundary, then holes) as lists of curves: its outline's arcs
-    grouped into ellipses (:func:`_arc_parts`) where they explain it, else, without holes, its
-    cuts at concave corners (:func:`_corner_parts`)."""
-    parts = _arc_parts(curves, depth)
-    if parts is None:
-        return [[part] for part in _corner_parts(curves[0], depth)] if len(curves) == 1 else [curves]
-    return parts
+#: ... and at most this many places have three parts within it (a chain or a tree of objects
+#: has none, a trefoil one; the petals of a flower fitted around the part that takes its centre
+#: make one with each two neighbours) ...
+ARC_TRIPLE_POINTS = 2
+#: ... and every part is at least this fraction of the largest: objects pressed into a clump are of
+#: comparable size (the families' radii differ by 1.5 at most, areas by 2.25), while the petals of
+#: a flower or the arms of a star are small beside the part that takes its centre.
+ARC_SIZE_RATIO = 0.25
 
 
 def _arc_parts(curves, depth=None):
@@ -1264,10 +1278,14 @@ def _arc_parts(curves, depth=None):
     (its normalised radius least: the truth's rule of :func:`activecontour.synthetic.
     render_instances` for overlaps), and the cells are cut out of the polygon (:func:`_cut`).
 
-    The clump stands when the ellipses cover ``ARC_COVER`` of the object, three of them at most
-    ``ARC_TRIPLE`` of it, overlap pairwise by at most ``ARC_OVERLAP``, every part holds pi
-    ``MIN_SPLIT_RADIUS``^2 pixels, every border between two parts reaches the outline at corners
-    only and no four parts meet (``ARC_REACH``).  Unlike a cut between two corners, the grouping
+    Of two ellipses that overlap by more than ``ARC_OVERLAP``, the worse fit is dropped.  The clump
+    stands when the ellipses' boundaries explain the outline (``ARC_COVER`` of its vertices within
+    ``ARC_GAP``), the ellipses cover ``ARC_COVER`` of the object and three of them at most
+    ``ARC_TRIPLE`` of it, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
+    ``ARC_SIZE_RATIO`` of the largest part, every border between two parts reaches the outline at
+    corners only, no four parts meet and at most ``ARC_TRIPLE_POINTS`` places have three
+    (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise the necks and the corner cuts decide, as
+    for an object without this stage.  Unlike a cut between two corners, the grouping
     splits three objects pressed around one point (a trefoil has three corners, one per contact,
     and three arcs) and takes a corner whose partner was rounded away as the end of two arcs.
     """
@@ -1302,49 +1320,26 @@ def _arc_parts(curves, depth=None):
     inside = rasterize([curve - low for curve in curves], shape)
     points = np.argwhere(inside)
     depth_in = np.array([_normalised_radius(ellipse, points + low) for ellipse in ellipses])
-    # an object inside the clump has no arc: a blob the ellipses leave uncovered
-    inner = _inner_ellipses(inside, np.all(depth_in > 1, axis=0), points,
-                            np.median([np.sqrt(np.prod(semi_axes)) for _, semi_axes, _ in ellipses]))
-    if inner:
-        ellipses += inner
-        depth_in = np.vstack([depth_in] + [_normalised_radius(ellipse, points)[None] for ellipse in inner])
     covered = np.count_nonzero(depth_in <= 1, axis=0)
-    if (np.count_nonzero(covered) < ARC_COVER * len(points)
+    # the outline is the ellipses' visible boundary: each vertex near one (an ellipse dropped for
+    # its overlap, or never found, leaves its arc unexplained)
+    gap = np.min([np.abs(_normalised_radius(ellipse, outline) - 1) * np.sqrt(np.prod(ellipse[1]))
+                  for ellipse in ellipses], axis=0)
+    if (np.count_nonzero(gap <= ARC_GAP) < ARC_COVER * len(outline)
+            or np.count_nonzero(covered) < ARC_COVER * len(points)
             or np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)):
         return None
     parts = np.zeros(inside.shape, dtype=np.int32)
     parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
     outer = rasterize([outline - low], shape)
-    if (np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:].min() < np.pi * MIN_SPLIT_RADIUS**2
+    sizes = np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:]
+    if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
             or not _meet_at_corners(parts, outer, outline[corners] - low, len(ellipses))):
         return None
     pieces = _cut(curves, parts, low)
     if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):
         return None  # a cell in pieces, or with a hole: no clump of ellipses
     return pieces
-
-
-def _inner_ellipses(inside, uncovered, points, radius):
-    """Circles (as ellipses, window coordinates) for objects inside a clump, which own no arc of
-    its outline: the largest disk inside the pixels that no ellipse covers, while its radius is
-    at least ``ARC_INNER`` of ``radius`` (the arc ellipses' median radius) and
-    ``MIN_SPLIT_RADIUS``; the pixels of each are taken out before the next is looked for.  The gap
-    between three objects pressed together is no object: it holds a disk of 0.15 of their radius."""
-    import scipy.ndimage
-
-    mask = np.zeros(inside.shape, dtype=bool)
-    mask[tuple(points[uncovered].T)] = True
-    least = max(ARC_INNER * radius, MIN_SPLIT_RADIUS)
-    rows, cols = np.indices(inside.shape)
-    circles = []
-    while mask.any():
-        distance = scipy.ndimage.distance_transform_edt(mask)
-        centre = np.unravel_index(np.argmax(distance), mask.shape)
-        if distance[centre] < least:
-            break
-        circles.append((np.array(centre, dtype=np.float64), np.full(2, distance[centre]), np.eye(2)))
-        mask &= np.hypot(rows - centre[0], cols - centre[1]) > distance[centre]
-    return circles
 
 
 def _arcs(outline, corners):
@@ -1440,8 +1435,10 @@ def _normalised_radius(ellipse, points):
 
 
 def _meet_at_corners(parts, inside, corners, count):
-    """Whether the borders between the pixel parts reach the object's edge within ``ARC_REACH``
-    of a corner (window coordinates) only, and no pixel has four parts within that reach."""
+    """Whether the borders between the pixel parts reach the object's edge (``inside``: the
+    pixels within its outer boundary) within ``ARC_REACH`` of a corner (window coordinates) only,
+    no pixel has four parts within that reach and at most ``ARC_TRIPLE_POINTS`` places have
+    three."""
     import scipy.ndimage
 
     edge = inside & ~scipy.ndimage.binary_erosion(inside)
@@ -1455,10 +1452,10 @@ def _meet_at_corners(parts, inside, corners, count):
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         if apart.min(axis=1).max() > ARC_REACH:
             return False
-    if count < 4:
+    if count < 3:
         return True
     reach = int(ARC_REACH)
     rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
     disk = rows**2 + cols**2 <= ARC_REACH**2
     near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8) for k in range(1, count + 1))
-    return bool(near.max() < 4)
+    return bool(near.max() < 4 and scipy.ndimage.label(near >= 3)[1] <= ARC_TRIPLE_POINTS)
