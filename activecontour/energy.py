@@ -140,13 +140,16 @@ def evaluate(model, points, next_index, params, *, gradient=False, empty_ok=Fals
 
 @dataclass
 class PartitionEvaluation:
-    """Energy of a partition into K regions, with each region's constants, area and the length."""
+    """Energy of a partition into K regions, with each region's constants, area and the length;
+    ``first`` and ``second`` the regions' ``int I`` and ``int I^2`` (K, C)."""
 
     energy: float
     constants: np.ndarray
     areas: np.ndarray
     length: float
     parts: np.ndarray | None = None
+    first: np.ndarray | None = None
+    second: np.ndarray | None = None
 
 
 def partition_moments(model, boundary, n_classes, *, parts=False):
@@ -236,7 +239,7 @@ def energy_of_moments(model, params, areas, first, second, length, constants=Non
     forms = params.class_forms(constants)
     energy = params.mu * length + sum(form.integral(a, f, q) for form, a, f, q
                                       in zip(forms, areas, first, second, strict=True))
-    return PartitionEvaluation(float(energy), constants, areas, length)
+    return PartitionEvaluation(float(energy), constants, areas, length, first=first, second=second)
 
 
 def partition_load(model, boundary, params, constants, parts=None):

@@ -30,13 +30,21 @@ must be kept from overlapping and gapping after every step.
 
 Topology
 --------
-The network moves its vertices; it does not change its graph.  The topology comes first, from the
+The network moves its vertices; its graph changes only where the flow pinches it (below).  The
+topology comes first, from the
 label field (:func:`activecontour.backends.labelfield.descend_labels`: the global K-means start, then
 the exact descent with its merge and split moves, which create, remove and reconnect regions
 freely).  Its partition (boundaries through the midpoints between pixels, junctions at cell
 centres: :mod:`activecontour.geometry.partition`) is the network's start; the flow then moves every
 interface and junction to sub-pixel position, lowering J from the label field's value.  So the
-polygon backend's N-region result is the label field's topology with the polygon's geometry.
+polygon backend's N-region result is the label field's topology with the polygon's geometry,
+changed where the flow pinches it: a step held back because two interface segments would meet
+(:meth:`_Flow.resolve`) joins them the other way when they bound the same two regions (a neck
+or a finger's sides cut, a spike's tip dropped), or collapses a vanishing segment there, or drops
+the closed loops through them; each is kept only if J does not rise.  A pinch between three
+regions (a region thinning between two others, whose cut would make two junctions) is not
+resolved: two steps in a row held back by such a pinch end the flow with status 4, a stall, not
+convergence.
 
 The step: dt by Armijo backtracking on J, at most the dt that moves the vertices ``max_step`` px
 root-mean-square, the first trial where the parabola through the last step's J(0), slope and
@@ -61,7 +69,6 @@ from activecontour.energy import (
     energy_of_moments,
     evaluate_partition,
     partition_load,
-    partition_moments,
     soup_moments,
 )
 from activecontour.geometry.partition import (
@@ -90,6 +97,10 @@ _ARMIJO = 1e-4
 _SPACING = 1.0
 #: Closed loops enclosing less than this (px^2) are dropped when that does not raise J.
 _ISLAND_AREA = 1.0
+#: Consecutive steps held back by a pinch that cannot be resolved that end the flow (a stall).
+_HELD = 2
+#: Segments shorter than this (px) next to a pinch are collapsed to a node (:meth:`_Flow.resolve`).
+_TINY = 0.05
 #: Blocks before a remesh that raised J is tried again.
 _REMESH_COOLDOWN = 4
 #: Halvings of dt before the line search gives up (stationary to working precision).
@@ -130,7 +141,7 @@ class Network:
         chosen = np.flatnonzero(self.interface)
         self._interface_ends = (np.ascontiguousarray(start[chosen], dtype=np.intp),
                                 np.ascontiguousarray(end[chosen], dtype=np.intp))
-        self._bands = {}
+        self._bands, self._orders = {}, {}
         degree = np.bincount(np.concatenate(self._interface_ends), minlength=len(nodes))
         self._plain = np.flatnonzero((degree == 2) & self.free[0] & self.free[1])
 
@@ -356,6 +367,77 @@ class Network:
         nodes = np.vstack([nodes[kept], new])
         return Network(nodes, start, end, inner, outer, self.shape), nodes
 
+    def meeting_pairs(self, nodes, limit=16):
+        """Up to ``limit`` pairs ``(e, f)`` of interface segments (indices among all segments)
+        that meet at ``nodes`` other than at a common node (:meth:`simple`'s test)."""
+        start, end = self._interface_ends
+        pairs = np.empty((limit, 2), dtype=np.intp)
+        found = _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, limit,
+                                       pairs, _NO_WHERE)
+        return np.flatnonzero(self.interface)[pairs[:min(found, limit)]]
+
+    def reconnected(self, pairs, nodes):
+        """The network with each pair of interface segments ``e = (a, b)``, ``f = (c, d)`` between
+        the same two regions, oriented alike (``f`` read backwards where its sides are swapped),
+        joined the other way: ``(a, d)`` and ``(c, b)``, both with ``e``'s sides.  Where the two
+        face each other across a thin part of one region (a neck, or a finger's sides), that part
+        is cut and the other region joins across; each new segment keeps the inner region on its
+        left, so the regions stay consistent.  Where one segment ``g`` joins ``b`` and ``c``
+        inside an interface (the sides of a spike cross), ``(c, b)`` and ``g`` would make a loop
+        of two segments: both go, the spike's tip with them.  Pairs that share a node with an
+        earlier one are skipped.  Returns ``(network, nodes)``, or None when no pair qualifies."""
+        start, end, inner, outer = self.start.copy(), self.end.copy(), self.inner.copy(), self.outer.copy()
+        keep, plain = np.ones(len(start), dtype=bool), np.zeros(len(nodes), dtype=bool)
+        plain[self._plain] = True
+        used = set()
+        for e, f in pairs:
+            if inner[e] == inner[f] and outer[e] == outer[f]:
+                c, d = start[f], end[f]
+            elif inner[e] == outer[f] and outer[e] == inner[f]:
+                c, d = end[f], start[f]
+            else:
+                continue
+            a, b = start[e], end[e]
+            ends = {int(a), int(b), int(c), int(d)}
+            if len(ends) < 4 or ends & used:
+                continue
+            used |= ends
+            end[e], start[f], end[f] = d, c, b
+            inner[f], outer[f] = inner[e], outer[e]
+            spike = np.flatnonzero(self.interface & (((self.start == b) & (self.end == c))
+                                                     | ((self.start == c) & (self.end == b))))
+            if spike.size and plain[b] and plain[c]:
+                keep[spike[0]] = keep[f] = False
+        if not used:
+            return None
+        network = Network(nodes, start[keep], end[keep], inner[keep], outer[keep], self.shape)
+        return network.inheriting(self), nodes
+
+    def collapsed(self, segments, nodes):
+        """The network without the interface segments ``segments``, the two ends of each made one
+        node: an end inside an interface (degree two, free) goes into the other end, which keeps
+        its place.  A segment is skipped where neither end is such, where the end would close a
+        loop of two segments, or where it shares a node with an earlier one.  Returns
+        ``(network, nodes)``, or None when none is left."""
+        start, end = self._interface_ends
+        others = np.bincount(start, weights=end, minlength=len(nodes)) + np.bincount(
+            end, weights=start, minlength=len(nodes))  # at a degree-two node: the sum of its neighbours
+        plain = np.zeros(len(nodes), dtype=bool)
+        plain[self._plain] = True
+        target, keep, used = np.arange(len(nodes)), np.ones(len(self.start), dtype=bool), set()
+        for s in segments:
+            u, v = int(self.start[s]), int(self.end[s])
+            gone, kept = (v, u) if plain[v] else (u, v)
+            if not plain[gone] or {u, v} & used or others[gone] - kept == kept:
+                continue
+            used |= {u, v}
+            target[gone], keep[s] = kept, False
+        if keep.all():
+            return None
+        network = Network(nodes, target[self.start[keep]], target[self.end[keep]], self.inner[keep],
+                          self.outer[keep], self.shape)
+        return network.inheriting(self), nodes
+
     def crossing_nodes(self, nodes):
         """The nodes of interface segments that cross another one (for the islands to drop)."""
         import shapely
@@ -468,7 +550,7 @@ class Network:
     def subset(self, keep, nodes):
         """The network of the segments ``keep`` (bool), its nodes at ``nodes``."""
         return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
-                       self.shape)
+                       self.shape).inheriting(self)
 
     def stiffness(self, nodes, smoothing=1.0):
         """The matrix ``M + l^2 K`` of the H^1 form (6.39) of P1 functions on the interfaces."""
@@ -524,28 +606,52 @@ class Network:
 
     def _band(self, component):
         """The free nodes of a component in reverse Cuthill-McKee order, each node's position in
-        that order (-1: not free), and the half bandwidth of the matrix in it."""
+        that order (-1: not free), and the half bandwidth of the matrix in it.  A network made
+        from another by a local change (:meth:`inheriting`) keeps that one's order of the nodes
+        still free, unless the band got wider than ``_BAND_LIMIT``."""
         if component not in self._bands:
-            import scipy.sparse
-            from scipy.sparse.csgraph import reverse_cuthill_mckee
-
             free = self.free[component]
             index = np.flatnonzero(free)
-            position = np.full(len(self.nodes), -1)
-            position[index] = np.arange(index.size)
-            start, end = self._interface_ends
-            i, j = position[start], position[end]
-            inside = (i >= 0) & (j >= 0)
-            pairs = (np.concatenate([i[inside], j[inside]]), np.concatenate([j[inside], i[inside]]))
-            graph = scipy.sparse.csr_matrix((np.ones(len(pairs[0])), pairs), shape=(index.size,) * 2)
-            permutation = reverse_cuthill_mckee(graph, symmetric_mode=True) if index.size else index
-            order = index[permutation]
-            position[order] = np.arange(order.size)
-            i, j = position[start], position[end]
-            inside = (i >= 0) & (j >= 0)
-            width = int(np.abs(i[inside] - j[inside]).max()) if inside.any() else 0
+            inherited = self._orders.get(component)
+            order = None if inherited is None else inherited[free[inherited]]
+            if order is None or order.size != index.size:
+                order = self._reverse_cuthill_mckee(index)
+            position, width = self._positions(order)
+            if width > _BAND_LIMIT and inherited is not None:
+                order = self._reverse_cuthill_mckee(index)
+                position, width = self._positions(order)
             self._bands[component] = (order, position, width)
         return self._bands[component]
+
+    def inheriting(self, network):
+        """This network, to reuse ``network``'s orders of the free nodes (:meth:`_band`): made from
+        it by a change that moves no node and frees no other (:meth:`reconnected`,
+        :meth:`collapsed`, :meth:`subset`: the nodes they leave out are dropped from the order)."""
+        self._orders = {component: band[0] for component, band in network._bands.items()}
+        return self
+
+    def _reverse_cuthill_mckee(self, index):
+        """The nodes ``index`` in reverse Cuthill-McKee order of the graph of the interfaces."""
+        import scipy.sparse
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        position = np.full(len(self.nodes), -1)
+        position[index] = np.arange(index.size)
+        start, end = self._interface_ends
+        i, j = position[start], position[end]
+        inside = (i >= 0) & (j >= 0)
+        pairs = (np.concatenate([i[inside], j[inside]]), np.concatenate([j[inside], i[inside]]))
+        graph = scipy.sparse.csr_matrix((np.ones(len(pairs[0])), pairs), shape=(index.size,) * 2)
+        return index[reverse_cuthill_mckee(graph, symmetric_mode=True)] if index.size else index
+
+    def _positions(self, order):
+        """Each node's position in ``order`` (-1: not in it), and the half bandwidth there."""
+        position = np.full(len(self.nodes), -1)
+        position[order] = np.arange(order.size)
+        start, end = self._interface_ends
+        i, j = position[start], position[end]
+        inside = (i >= 0) & (j >= 0)
+        return position, int(np.abs(i[inside] - j[inside]).max()) if inside.any() else 0
 
     def velocity(self, nodes, force, factors=None):
         """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component.
@@ -741,7 +847,7 @@ class _Flow:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
         # move from the region inside to the one around it, and its loop leaves the length
-        areas, first, second = partition_moments(self.model, network.boundary(nodes), self.n_regions)
+        areas, first, second = self.current.areas, self.current.first, self.current.second
         length, energy = self.current.length, self.current.energy
         keep = np.ones(len(network.start), dtype=bool)
         uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
@@ -782,6 +888,41 @@ class _Flow:
         self.network, self.current = network, current
         return True
 
+    def resolve(self, crossed):
+        """Resolve the pinch that held the step back, where the pairs of interface segments that
+        meet in the trial ``crossed`` (:meth:`Network.meeting_pairs`) tell: join them the other
+        way (:meth:`Network.reconnected`), or else make one node of the ends of each segment
+        shorter than ``_TINY`` px at their nodes (:meth:`Network.collapsed`: a fold about a
+        vanishing segment).  Either is made at the current nodes, the closed loops through the
+        pairs' nodes then dropped where that lowers J (:meth:`drop_islands`), and kept if the
+        network is still simple and J has not risen; else those loops alone are dropped where
+        that lowers J (a region shrinking to nothing).  Returns whether the network changed."""
+        network, nodes = self.network, self.nodes
+        pairs = network.meeting_pairs(crossed)
+        ends = np.unique(np.concatenate([network.start[pairs], network.end[pairs]], axis=None))
+        near = network.interface & (np.isin(network.start, ends) | np.isin(network.end, ends))
+        lengths = np.linalg.norm(nodes[network.end] - nodes[network.start], axis=1)
+        for changed in (lambda: network.reconnected(pairs, nodes),
+                        lambda: network.collapsed(np.flatnonzero(near & (lengths < _TINY)), nodes)):
+            candidate = changed()
+            if candidate is not None and candidate[0].simple(candidate[1]) and self.replace(*candidate, ends):
+                return True
+        return self.drop_islands(ends)
+
+    def replace(self, network, nodes, ends):
+        """Take ``network`` at ``nodes``, the closed loops through ``ends`` dropped where that
+        lowers J, if J does not rise.  Returns whether it was taken."""
+        previous, current, count = (self.network, self.nodes), self.current, len(self.energies)
+        self.network, self.nodes, self.current = network, nodes, self.evaluate(network, nodes)
+        self.drop_islands(ends)
+        if self.current.energy > current.energy:
+            (self.network, self.nodes), self.current = previous, current
+            del self.energies[count:]
+            return False
+        if self.current.energy < current.energy and len(self.energies) == count:
+            self.energies.append(self.current.energy)
+        return True
+
     def unhealthy(self):
         network, nodes = self.network, self.nodes
         chosen = network.interface
@@ -789,9 +930,9 @@ class _Flow:
         return lengths.size and (lengths.min() < 0.5 * _SPACING or lengths.max() > 2.0 * _SPACING)
 
     def run(self, max_num_iter, tol, callback, n_iter):
-        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step)
-        and the iteration count."""
-        dt_next, block_start, block_network, still = None, self.nodes, self.network, 0
+        """Returns the status (0 converged, 1 out of iterations, 2 callback, 4 no descent step or
+        a stall at a pinch that cannot be resolved) and the iteration count."""
+        dt_next, block_start, block_network, still, held = None, self.nodes, self.network, 0, 0
         factors = None
         for iteration in range(1, max_num_iter + 1):
             network, nodes, current = self.network, self.nodes, self.current
@@ -836,8 +977,14 @@ class _Flow:
             self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
+            if crossings and self.resolve(crossings[-1][1]):
+                factors, dt_next, held = None, None, 0
+            else:
+                held = held + 1 if crossings else 0
             if callback is not None and callback(_state(network, trial, candidate, n_iter, max_num_iter)):
                 return 2, n_iter
+            if held == _HELD:  # a stall: each step held back by a pinch that cannot be resolved
+                return 4, n_iter
             if iteration % _BLOCK == 0:
                 slow = block_network is network and network.swept(block_start, trial) / _BLOCK < tol
                 still = still + 1 if slow else 0

@@ -422,3 +422,58 @@ def test_boxes_hold_nodes_is_the_direct_test():
             inside = np.all((nodes > low) & (nodes < high), axis=1) & used
             assert found == inside.any()
         assert holds.any() and not holds.all()
+
+
+def test_reconnecting_across_a_neck_cuts_it():
+    # two 3 x 3 blocks of region 1 joined by a bridge one pixel wide and three long (row 4)
+    classes = np.zeros((9, 13), dtype=np.int32)
+    classes[3:6, 1:4] = classes[3:6, 9:12] = 1
+    classes[4, 4:9] = 1
+    image = np.random.default_rng(6).random(classes.shape)
+    model, params = _setup(image, 0.3)
+    network = Network.of_classes(classes)
+    nodes = network.nodes
+    a, b = nodes[network.start], nodes[network.end]
+    middle = 0.5 * (a + b)
+    # the bridge's two sides at its middle column: horizontal, a pixel apart
+    top, bottom = (np.flatnonzero(network.interface & (middle[:, 1] == 6.5) & (middle[:, 0] == row))
+                   for row in (3.5, 4.5))
+    assert top.size == bottom.size == 1
+    pair = np.array([[top[0], bottom[0]]])
+    assert network.meeting_pairs(nodes).size == 0
+    pressed = nodes.copy()
+    pressed[[network.start[top[0]], network.end[top[0]]], 0] += 1.0  # the top side onto the bottom one
+    assert {top[0], bottom[0]} in [set(found) for found in network.meeting_pairs(pressed)]
+    cut, same = network.reconnected(pair, nodes)
+    assert same is nodes and cut.simple(nodes)
+    assert len(cut.region_curves(np.array([False, True]))) == 2  # the blocks come apart
+    before = evaluate_partition(model, network.boundary(), params, 2)
+    after = evaluate_partition(model, cut.boundary(), params, 2)
+    # the unit square between the two sides goes to the background; the sides (1 each) give way
+    # to two rungs across the bridge (1 each): the same length
+    np.testing.assert_allclose(after.areas, before.areas + np.array([1.0, -1.0]), rtol=1e-12)
+    assert after.length == pytest.approx(before.length, rel=1e-12)
+
+
+def test_collapsing_a_vanishing_segment_keeps_the_partition():
+    classes = np.zeros((10, 12), dtype=np.int32)
+    classes[2:8, 3:9] = 1
+    classes[4:8, 6:9] = 2  # junctions where the three regions meet
+    image = np.random.default_rng(7).random(classes.shape)
+    model, params = _setup(image, 0.3)
+    network = Network.of_classes(classes)
+    nodes = network.nodes.copy()
+    degree = np.bincount(np.concatenate([network.start[network.interface], network.end[network.interface]]),
+                         minlength=len(nodes))
+    plain = (degree == 2) & network.free[0] & network.free[1]
+    chosen = np.flatnonzero(network.interface & plain[network.start] & plain[network.end])[0]
+    nodes[network.end[chosen]] = nodes[network.start[chosen]]  # the segment has vanished
+    collapsed, same = network.collapsed([chosen], nodes)
+    assert same is nodes and len(collapsed.start) == len(network.start) - 1
+    assert collapsed.simple(nodes) and not network.simple(nodes)
+    before = evaluate_partition(model, network.boundary(nodes), params, 3)
+    after = evaluate_partition(model, collapsed.boundary(), params, 3)
+    assert after.energy == pytest.approx(before.energy, rel=1e-12)
+    # a segment between two branch nodes (junctions, the border) is not collapsed
+    branch = np.flatnonzero(network.interface & ~plain[network.start] & ~plain[network.end])
+    assert network.collapsed(branch, network.nodes) is None
