@@ -12,8 +12,10 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
   boundary at its pixel centres, from a finer raster), :func:`near_distance` (the distance
-  transform up to a few pixels, for the split's tests against a radius), :func:`ellipse_moments`,
-  :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
+  transform up to a few pixels, for the split's tests against a radius), :func:`distance_peaks`
+  (an object's distance transform and its pieces of peaks: the first test for necks),
+  :func:`fill_holes` (an object's window without holes),
+  :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside` (the corner stage's ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`segment_loads`, :func:`band_cholesky`, :func:`band_solve`,
   :func:`cycles`, :func:`untwist`, :func:`step_bounds`, :func:`normal_part` -- :mod:`activecontour.energy`,
@@ -2305,3 +2307,182 @@ def segment_inside(const double[:, ::1] start, const double[:, ::1] end, Py_ssiz
 
 
 # ==== end of split2's kernels ===================================================================
+
+
+# ==== necks (issue 23 item 2): one object's distance transform and its peaks ======================
+
+def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
+    """The squared Euclidean distance transform of a mask (``out[i, j]``: the squared distance
+    from pixel (i, j) to the nearest pixel where ``mask`` is 0, 0 there; pixels beyond the
+    array's edge do not count, as in ``scipy.ndimage.distance_transform_edt``, whose values are
+    its square roots), and the number of 4-connected pieces of its peaks: the pixels of the mask
+    not below any of their 8 neighbours (the array's edge repeated, as in
+    ``scipy.ndimage.maximum_filter(size=3)`` with its default mode).  The mask must hold a 0.
+
+    Separable and exact: per column the distance g to the nearest 0 in it (two passes down the
+    rows, row by row), then per row the lower envelope of the parabolas ``(j - q)^2 + g_q^2``
+    over the columns q (Felzenszwalb and Huttenlocher), its breakpoints compared as integers.
+    O(pixels); the peaks' pieces by a flood fill over the peaks alone."""
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, q, p, u, last, di, dj, at
+    cdef Py_ssize_t size = 0, capacity = 1024, pieces = 0
+    cdef long long far = m + 1, g, h, value
+    cdef bint peak
+    cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
+    cdef long long *height = <long long *> malloc(max(n, 1) * sizeof(long long))
+    cdef unsigned char *flag = <unsigned char *> calloc(max(m * n, 1), sizeof(unsigned char))
+    cdef Py_ssize_t *stack = <Py_ssize_t *> malloc(capacity * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *grown
+    if vertex == NULL or height == NULL or flag == NULL or stack == NULL:
+        free(vertex)
+        free(height)
+        free(flag)
+        free(stack)
+        raise MemoryError()
+    with nogil:
+        for i in range(m):
+            for j in range(n):
+                if mask[i, j] == 0:
+                    out[i, j] = 0
+                else:
+                    out[i, j] = out[i - 1, j] + 1 if i > 0 and out[i - 1, j] < far else far
+        for i in range(m - 2, -1, -1):
+            for j in range(n):
+                if out[i + 1, j] + 1 < out[i, j]:
+                    out[i, j] = out[i + 1, j] + 1
+        for i in range(m):
+            # the envelope: parabola vertex[k] (column) with height[k] = g^2 + q^2 is lowest from
+            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
+            # breakpoint of columns u < p lies at (height_p - height_u) / (2 (p - u))
+            k = -1
+            for q in range(n):
+                g = out[i, q]
+                if g >= far:
+                    continue
+                h = g * g + <long long> q * q
+                while k >= 1:
+                    p, u = vertex[k], vertex[k - 1]
+                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (q - p):
+                        k -= 1
+                    else:
+                        break
+                if k == 0 and h - height[0] <= 0:
+                    k = -1
+                k += 1
+                vertex[k] = q
+                height[k] = h
+            last = 0
+            for j in range(n):
+                while last < k and height[last + 1] - height[last] <= 2 * j * (vertex[last + 1] - vertex[last]):
+                    last += 1
+                out[i, j] = (<long long> (j - vertex[last]) * (j - vertex[last]) + height[last]
+                             - <long long> vertex[last] * vertex[last])
+        # the peaks (flag 1), then their pieces (a piece's pixels flagged 2 as the fill reaches them)
+        for i in range(m):
+            for j in range(n):
+                if mask[i, j] == 0:
+                    continue
+                value = out[i, j]
+                peak = True
+                for di in range(-1, 2):
+                    for dj in range(-1, 2):
+                        if out[_clamp(i + di, m), _clamp(j + dj, n)] > value:
+                            peak = False
+                if peak:
+                    flag[i * n + j] = 1
+        for at in range(m * n):
+            if flag[at] != 1:
+                continue
+            pieces += 1
+            flag[at] = 2
+            stack[0] = at
+            size = 1
+            while size > 0:
+                size -= 1
+                p = stack[size]
+                i, j = p // n, p % n
+                for k in range(4):
+                    di = (k == 1) - (k == 0)
+                    dj = (k == 3) - (k == 2)
+                    if not (0 <= i + di < m and 0 <= j + dj < n) or flag[(i + di) * n + j + dj] != 1:
+                        continue
+                    flag[(i + di) * n + j + dj] = 2
+                    if size == capacity:
+                        capacity *= 2
+                        grown = <Py_ssize_t *> realloc(stack, capacity * sizeof(Py_ssize_t))
+                        if grown == NULL:
+                            pieces = -1
+                            break
+                        stack = grown
+                    stack[size] = (i + di) * n + j + dj
+                    size += 1
+                if pieces < 0:
+                    break
+            if pieces < 0:
+                break
+    free(vertex)
+    free(height)
+    free(flag)
+    free(stack)
+    if pieces < 0:
+        raise MemoryError()
+    return pieces
+
+
+def fill_holes(unsigned char[:, ::1] mask):
+    """Fill the holes of a mask whose edge rows and columns are 0, in place: every 0 pixel that
+    no path of 4-neighbours through 0 pixels joins to pixel (0, 0) becomes 1, as
+    ``scipy.ndimage.binary_fill_holes`` with its default structure (on the mask without its
+    frame: the frame joins every 0 pixel on the inner edge).  One flood fill over the 0 pixels
+    reached, then one pass."""
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, p, size = 1, capacity = 4096
+    cdef Py_ssize_t *stack = <Py_ssize_t *> malloc(capacity * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *grown
+    cdef bint failed = False
+    if stack == NULL:
+        raise MemoryError()
+    if m == 0 or n == 0:
+        free(stack)
+        return
+    with nogil:
+        # reached 0 pixels become 2 as they are pushed
+        mask[0, 0] = 2
+        stack[0] = 0
+        while size > 0 and not failed:
+            size -= 1
+            p = stack[size]
+            i, j = p // n, p % n
+            for k in range(4):
+                if k == 0:
+                    if i == 0:
+                        continue
+                    p = (i - 1) * n + j
+                elif k == 1:
+                    if i == m - 1:
+                        continue
+                    p = (i + 1) * n + j
+                elif k == 2:
+                    if j == 0:
+                        continue
+                    p = i * n + j - 1
+                else:
+                    if j == n - 1:
+                        continue
+                    p = i * n + j + 1
+                if mask[p // n, p % n] != 0:
+                    continue
+                mask[p // n, p % n] = 2
+                if size == capacity:
+                    capacity *= 2
+                    grown = <Py_ssize_t *> realloc(stack, capacity * sizeof(Py_ssize_t))
+                    if grown == NULL:
+                        failed = True
+                        break
+                    stack = grown
+                stack[size] = p
+                size += 1
+        for i in range(m):
+            for j in range(n):
+                mask[i, j] = 0 if mask[i, j] == 2 else 1
+    free(stack)
+    if failed:
+        raise MemoryError()

@@ -201,7 +201,8 @@ def main():
     if not args.skip_cold:
         cold_start(args.cache, args.repeat)
     if not args.skip_sizes:
-        sizes(args.cache, args.sizes + ([8192] if args.huge else []), args.max_iter)
+        huge = [8192] if args.huge and 8192 not in args.sizes else []
+        sizes(args.cache, args.sizes + huge, args.max_iter)
 
 
 if __name__ == "__main__":

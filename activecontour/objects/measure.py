@@ -203,12 +203,16 @@ def find_objects(contours, shape, image=None, *, separate=True, min_size=0.0, se
     objects, classes = [objects[i] for i in order], np.array([classes[i] for i in order], dtype=np.int32)
     if labels is None:
         labels = label_image(objects, shape) if drawn is None else _redrawn(*drawn, objects)
-    present = np.bincount(labels.ravel(), minlength=len(objects) + 1)[1:] > 0
+    table = measure(objects, labels, image)
+    # the objects without a pixel are left out: each row of the table is its object's alone,
+    # and the count of its pixels (read in its window) says whether it has one
+    present = table["num_pixels"] > 0
     if not present.all():
         objects, classes = [o for o, keep in zip(objects, present, strict=True) if keep], classes[present]
         relabel = np.concatenate([[0], np.cumsum(present) * present]).astype(np.int32)
         labels = relabel[labels]
-    table = measure(objects, labels, image)
+        table = {name: column[present] for name, column in table.items()}
+        table["label"] = np.arange(1, len(objects) + 1, dtype=np.int32)
     table["class"] = classes
     return objects, labels, table
 

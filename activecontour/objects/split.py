@@ -46,7 +46,8 @@ waist, no neck and no concave corner: it skips stages 0 to 2 after one convex hu
 Past that gate, each stage stops as soon as a consequence of its own criterion shows that it
 will not cut, so the shortcuts change no decision (``benchmarks/split_same.py`` compares the
 objects before and after a change; ``tests/objects/test_split_gates.py`` the shortcuts): no
-neck is looked for where the pixel raster bounds the boundary distance below ``min_radius``
+neck is looked for where the pixel distance transform has one piece of peaks (one compiled pass,
+:func:`_may_have_necks`) or the pixel raster bounds the boundary distance below ``min_radius``
 (:func:`_thinner_than`), nor past a watershed with one part thick enough to be an object; no
 corner cut in a part that is an ellipse or under twice the smallest part (:func:`_uncuttable`),
 nor on the second side of a cut whose first side already leaves too much unexplained; no
@@ -171,12 +172,14 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         The objects, split ones replaced by their parts (each an outer boundary then its holes).
     """
     if image is not None:
-        image = np.asarray(image, dtype=np.float64)
-        image = image.mean(axis=2) if image.ndim == 3 else image
+        # (a grey image in its own type: each object's box is read as float64, the whole image
+        # only for the noise)
+        image = np.asarray(image)
+        image = image.astype(np.float64).mean(axis=2) if image.ndim == 3 else image
         # the least contrast of a split by intensity: a number of noise sigmas, and on a noise-free
         # image a fraction of its range (shading is not two objects); the noise is estimated
         # only for an object whose blocks differ by more than that fraction
-        floor = CONTRAST_FLOOR * float(np.ptp(image))
+        floor = CONTRAST_FLOOR * (float(image.max()) - float(image.min()))
         least = None
     result = []
     for k, curves in enumerate(objects):
@@ -189,11 +192,12 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         concave = depth.max() >= MIN_WAIST_DEPTH
         contrast = False
         if image is not None:
-            spread = _block_spread(inside, image[box], min_radius)
+            spread = _block_spread(inside, np.asarray(image[box], dtype=np.float64), min_radius)
             if spread > floor and least is None:
                 from activecontour.imaging.noise import estimate_noise
 
-                least = max(CONTRAST_DEPTH * float(estimate_noise(image[:, :, None])[0]), floor)
+                noise = estimate_noise(np.asarray(image, dtype=np.float64)[:, :, None])[0]
+                least = max(CONTRAST_DEPTH * float(noise), floor)
             # (a part of fewer than twice pi min_radius^2 pixels is never split by contrast,
             # :func:`_contrast_split`, and the parts lie in the object's box)
             contrast = spread > floor and spread > least and inside.size > 2 * np.pi * min_radius ** 2
@@ -203,18 +207,19 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if concave and (clump := _arc_parts(curves, depth)) is not None:
             result.extend(clump)
             continue
-        import scipy.ndimage  # here: an object with nothing to split need not load it
-
         low = np.array([box[0].start - 1, box[1].start - 1])
-        # the outline's shape decides (holes filled): the rim around a hole is no neck
-        window = np.pad(scipy.ndimage.binary_fill_holes(inside), 1)
-        parts = window.astype(np.int32)
+        # the outline's shape decides (holes filled, as scipy.ndimage.binary_fill_holes): the rim
+        # around a hole is no neck
+        window = np.pad(inside, 1)
+        _kernels.fill_holes(window.view(np.uint8))
+        parts = None  # the window as one part
         if concave and (concavity := _may_have_necks(window, curves[0] - low, min_radius)) is not None:
             parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
                                 neck_ratio, min_radius)
         if contrast:
-            parts = _contrast_parts(parts, _window(image, box), least, min_radius)
-        pieces = _cut(curves, parts, low) if parts.max() > 1 else [curves]
+            parts = _contrast_parts(window.astype(np.int32) if parts is None else parts,
+                                    np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
+        pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
         if concave:
             # (an object its necks did not cut: its hull depth is known)
             pieces = [cut for piece in pieces for cut in
@@ -240,16 +245,22 @@ def _hull_depth(outline):
 
 def _may_have_necks(region, outline, min_radius):
     """The region's :func:`_concavity` when it may have necks, None when it has none: necks need
-    two edge pixels ``MIN_WAIST_DEPTH`` inside the outline's convex hull (every split line ends
-    in two such waists, :meth:`_PartGraph.is_waist`; pixels touching only at a corner are parts
-    without one), a part that may reach ``min_radius`` (:func:`_thinner_than`, told first: then
-    the concavity is not measured) and two maxima of dynamic above half a pixel in the pixel
-    distance transform: without them no neck is ``MIN_NECK_DEPTH`` deep even after its
-    half-pixel errors (cheap tests that spare most single objects the exact distance).  The
-    h-maxima (plateaus of regional maxima) lie in the pixels not below any 8-neighbour, each of
-    whose 4-connected pieces holds at most one of them, so one such piece means no two h-maxima.
-    The outline is in window coordinates."""
-    import scipy.ndimage
+    two maxima of dynamic above half a pixel in the pixel distance transform (without them no
+    neck is ``MIN_NECK_DEPTH`` deep even after its half-pixel errors), two edge pixels
+    ``MIN_WAIST_DEPTH`` inside the outline's convex hull (every split line ends in two such
+    waists, :meth:`_PartGraph.is_waist`; pixels touching only at a corner are parts without one)
+    and a part that may reach ``min_radius`` (:func:`_thinner_than`): cheap tests that spare most
+    single objects the exact distance.  Each is a consequence of the neck criterion on its own,
+    so their order changes no answer; the cheapest proof for a single blob comes first.
+    The h-maxima (plateaus of regional maxima) lie in the pixels not below any 8-neighbour, each
+    of whose 4-connected pieces holds at most one of them, so one such piece means no two
+    h-maxima: the transform and its pieces of peaks cost one compiled pass
+    (:func:`activecontour._kernels.distance_peaks`), and only an object with two pieces or more
+    is looked at further.  The outline is in window coordinates."""
+    squared = np.empty(region.shape, dtype=np.int64)
+    if _kernels.distance_peaks(region.view(np.uint8), squared) <= 1:
+        return None
+    import scipy.ndimage  # here: a single blob need not load it (0.2-0.4 s of a cold import)
 
     whole = scipy.ndimage.label(region)[1] == 1
     if whole and _thinner_than(region, outline, min_radius):
@@ -257,13 +268,10 @@ def _may_have_necks(region, outline, min_radius):
     concavity = _concavity(region, outline)
     if whole and np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2:
         return None
-    distance = scipy.ndimage.distance_transform_edt(region)
-    peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region
-    if scipy.ndimage.label(peaks)[1] <= 1:
-        return None
     import skimage.morphology  # here: most objects are decided before (0.3 s of a cold import)
 
-    two = scipy.ndimage.label(skimage.morphology.h_maxima(distance, MIN_NECK_DEPTH / 2))[1] > 1
+    # (the square roots of the squared transform: scipy.ndimage.distance_transform_edt's values)
+    two = scipy.ndimage.label(skimage.morphology.h_maxima(np.sqrt(squared), MIN_NECK_DEPTH / 2))[1] > 1
     return concavity if two else None
 
 
@@ -1022,14 +1030,11 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN):
     unless given, and only once a stretch turns enough); the corner is its vertex of most negative
     curvature.
     """
-    import scipy.ndimage
-
     h = edge_lengths(outline)
     ds = 0.5 * (h + np.roll(h, 1))  # the arc length each vertex stands for
     width = CORNER_SMOOTHING / h.mean()
-    kappa = (scipy.ndimage.gaussian_filter1d(curvature(outline) * ds, width, mode="wrap")
-             / scipy.ndimage.gaussian_filter1d(ds, width, mode="wrap"))
-    normals = scipy.ndimage.gaussian_filter1d(vertex_normals(outline), width, axis=0, mode="wrap")
+    kappa = _cyclic_gaussian(curvature(outline) * ds, width) / _cyclic_gaussian(ds, width)
+    normals = _cyclic_gaussian(vertex_normals(outline), width)
     normals /= np.maximum(np.hypot(normals[:, 0], normals[:, 1]), 1e-12)[:, None]
     concave = kappa < 0
     if concave.all() or not concave.any():
@@ -1046,6 +1051,23 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN):
         if depth[stretch].max() >= MIN_WAIST_DEPTH:
             corners.append(stretch[np.argmin(kappa[stretch])])
     return np.sort(np.array(corners, dtype=int)), kappa, normals
+
+
+def _cyclic_gaussian(values, sigma):
+    """``scipy.ndimage.gaussian_filter1d(values, sigma, axis=0, mode="wrap")`` to the last bit,
+    without loading scipy.ndimage (0.2-0.4 s of a cold start, for an object that is then not
+    cut): its weights (truncated at 4 sigma, normalised) and its order of summation for a
+    symmetric kernel (the centre, then the pairs of taps from the outermost in)."""
+    values = np.asarray(values, dtype=np.float64)
+    radius = int(4.0 * float(sigma) + 0.5)
+    offsets = np.arange(-radius, radius + 1)
+    weights = np.exp(-0.5 / (sigma * sigma) * offsets ** 2)
+    weights = weights / weights.sum()
+    index, count = np.arange(len(values)), len(values)
+    smooth = values * weights[radius]
+    for j in range(radius, 0, -1):
+        smooth += (values[(index - j) % count] + values[(index + j) % count]) * weights[radius + j]
+    return smooth
 
 
 def _cuts(outline, cycle, is_corner, flat, normals):

@@ -94,6 +94,22 @@ def test_an_object_inside_a_hole_is_another_object():
     assert areas[0] == pytest.approx(regular_polygon_area(10.0, len(curves[2])), rel=1e-9)
 
 
+@pytest.mark.parametrize("separate", [False, True])
+def test_specks_between_pixel_centres_have_no_id_and_the_rest_are_numbered_in_order(separate):
+    # two specks that hold no pixel centre, one first in reading order, around two disks
+    speck = orient(np.array([[2.2, 2.2], [2.2, 2.8], [2.8, 2.5]]))
+    curves = [speck, ac.circle((20.0, 20.0), 8.0), speck + [30.0, 1.0], ac.circle((40.0, 45.0), 6.0)]
+    image = np.random.default_rng(0).random((60, 60))
+    objects, labels, table = find_objects(curves, (60, 60), image, separate=separate)
+    disks = [[curves[1]], [curves[3]]]
+    assert len(objects) == 2 and all(np.array_equal(o[0], d[0]) for o, d in zip(objects, disks, strict=True))
+    np.testing.assert_array_equal(labels, label_image(disks, (60, 60)))
+    expected = measure(disks, labels, image)
+    assert list(table) == list(expected) + ["class"]
+    for name, column in expected.items():
+        np.testing.assert_array_equal(table[name], column)
+
+
 def test_labels_are_the_mask_with_ids_and_agree_with_regionprops():
     rng = np.random.default_rng(3)
     curves = [ellipse(rng.uniform(20, 180, 2), rng.uniform(5, 12), rng.uniform(3, 5), rng.uniform(-1.5, 1.5),

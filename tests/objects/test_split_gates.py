@@ -193,6 +193,51 @@ def test_the_near_distance_kernel_is_the_squared_distance_transform_up_to_its_ca
         np.testing.assert_array_equal(out, np.minimum(squared, cap))
 
 
+@pytest.mark.parametrize("seed", range(8))
+def test_the_distance_peaks_kernel_is_the_distance_transform_and_its_pieces_of_peaks(seed):
+    from activecontour import _kernels
+
+    rng = np.random.default_rng(seed)
+    counts = []
+    for _ in range(40):
+        m, n = rng.integers(1, 60, 2)
+        # blobs with holes and specks, plateaus (a square) and masks of one row or column
+        smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 6))
+        inside = smooth > np.quantile(smooth, rng.uniform(0.0, 0.6))
+        if rng.random() < 0.2:
+            inside = np.pad(np.ones((m, n), bool), int(rng.integers(1, 3)))
+        inside.flat[rng.integers(inside.size)] = False
+        out = np.empty(inside.shape, dtype=np.int64)
+        pieces = _kernels.distance_peaks(inside.astype(np.uint8), out)
+        # the definitions: squared offsets to the feature transform's nearest False pixel; the
+        # pixels of the mask that the 3 x 3 maximum filter of the transform does not exceed
+        _, nearest = scipy.ndimage.distance_transform_edt(inside, return_indices=True)
+        np.testing.assert_array_equal(out, np.sum((nearest - np.indices(inside.shape)) ** 2, axis=0))
+        distance = scipy.ndimage.distance_transform_edt(inside)
+        peaks = (distance >= scipy.ndimage.maximum_filter(distance, size=3)) & inside
+        assert pieces == scipy.ndimage.label(peaks)[1]
+        counts.append(pieces)
+    assert min(counts) <= 1 and max(counts) >= 3
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_fill_holes_kernel_fills_as_scipy_on_the_framed_mask(seed):
+    from activecontour import _kernels
+
+    rng = np.random.default_rng(seed)
+    filled = 0
+    for _ in range(60):
+        m, n = rng.integers(1, 50, 2)
+        # blobs with holes (rings of noise above a threshold) and masks of one row or column
+        smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 4))
+        inside = smooth > np.quantile(smooth, rng.uniform(0.0, 0.9))
+        window = np.pad(inside, 1)
+        _kernels.fill_holes(window.view(np.uint8))
+        np.testing.assert_array_equal(window, np.pad(scipy.ndimage.binary_fill_holes(inside), 1))
+        filled += np.count_nonzero(window) > np.count_nonzero(inside)
+    assert filled >= 5  # holes were drawn
+
+
 @pytest.mark.parametrize("radius", [0.0, 1.0, np.sqrt(2), 2.5, 3.0, 4.0, np.sqrt(17)])
 def test_the_near_distance_compares_with_its_radius_as_the_distance_transform(radius):
     rng = np.random.default_rng(int(10 * radius))
@@ -295,12 +340,26 @@ def test_may_have_necks_gives_the_concavity_or_none_by_its_tests_in_either_order
     concavity = split._concavity(region, outline)
     found = split._may_have_necks(region, outline, split.MIN_SPLIT_RADIUS)
     whole = scipy.ndimage.label(region)[1] == 1
-    # the thin test told first (no concavity measured) or second: the same refusal
+    # each test refuses on its own, whichever is told first
     if whole and (np.count_nonzero(concavity >= split.MIN_WAIST_DEPTH) < 2
                   or split._thinner_than(region, outline, split.MIN_SPLIT_RADIUS)):
         assert found is None
+    distance = scipy.ndimage.distance_transform_edt(region)
+    if scipy.ndimage.label((distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region)[1] <= 1:
+        assert found is None
     if found is not None:
         np.testing.assert_array_equal(found, concavity)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_cyclic_gaussian_is_scipys_wrapped_gaussian_to_the_last_bit(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        # curves shorter than the kernel (wrapped more than once), and (K, 2) normals
+        count, sigma = int(rng.integers(1, 300)), rng.uniform(0.1, 40)
+        values = rng.normal(size=(count,) if rng.random() < 0.5 else (count, 2)) * 10 ** rng.uniform(-3, 3)
+        np.testing.assert_array_equal(split._cyclic_gaussian(values, sigma),
+                                      scipy.ndimage.gaussian_filter1d(values, sigma, axis=0, mode="wrap"))
 
 
 @pytest.mark.parametrize("reach", [1, 2, 5, 9, 30])
