@@ -1247,6 +1247,10 @@ ARC_CORNER_TURN = 15.0
 #: Each arc loses this much (pixels of arc length) at both ends (the rounding of the corner is
 #: neither object's outline) and is fitted only when this much of it is left.
 ARC_TRIM, ARC_MIN_LENGTH = 1.5, 4.0
+#: An outline of more arcs than this is no clump of ellipses (a clump of ``FAMILY_CLUMP`` = 8
+#: objects has at most 14 contacts, 28 corners) but a ragged region of a texture: not grouped (the
+#: grouping costs the square of the arcs in ellipse fits).
+ARC_MAX = 32
 #: Two groups of arcs join when one ellipse fits their union as well as two fit them apart, up to
 #: the Bayesian information criterion of the five parameters saved: the squared Sampson distances
 #: grow by at most ``5 ln n`` noise variances for n points, the noise variance being the two fits'
@@ -1321,7 +1325,7 @@ def _arc_parts(curves, depth=None):
     if len(corners) < 2:
         return None
     arcs = _arcs(outline, corners)
-    if len(arcs) < 2:
+    if not 2 <= len(arcs) <= ARC_MAX:
         return None
     region = shapely.Polygon(outline)
     groups = _grouped_arcs(outline, arcs, region)
@@ -1382,46 +1386,59 @@ def _arcs(outline, corners):
 
 
 def _grouped_arcs(outline, arcs, region):
-    """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None)."""
-    def judged(groups):
-        points = [outline[np.concatenate([arcs[i] for i in group])] for group in groups]
-        return [(group, fit, _arc_ellipse(side, fit, region))
-                for group, side, fit in zip(groups, points, _ellipse_fits(points), strict=True)]
+    """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
+    The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
+    intersection, the dearest test) only when its cost makes it the pair to join."""
+    def points(group):
+        return outline[np.concatenate([arcs[i] for i in group])]
 
-    groups = judged([(i,) for i in range(len(arcs))])
-    joined = {}  # pair of groups: the judged union (a group is a tuple of arcs)
+    singles = [(i,) for i in range(len(arcs))]
+    groups = [(group, fit, _arc_ellipse(points(group), fit, region))
+              for group, fit in zip(singles, _ellipse_fits([points(g) for g in singles]), strict=True)]
+    joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
     while len(groups) > 1:
-        best = None
-        for i, j in zip(*np.triu_indices(len(groups), 1), strict=True):
-            key = (groups[i][0], groups[j][0])
-            if key not in joined:
-                joined[key] = judged([groups[i][0] + groups[j][0]])[0]
-            union = joined[key]
-            if union[2] is None:
+        pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
+        new = [(groups[i][0], groups[j][0]) for i, j in pairs if (groups[i][0], groups[j][0]) not in joined]
+        for key, fit in zip(new, _ellipse_fits([points(a + b) for a, b in new]), strict=True):
+            joined[key] = [fit, None]
+        options = []
+        for i, j in pairs:
+            fit, ellipse = joined[(groups[i][0], groups[j][0])]
+            if ellipse is False or fit[0] is None:
                 continue
             # the excess of the union's squared distances over the two fits', in noise variances
             # (a group that is no object's ellipse joins whatever it costs, the cheapest first)
             apart = groups[i][1][1] + groups[j][1][1]
-            points = sum(arcs[k].size for k in union[0])
+            count = sum(arcs[k].size for k in groups[i][0] + groups[j][0])
             if groups[i][2] is not None and groups[j][2] is not None:
-                noise = max(apart / max(points - 10, 1), ARC_NOISE**2)
-                cost = (union[1][1] - apart) / noise
-                if cost > 5 * np.log(points):
+                noise = max(apart / max(count - 10, 1), ARC_NOISE**2)
+                cost = (fit[1] - apart) / noise
+                if cost > 5 * np.log(count):
                     continue
             else:
-                cost = -np.inf if not np.isfinite(apart) else union[1][1] / points - 1e12
-            if best is None or cost < best[0]:
-                best = (cost, i, j, union)
+                cost = -np.inf if not np.isfinite(apart) else fit[1] / count - 1e12
+            options.append((cost, len(options), i, j))
+        best = None
+        for _, _, i, j in sorted(options):
+            key = (groups[i][0], groups[j][0])
+            entry = joined[key]
+            if entry[1] is None:
+                entry[1] = _arc_ellipse(points(key[0] + key[1]), entry[0], region)
+                entry[1] = False if entry[1] is None else entry[1]
+            if entry[1] is not False:
+                best = (i, j, (key[0] + key[1], entry[0], entry[1]))
+                break
         if best is None:
             break
-        _, i, j, union = best
+        i, j, union = best
         groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
     return groups
 
 
 def _arc_ellipse(points, fit, region):
     """The ellipse (centre, semi-axes, axes) of an arc group's fit when it is an object's
-    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS``, ``ARC_OUTSIDE``), else None."""
+    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS`` and ``ARC_OUTSIDE`` of the object's
+    ``region``, a shapely polygon), else None."""
     import shapely
 
     conic, residual = fit
