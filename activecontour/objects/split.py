@@ -1407,16 +1407,16 @@ def _grouped_arcs(outline, arcs, region):
             if ellipse is False or fit[0] is None:
                 continue
             # the excess of the union's squared distances over the two fits', in noise variances
-            # (a group that is no object's ellipse joins whatever it costs, the cheapest first)
+            # (a group whose fit failed joins whatever it costs, the cheapest first)
             apart = groups[i][1][1] + groups[j][1][1]
             count = sum(arcs[k].size for k in groups[i][0] + groups[j][0])
-            if groups[i][2] is not None and groups[j][2] is not None:
+            if np.isfinite(apart):
                 noise = max(apart / max(count - 10, 1), ARC_NOISE**2)
                 cost = (fit[1] - apart) / noise
                 if cost > 5 * np.log(count):
                     continue
             else:
-                cost = -np.inf if not np.isfinite(apart) else fit[1] / count - 1e12
+                cost = fit[1] / count - 1e12
             options.append((cost, len(options), i, j))
         best = None
         for _, _, i, j in sorted(options):
