@@ -67,12 +67,12 @@ Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at
 split                                       touching ellipses  touching disks   singles cut
 ==========================================  =================  ===============  ============
 necks alone (stage 1, the split until now)  0.14 / 0.78        0.48 / 0.91      4 of 120
-necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      10 of 120
-arcs into ellipses first (this module)      0.28 / 0.85        0.49 / 0.92      10 of 120
-  the same on seeds 20-39 (before: 0.50 /   0.69 / 0.93        0.49 / 0.91      9 of 120
-  0.90, 0.39 / 0.91, 9 of 120)
-  the same on seeds 40-59 (before: 0.50 /   0.50 / 0.91        0.65 / 0.92      4 of 120
-  0.90, 0.53 / 0.90, 4 of 120)
+necks, then concave corners                 0.45 / 0.83        0.48 / 0.92      7 of 120
+arcs into ellipses first (this module)      0.45 / 0.86        0.53 / 0.93      8 of 120
+  on seeds 20-39, an earlier segmentation   0.69 / 0.93        0.49 / 0.92      9 of 120
+  (before: 0.50 / 0.90, 0.39 / 0.91, 9)
+  on seeds 40-59, an earlier segmentation   0.50 / 0.91        0.65 / 0.93      4 of 120
+  (before: 0.50 / 0.90, 0.53 / 0.90, 4)
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
