@@ -356,19 +356,21 @@ class _Flow:
         # f . V = -b^{-1}(f~, f~) < 0 stays a descent direction after clipping to the image.
         held = ((points <= self.low) & (current.load > 0)) | ((points >= self.high) & (current.load < 0))
         load = np.where(held, 0.0, current.load)
-        v = self.velocity(geometry, load)
-        v[held] = 0.0
-        # the bulk of the curve, not its fastest vertex (a noise outlier, often 20x the median),
-        # sets the scale of the first trial; backtracking still guarantees descent
-        speed = np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2))
-        if not speed > 0:
-            return None
-        dt = min(self.max_step / speed, 2.0 * self.dt)
         accelerated = self.memory.direction(geometry, load, held, self.velocity)
         if accelerated is not None:
-            # a quasi-Newton step in the same metric: its natural length is 1
+            # a quasi-Newton step in the same metric: its natural length is 1 (a descent
+            # direction, f . V < 0, so f and the gradient step are not zero)
             v = accelerated
             dt = min(1.0, self.max_step / np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2)))
+        else:
+            v = self.velocity(geometry, load)
+            v[held] = 0.0
+            # the bulk of the curve, not its fastest vertex (a noise outlier, often 20x the
+            # median), sets the scale of the first trial; backtracking still guarantees descent
+            speed = np.sqrt(np.mean(v[:, 0] ** 2 + v[:, 1] ** 2))
+            if not speed > 0:
+                return None
+            dt = min(self.max_step / speed, 2.0 * self.dt)
         dt = min(dt, _size_limit(geometry, self.edge_lengths(geometry), v))
         areas = self.areas(geometry)  # the iterate bounds a region: see repair
         for _ in range(_MAX_HALVINGS):

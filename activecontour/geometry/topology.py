@@ -24,7 +24,14 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.geometry.curve import curve_areas, signed_area, split_curves, stack_curves, take_curves
+from activecontour.geometry.curve import (
+    curve_areas,
+    signed_area,
+    split_curves,
+    stack_curves,
+    stacked_next,
+    take_curves,
+)
 from activecontour.geometry.regions import nesting
 from activecontour.geometry.regions import polygons as valid_polygons
 
@@ -157,7 +164,10 @@ def repair_stacked(points, next_index, offsets, *, min_area=0.0, before=None):
     linked = _link([chain for chain, w in zip(chains, windings[:len(chains)], strict=True) if w == 0], nodes,
                    n_points)
     kept_points, _, kept_offsets = take_curves(points, offsets, kept)
-    repaired = stack_curves(split_curves(kept_points, kept_offsets) + linked)
+    # the linked curves stacked after the kept ones (no list of the kept curves: there are many)
+    linked_offsets = kept_offsets[-1] + np.cumsum([len(curve) for curve in linked], dtype=np.intp)
+    repaired_offsets = np.concatenate([kept_offsets, linked_offsets])
+    repaired = (np.concatenate([kept_points] + linked), stacked_next(repaired_offsets), repaired_offsets)
     areas = curve_areas(*repaired)
     return take_curves(repaired[0], repaired[2], (np.diff(repaired[2]) >= 3) & (np.abs(areas) > min_area))
 
@@ -171,7 +181,9 @@ def border_overlap(points, next_index, bounds):
     region's boundary covers every point of the border at most once, and each corner at most once.
     """
     # only vertices on the border take part: one pass over the points finds them
-    on = np.unique(np.flatnonzero((points == bounds[0]) | (points == bounds[1])) // 2)
+    rows, cols = points[:, 0], points[:, 1]
+    on = np.flatnonzero((rows == bounds[0, 0]) | (rows == bounds[1, 0]) | (cols == bounds[0, 1])
+                        | (cols == bounds[1, 1]))
     if on.size < 2:
         return False
     start, end = points[on], points[next_index[on]]
