@@ -635,23 +635,25 @@ class Network:
         import scipy.sparse
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-        position = np.full(len(self.nodes), -1)
-        position[index] = np.arange(index.size)
-        start, end = self._interface_ends
-        i, j = position[start], position[end]
-        inside = (i >= 0) & (j >= 0)
-        pairs = (np.concatenate([i[inside], j[inside]]), np.concatenate([j[inside], i[inside]]))
+        _, i, j = self._interfaces_within(index)
+        pairs = (np.concatenate([i, j]), np.concatenate([j, i]))
         graph = scipy.sparse.csr_matrix((np.ones(len(pairs[0])), pairs), shape=(index.size,) * 2)
         return index[reverse_cuthill_mckee(graph, symmetric_mode=True)] if index.size else index
 
     def _positions(self, order):
         """Each node's position in ``order`` (-1: not in it), and the half bandwidth there."""
+        position, i, j = self._interfaces_within(order)
+        return position, int(np.abs(i - j).max()) if i.size else 0
+
+    def _interfaces_within(self, index):
+        """Each node's position in ``index`` (-1: not in it), and the positions of the two ends of
+        every interface with both ends in it."""
         position = np.full(len(self.nodes), -1)
-        position[order] = np.arange(order.size)
+        position[index] = np.arange(index.size)
         start, end = self._interface_ends
         i, j = position[start], position[end]
         inside = (i >= 0) & (j >= 0)
-        return position, int(np.abs(i[inside] - j[inside]).max()) if inside.any() else 0
+        return position, i[inside], j[inside]
 
     def velocity(self, nodes, force, factors=None):
         """Solve ``b(V, Y) = -delta J(Y)`` (6.40) with the H^1 form for every free component.

@@ -168,9 +168,7 @@ class PolygonOptions:
     spacing: float = option(1.0, (
         f"Target distance between vertices, in pixels (>= {_MIN_SPACING}).  About one vertex per pixel "
         "resolves everything the image resolves; the cost of an iteration grows with the curve's length "
-        "in pixels either way.  Once the flow has converged, a last stage halves every edge and "
-        "converges again (a result has half this spacing): the polygon's own discretisation error "
-        "would otherwise still move the boundary under a smaller tol."))
+        "in pixels either way."))
     max_step: float = option(8.0, (
         "Largest root-mean-square vertex displacement of a trial step, in pixels (> 0).  Steps "
         "double while they are accepted, up to this; backtracking halves them."), typical=(0.25, 10.0))

@@ -21,27 +21,15 @@ Per iteration k, on the polygon(s) Gamma^k:
    the previous iterate's, so the recorded energy sequence never increases.  The start is taken
    as given: only its edges longer than twice ``spacing`` are split (the same polygon), so a
    previous result restarts at its own energy and mask.
-5. The last stage: once the flow has converged at ``spacing``, every edge is halved (the same
-   polygon, the same energy) and the flow converges again at ``spacing / 2``, the spacing of the
-   result; a result restarts at that spacing.  The polygon's own discretisation error is what a
-   converged contour still holds: between the vertices the curve is a chord, and the vertices
-   can slide along the curve to where it bends (a staircase's corners on a binary image, a thin
-   stroke's ends), which lowers J and moves the boundary by a few hundredths of a pixel.  That
-   slide is slow (the energy hardly changes along the curve), so a run that stopped at spacing h
-   and is continued with a 100x smaller tol lowers J by up to 0.14 % and flips up to 0.7 % of the
-   mask (scikit-image's horse, gravel) in 500 iterations: more than "converged" allows.  Both
-   shrink about 3-fold when h is halved (benchmarks/restart.py), and J ends lower; halving h for
-   the last stage only pays for the finer polygon where the curve is found already.
 
 The flow stalls when the contour stops getting anywhere: its mean normal displacement (the area it
 sweeps over its length, in pixels) between the start and the end of a block of five iterations,
 per iteration, falls below ``tol`` (see :class:`_Movement`).  No energy scale enters, so the test
 means the same on every image: a relative energy decrease would stop earlier the larger or noisier
 the image, as J holds the noise energy sigma^2 |D|.  A coarse l gives way to the next after one
-block below 10 tol, and the finest l at ``spacing`` gives way to the last stage (step 5) after one
-block below tol; convergence there takes two blocks in a row below tol (one slow block can be a
-pause: on scikit-image's cat a lobe still retracting moved 0.5 % of the mask after such a stop);
-the run also stops at ``max_num_iter``.
+block below 10 tol; convergence at the finest l takes two blocks in a row below tol (one slow
+block can be a pause: on scikit-image's cat a lobe still retracting moved 0.5 % of the mask after
+such a stop); the run also stops at ``max_num_iter``.
 """
 
 from __future__ import annotations
@@ -81,7 +69,6 @@ _NUCLEATION_RADIUS = 4.0
 _NUCLEATION_ROUNDS = 4
 _NUCLEATION_TRIALS = 30
 _REMESH_COOLDOWN = 10
-_LAST_SPACING = 0.5  # the last stage's spacing, a fraction of ``spacing`` (every edge halved)
 _BACKGROUND_SHARE = 1.5  # the global move takes the background when the given curves hold 1.5x
                          # the share of it that they hold of the objects
 
@@ -117,10 +104,6 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
     # nothing is cut, and the remesh takes short edges when that lowers the energy; the starts we
     # draw ourselves (the default start, the global move's threshold set) are at the spacing
     start = stack_curves(initial_curves(init, shape, model.image, params.mu))
-    # a result's vertices are at the last stage's spacing already (see the module's step 5)
-    last_stage = from_result
-    if last_stage:
-        spacing *= _LAST_SPACING
     geometry = _resampled(start, spacing) if init is None else _subdivided(start, spacing)
     current = evaluate(model, *geometry[:2], params, gradient=True)
     # a start around the whole image (or nothing) has the energy of the empty set plus its
@@ -174,10 +157,8 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
                 status = 2
                 break
         finest = flow.smoothing <= min_smoothing or not flow.h1
-        # a coarse stage gives way after one slow block, and so does the finest l at ``spacing``
-        # (the last stage goes on from there); convergence takes _STILL_BLOCKS in a row
-        blocks = _STILL_BLOCKS if finest and last_stage else 1
-        if movement.still(tol if finest else _STAGE_TOL * tol) >= blocks:
+        # a coarse stage gives way after one slow block; convergence takes _STILL_BLOCKS in a row
+        if movement.still(tol if finest else _STAGE_TOL * tol) >= (_STILL_BLOCKS if finest else 1):
             if not finest:
                 flow.refine(min_smoothing)
             elif nucleate and rounds < _NUCLEATION_ROUNDS and (grown := flow.nucleate(geometry, current)):
@@ -185,12 +166,6 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
                 geometry, current = grown
                 energies[-1] = current.energy  # part of this iteration's update: lower still
                 flow.restart(smoothing)
-            elif not last_stage:
-                last_stage, spacing = True, spacing * _LAST_SPACING
-                geometry = _halved(geometry)
-                current = evaluate(model, *geometry[:2], params, gradient=True)
-                energies[-1] = current.energy  # the same polygon: J to rounding
-                flow.restart(flow.smoothing)
             else:
                 status = 0
                 break
@@ -553,17 +528,6 @@ def _subdivided(geometry, spacing):
     piece = np.repeat(np.where(few, np.minimum(spacing, totals / 8.0), spacing), counts)
     longest = np.repeat(np.where(few, 0.0, 2.0 * spacing), counts)
     dense, counts = subdivide(points, counts, piece, longest)
-    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
-    return dense, stacked_next(offsets), offsets
-
-
-def _halved(geometry):
-    """Stacked curves with every edge split at its midpoint: the same polygons, twice the vertices
-    (:func:`activecontour.geometry.curve.subdivide` with each edge's half length as its piece)."""
-    points, next_index, offsets = geometry
-    d = np.take(points, next_index, axis=0) - points
-    half = np.maximum(0.5 * np.hypot(d[:, 0], d[:, 1]) * (1.0 + 1e-9), _MIN_EDGE)  # ceil(h / half) = 2
-    dense, counts = subdivide(points, np.diff(offsets), half, 0.0)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
     return dense, stacked_next(offsets), offsets
 

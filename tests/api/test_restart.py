@@ -59,8 +59,16 @@ def test_the_other_backends_result_keeps_its_mask(results, name, backend):
     assert np.count_nonzero(again.mask != first.mask) <= 1e-3 * first.mask.sum()
 
 
+#: Where DESIGN's stationarity does not hold yet (issue 22, item 2, open): continuing from the polygon's
+#: result on binary_blobs with tol/100 lowers J by 0.11 % (151.24 -> 151.07) in 500 iterations, mask
+#: unchanged.  Strict: the day it holds, this mark must go.
+_NOT_YET_STATIONARY = {("binary_blobs", "polygon")}
+
+
 @pytest.mark.parametrize(("name", "backend"), [
-    pytest.param(name, backend, id=f"{name}-{backend}") for name in _crops() for backend in BACKENDS])
+    pytest.param(name, backend, id=f"{name}-{backend}", marks=pytest.mark.xfail(
+        strict=True, reason="issue 22 item 2: not yet stationary")) if (name, backend) in _NOT_YET_STATIONARY
+    else pytest.param(name, backend, id=f"{name}-{backend}") for name in _crops() for backend in BACKENDS])
 def test_a_converged_result_is_stationary(results, name, backend):
     image, first = results[name, backend]
     assert first.success, first.message

@@ -176,22 +176,3 @@ def test_mask_init_and_result_init():
     first = ac.segment(image, start, max_num_iter=5)
     result = ac.segment(image, first)  # a result is a valid init
     assert synthetic.dice(result.mask, truth) >= 0.98
-
-
-def test_the_last_stage_halves_the_edges_and_a_result_restarts_at_that_spacing():
-    # polygon.py step 5: converged at spacing 1 px, every edge is halved and the flow converges
-    # again; the remesh keeps edges within [spacing / 2, 2 spacing] of that stage's spacing
-    image, _ = shape_image("star", noise=0.1, seed=5)
-    stopped = ac.segment(image, max_num_iter=5)
-    result = ac.segment(image)
-    assert result.success, result.message
-
-    def mean_edge(res):
-        return np.mean(np.concatenate([np.hypot(*np.diff(np.vstack([c, c[:1]]), axis=0).T)
-                                       for c in res.contours]))
-
-    assert 0.5 <= mean_edge(stopped) <= 2.0  # before convergence: the spacing
-    assert 0.25 <= mean_edge(result) <= 0.75  # the last stage's: about half of it
-    assert np.all(np.diff(result.energies) <= 0)
-    again = ac.segment(image, init=result, max_num_iter=5)
-    assert 0.25 <= mean_edge(again) <= 0.75  # a result goes on at its own spacing
