@@ -204,7 +204,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if not concave and not contrast:
             result.append(curves)
             continue
-        if concave and (clump := _arc_parts(curves, depth)) is not None:
+        if concave and (clump := _arc_parts(curves, depth, labels.shape)) is not None:
             result.extend(clump)
             continue
         low = np.array([box[0].start - 1, box[1].start - 1])
@@ -1275,10 +1275,18 @@ ARC_TRIPLE = 0.02
 #: (an ellipse across a star's centre, through two opposite arms).
 ARC_OVERLAP = 0.3
 #: ... every point where the border between two parts meets the outline lies within this many
-#: pixels of a corner (a waist at both ends: a bent rod or a banana cut across is not two
-#: objects), no point has four parts within that reach (a star's arms all meet at its centre;
-#: objects pressed together meet two or three at a point) ...
+#: pixels of a corner that turns by ``ARC_END_TURN`` (a waist at both ends: a bent rod or a
+#: banana cut across is not two objects), no point has four parts within that reach (a star's
+#: arms all meet at its centre; objects pressed together meet two or three at a point) ...
 ARC_REACH = 3.0
+#: The corners a border between two parts may end at turn by this many degrees: more than
+#: ``ARC_CORNER_TURN``, which only cuts the outline into arcs (a wiggle of the noise cuts one arc
+#: in two that the grouping joins again), since a border is drawn where two objects cross.  A
+#: bent rod has one concave corner, inside its bend; a wiggle of 15-20 degrees on the outside of
+#: the bend was the other end of a border cutting it into two ellipses (the singles family,
+#: seed 7: 17 degrees), while the contacts of the touching families, the rounded ones too, turn
+#: by more (seeds 0-59 split the same with 15 and with 20 degrees).
+ARC_END_TURN = 20.0
 #: ... and at most this many places have three parts within it (a chain or a tree of objects
 #: has none, a trefoil one; the petals of a flower fitted around the part that takes its centre
 #: make one with each two neighbours) ...
@@ -1289,9 +1297,10 @@ ARC_TRIPLE_POINTS = 2
 ARC_SIZE_RATIO = 0.25
 
 
-def _arc_parts(curves, depth=None):
+def _arc_parts(curves, depth=None, extent=None):
     """The parts of an object (outer boundary, then holes: a ring of objects around a gap) as a
     clump of overlapping ellipses (lists of curves), or None when no such clump explains it.
+    ``extent``: the label image's shape, whose edge cuts an object that leaves it.
 
     The model-based split of overlapping convex objects (nuclei): where two convex objects
     overlap, their outlines cross at a concave corner (negative curvature kappa of (3.45), turning
@@ -1309,17 +1318,27 @@ def _arc_parts(curves, depth=None):
     ``ARC_GAP``), the ellipses cover ``ARC_COVER`` of the object and three of them at most
     ``ARC_TRIPLE`` of it, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
     ``ARC_SIZE_RATIO`` of the largest part, every border between two parts reaches the outline at
-    corners only, no four parts meet and at most ``ARC_TRIPLE_POINTS`` places have three
+    corners only (of ``ARC_END_TURN``), no four parts meet and at most ``ARC_TRIPLE_POINTS`` places have three
     (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise the necks and the corner cuts decide, as
     for an object without this stage.  Unlike a cut between two corners, the grouping
     splits three objects pressed around one point (a trefoil has three corners, one per contact,
     and three arcs) and takes a corner whose partner was rounded away as the end of two arcs.
+
+    An object that reaches the edge of the image (of the crop of a pointed run,
+    ``roi="init"``, where a touching neighbour is cut off by the neighbourhood) is left to the
+    stages below: part of its outline is that edge, no object's boundary, so the ellipse of its
+    cut-off arcs is not the object's (``tests/imaging/test_pointed.py``: a disk of radius 13 cut
+    in half got an ellipse of 13.5 by 8.4 px, and the touching disk's part took three pixels of
+    it at the ends of the contact, outside the lens the two share).
     """
     import shapely
 
     outline = curves[0]
     area = signed_area(outline)
     if area < 2 * np.pi * MIN_SPLIT_RADIUS**2:
+        return None
+    if extent is not None and (outline.min() <= -0.5
+                               or (outline.max(axis=0) >= np.subtract(extent, 0.5)).any()):
         return None
     corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN)
     if len(corners) < 2:
@@ -1342,8 +1361,8 @@ def _arc_parts(curves, depth=None):
     if len(ellipses) < 2:
         return None
     low = np.floor(outline.min(axis=0)).astype(int) - 1
-    shape = tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2)
-    inside = rasterize([curve - low for curve in curves], shape)
+    window = tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2)
+    inside = rasterize([curve - low for curve in curves], window)
     points = np.argwhere(inside)
     depth_in = np.array([_normalised_radius(ellipse, points + low) for ellipse in ellipses])
     covered = np.count_nonzero(depth_in <= 1, axis=0)
@@ -1357,10 +1376,11 @@ def _arc_parts(curves, depth=None):
         return None
     parts = np.zeros(inside.shape, dtype=np.int32)
     parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
-    outer = rasterize([outline - low], shape)
+    outer = rasterize([outline - low], window)
     sizes = np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:]
+    ends = _concave_corners(outline, depth, ARC_END_TURN)[0]  # (those of ARC_CORNER_TURN that turn more)
     if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
-            or not _meet_at_corners(parts, outer, outline[corners] - low, len(ellipses))):
+            or not _meet_at_corners(parts, outer, outline[ends] - low, len(ellipses))):
         return None
     pieces = _cut(curves, parts, low)
     if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):

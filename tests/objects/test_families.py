@@ -80,7 +80,9 @@ def test_touching_objects_are_split_from_the_level_set_too():
     assert match_instances(ac.segment(image, backend="levelset").labels, truth)["f1"] >= 0.9
 
 
-@pytest.mark.parametrize("seed", [1, 4, 5])
+# (seed 7: a rod bent sharply, whose border between two ellipses ended at a wiggle of 17 degrees
+# outside the bend, :data:`activecontour.objects.split.ARC_END_TURN`)
+@pytest.mark.parametrize("seed", [1, 4, 5, 7])
 def test_singles_are_never_split(seed):
     image, _ = synthetic.singles(seed)
     pieces = ac.segment(image, separate=False).labels
@@ -196,6 +198,18 @@ def test_a_chain_of_three_disks_gives_the_middle_one_both_its_arcs():
     polygons = [shapely.Polygon(p[0]) for p in parts]
     areas = [next(p for p in polygons if p.contains(shapely.Point(c))).area for c in centres]
     np.testing.assert_allclose(areas, expected, atol=2 * r)
+
+
+def test_a_clump_that_reaches_the_image_edge_is_left_to_the_necks_and_corners():
+    # two disks overlapping by a sixth of the radius: a clump of two ellipses inside the image,
+    # none where the image ends at its last column (an object there may be cut off by the edge,
+    # whose straight piece of outline is no object's)
+    r = 12.0
+    outline, parts, _ = _disks_parts([(40.0, 30.0), (40.0, 30.0 + 2 * r - r / 6)], r)
+    columns = int(np.floor(outline[:, 1].max() + 0.5))  # the image's edge at column columns - 0.5
+    assert len(_arc_parts([outline], extent=(100, columns + 1))) == 2
+    assert _arc_parts([outline], extent=(100, columns)) is None
+    assert _arc_parts([outline - [0.0, outline[:, 1].min() + 0.5]], extent=(100, 100)) is None
 
 
 def _flower(radius, petals, length, width):
