@@ -204,7 +204,8 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if not concave and not contrast:
             result.append(curves)
             continue
-        if concave and (clump := _arc_parts(curves, depth, labels.shape)) is not None:
+        bent = _bent(curves[0]) if concave else None
+        if concave and (clump := _arc_parts(curves, depth, labels.shape, bent)) is not None:
             result.extend(clump)
             continue
         low = np.array([box[0].start - 1, box[1].start - 1])
@@ -221,10 +222,10 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
                                     np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
         pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
         if concave:
-            # (an object its necks did not cut: its hull depth is known)
+            # (an object its necks did not cut: its hull depth and curvature are known)
             pieces = [cut for piece in pieces for cut in
                       ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
-                          piece[0], depth if piece[0] is curves[0] else None)])]
+                          piece[0], *((depth, bent) if piece[0] is curves[0] else ()))])]
         result.extend(pieces)
     return result
 
@@ -933,7 +934,7 @@ ELLIPSE_SOLIDITY = 0.9
 EXPLAINED_GAIN = 0.5
 
 
-def _corner_parts(outline, depth=None):
+def _corner_parts(outline, depth=None, bent=None):
     """The parts of a polygon (an outer boundary without holes) cut at its concave corners, as
     polygons that share their cut lines (each cut joins two vertices of the outline).
 
@@ -941,14 +942,14 @@ def _corner_parts(outline, depth=None):
     other, or one corner and the outline across, :func:`_cuts`) that are necks (``CUT_NECK``) and
     lie inside the part are ordered by their neck ratio; of the first ``CUT_OPTIONS``, the one
     whose two sides are fitted best by an ellipse each is made and its sides cut in turn.  A cut
-    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth``: the
-    outline's :func:`_hull_depth`, when it is known.
+    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth`` and
+    ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
     """
     import shapely
 
     if _uncuttable(signed_area(outline), False):
         return [outline]
-    corners, kappa, normals = _concave_corners(outline, depth)
+    corners, kappa, normals = _concave_corners(outline, depth, bent=bent)
     if len(corners) == 0:
         return [outline]
     region = shapely.Polygon(outline)
@@ -1018,7 +1019,19 @@ def _uncuttable(area, good):
     return (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2
 
 
-def _concave_corners(outline, depth=None, turn=CORNER_TURN):
+def _bent(outline):
+    """A polygon's curvature averaged along the arc, its smoothed outward unit normals and the
+    arc length each vertex stands for (:func:`_concave_corners`)."""
+    h = edge_lengths(outline)
+    ds = 0.5 * (h + np.roll(h, 1))
+    width = CORNER_SMOOTHING / h.mean()
+    kappa = _cyclic_gaussian(curvature(outline) * ds, width) / _cyclic_gaussian(ds, width)
+    normals = _cyclic_gaussian(vertex_normals(outline), width)
+    normals /= np.maximum(np.hypot(normals[:, 0], normals[:, 1]), 1e-12)[:, None]
+    return kappa, normals, ds
+
+
+def _concave_corners(outline, depth=None, turn=CORNER_TURN, bent=None):
     """The vertices at the concave corners of a polygon, its smoothed curvature and its smoothed
     outward unit normals.
 
@@ -1028,14 +1041,10 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN):
     ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_parts`) and it dips
     ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``: :func:`_hull_depth`, measured here
     unless given, and only once a stretch turns enough); the corner is its vertex of most negative
-    curvature.
+    curvature.  ``bent``: the outline's :func:`_bent`, when it is known (the arc stage and the
+    corner stage look at the same outline).
     """
-    h = edge_lengths(outline)
-    ds = 0.5 * (h + np.roll(h, 1))  # the arc length each vertex stands for
-    width = CORNER_SMOOTHING / h.mean()
-    kappa = _cyclic_gaussian(curvature(outline) * ds, width) / _cyclic_gaussian(ds, width)
-    normals = _cyclic_gaussian(vertex_normals(outline), width)
-    normals /= np.maximum(np.hypot(normals[:, 0], normals[:, 1]), 1e-12)[:, None]
+    kappa, normals, ds = _bent(outline) if bent is None else bent
     concave = kappa < 0
     if concave.all() or not concave.any():
         return np.zeros(0, dtype=int), kappa, normals
@@ -1297,10 +1306,11 @@ ARC_TRIPLE_POINTS = 2
 ARC_SIZE_RATIO = 0.25
 
 
-def _arc_parts(curves, depth=None, extent=None):
+def _arc_parts(curves, depth=None, extent=None, bent=None):
     """The parts of an object (outer boundary, then holes: a ring of objects around a gap) as a
     clump of overlapping ellipses (lists of curves), or None when no such clump explains it.
-    ``extent``: the label image's shape, whose edge cuts an object that leaves it.
+    ``extent``: the label image's shape, whose edge cuts an object that leaves it; ``depth`` and
+    ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
 
     The model-based split of overlapping convex objects (nuclei): where two convex objects
     overlap, their outlines cross at a concave corner (negative curvature kappa of (3.45), turning
@@ -1340,7 +1350,8 @@ def _arc_parts(curves, depth=None, extent=None):
     if extent is not None and (outline.min() <= -0.5
                                or (outline.max(axis=0) >= np.subtract(extent, 0.5)).any()):
         return None
-    corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN)
+    bent = _bent(outline) if bent is None else bent
+    corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN, bent)
     if len(corners) < 2:
         return None
     arcs = _arcs(outline, corners)
@@ -1378,7 +1389,7 @@ def _arc_parts(curves, depth=None, extent=None):
     parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
     outer = rasterize([outline - low], window)
     sizes = np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:]
-    ends = _concave_corners(outline, depth, ARC_END_TURN)[0]  # (those of ARC_CORNER_TURN that turn more)
+    ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
     if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
             or not _meet_at_corners(parts, outer, outline[ends] - low, len(ellipses))):
         return None
@@ -1408,13 +1419,14 @@ def _arcs(outline, corners):
 def _grouped_arcs(outline, arcs, region):
     """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
     The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
-    intersection, the dearest test) only when its cost makes it the pair to join."""
+    intersection, the dearest test) only when its cost makes it the pair to join, and a single
+    arc's only when it is left alone (the joining reads the fits)."""
     def points(group):
         return outline[np.concatenate([arcs[i] for i in group])]
 
     singles = [(i,) for i in range(len(arcs))]
-    groups = [(group, fit, _arc_ellipse(points(group), fit, region))
-              for group, fit in zip(singles, _ellipse_fits([points(g) for g in singles]), strict=True)]
+    groups = [(group, fit, None) for group, fit in zip(singles, _ellipse_fits([points(g) for g in singles]),
+                                                       strict=True)]
     joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
     while len(groups) > 1:
         pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
@@ -1452,7 +1464,8 @@ def _grouped_arcs(outline, arcs, region):
             break
         i, j, union = best
         groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
-    return groups
+    return [(group, fit, _arc_ellipse(points(group), fit, region) if len(group) == 1 else ellipse)
+            for group, fit, ellipse in groups]
 
 
 def _arc_ellipse(points, fit, region):
