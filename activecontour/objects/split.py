@@ -67,12 +67,10 @@ Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at
 split                                       touching ellipses  touching disks   singles cut
 ==========================================  =================  ===============  ============
 necks alone (stage 1, the split until now)  0.14 / 0.78        0.48 / 0.91      4 of 120
-necks, then concave corners                 0.45 / 0.83        0.48 / 0.92      7 of 120
-arcs into ellipses first (this module)      0.45 / 0.86        0.53 / 0.93      8 of 120
-  on seeds 20-39, an earlier segmentation   0.69 / 0.93        0.49 / 0.92      9 of 120
-  (before: 0.50 / 0.90, 0.39 / 0.91, 9)
-  on seeds 40-59, an earlier segmentation   0.50 / 0.91        0.65 / 0.93      4 of 120
-  (before: 0.50 / 0.90, 0.53 / 0.90, 4)
+necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      10 of 120
+arcs into ellipses first (this module)      0.28 / 0.85        0.53 / 0.93      10 of 120
+  on seeds 20-59                            0.50 / 0.92        0.49 / 0.92      12 of 240
+  (necks and corners: 0.50 / 0.90, 0.39 / 0.90, 12 of 240)
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -81,10 +79,15 @@ Otsu + distance watershed (the scikit-      0.42 / 0.78        0.72 / 0.96      
 image gallery pipeline, for reference)
 ==========================================  =================  ===============  ============
 
-The corner stage is what wins on elongated objects side by side; the necks keep the singles
-whole.  What is left is small and crowded: the worst seeds of both touching families have radii
-of 6-9 px at SNR 2-3 with 1-1.5 px of blur, where the converged contour rounds the contacts
-until neither a neck nor a corner is left (on those seeds the pipeline scores 0.42 and 0.72).
+(The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the same scenes'
+objects for every split.)  The corner stage is what wins on elongated objects side by side; the
+necks keep the singles whole.  What is left is crowded: the worst seeds of both touching
+families (ellipses 13, 17, 14: 0.28, 0.41, 0.50; disks 0, 6: 0.53, 0.60) hold connected pieces of
+5-8 objects, some of which own no arc of the outline (pressed inside the clump, or their contacts
+rounded away), so the arc ellipses cover 0.6-0.8 of the piece and the clump is left to the necks
+and corners, which cut off only some of its objects (the pipeline scores 0.68, 0.81, 0.78, 0.86,
+0.83 there).  The singles the split cuts (10 of 120) are cut by the necks and corners, as before
+the arc stage: bent rods and strokes.
 """
 
 from __future__ import annotations
