@@ -1866,6 +1866,45 @@ def segment_table(const double[:, :, ::1] segments, double far, double[:, ::1] c
                 columns32[k, i] = <float> row[k]
 
 
+cdef Py_ssize_t _lower_envelope(const long long *g, Py_ssize_t count, Py_ssize_t stride, long long far,
+                                Py_ssize_t *vertex, long long *height) noexcept nogil:
+    """The lower envelope of the parabolas ``(x - q)^2 + g_q^2`` over q < ``count`` with
+    ``g_q = g[q * stride] < far`` (Felzenszwalb and Huttenlocher), its breakpoints compared as
+    integers: parabola ``vertex[k]`` with ``height[k] = g^2 + q^2`` is lowest from its breakpoint
+    with ``vertex[k - 1]`` to its breakpoint with ``vertex[k + 1]``, the breakpoint of u < p lying
+    at ``(height_p - height_u) / (2 (p - u))``.  Returns the last index k (-1: no parabola)."""
+    cdef Py_ssize_t k = -1, q, p, u
+    cdef long long h
+    for q in range(count):
+        h = g[q * stride]
+        if h >= far:
+            continue
+        h = h * h + <long long> q * q
+        while k >= 1:
+            p, u = vertex[k], vertex[k - 1]
+            # drop p when q's breakpoint with it comes no later than p's with u
+            if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (q - p):
+                k -= 1
+            else:
+                break
+        if k == 0 and h - height[0] <= 0:
+            k = -1  # q is as low as vertex[0] from x = 0 on
+        k += 1
+        vertex[k] = q
+        height[k] = h
+    return k
+
+
+cdef inline long long _envelope_at(const Py_ssize_t *vertex, const long long *height, Py_ssize_t k,
+                                   Py_ssize_t *last, Py_ssize_t x) noexcept nogil:
+    """The envelope of :func:`_lower_envelope` (last index ``k``) at ``x``, the squared distance;
+    ``last`` is the parabola that was lowest at the previous, smaller x (start at 0)."""
+    while last[0] < k and height[last[0] + 1] - height[last[0]] <= 2 * x * (vertex[last[0] + 1] - vertex[last[0]]):
+        last[0] += 1
+    return (<long long> (x - vertex[last[0]]) * (x - vertex[last[0]]) + height[last[0]]
+            - <long long> vertex[last[0]] * vertex[last[0]])
+
+
 def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, const int[::1] direction,
                      Py_ssize_t rows, Py_ssize_t cols, Py_ssize_t step, double[:, ::1] out):
     """The Euclidean distance transform (as ``scipy.ndimage.distance_transform_edt``: from each
@@ -1879,12 +1918,11 @@ def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, con
     Separable and exact, without drawing the mask: per row, the runs of inside pixels from its
     crossings, and the distance h along the row from each sampled column to the nearest pixel
     outside; per sampled column, the lower envelope of the parabolas ``(x - r)^2 + h_r^2`` over
-    the rows r (Felzenszwalb and Huttenlocher), its breakpoints compared as fractions of
-    integers, read at the sampled rows: the least squared distance as an integer, then one square
-    root (the transform's own values).  O(rows x sampled columns + crossings)."""
+    the rows r (:func:`_lower_envelope`), read at the sampled rows: the least squared distance
+    as an integer, then one square root (the transform's own values).  O(rows x sampled columns + crossings)."""
     cdef Py_ssize_t m = out.shape[0], n = out.shape[1], count = row.shape[0]
-    cdef Py_ssize_t r, c, i, j, k, x, p, u, at = 0, start, stop, winding, before, last
-    cdef long long far = (rows + cols) * (rows + cols) + 1, h, best
+    cdef Py_ssize_t r, c, i, j, k, at = 0, start, stop, winding, before, last
+    cdef long long far = (rows + cols) * (rows + cols) + 1
     cdef long long *across = <long long *> malloc(max(rows * n, 1) * sizeof(long long))
     cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(rows, 1) * sizeof(Py_ssize_t))
     cdef long long *height = <long long *> malloc(max(rows, 1) * sizeof(long long))
@@ -1915,40 +1953,14 @@ def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, con
             if winding != 0:
                 _run_distances(across, r, n, step, start, cols, cols, far)
         for j in range(n):
-            # the envelope: parabola vertex[k] (row) with height[k] = h^2 + row^2 is lowest from
-            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
-            # breakpoint of rows u < p lies at (height_p - height_u) / (2 (p - u))
-            k = -1
-            for r in range(rows):
-                h = across[r * n + j]
-                if h >= far:
-                    continue
-                h = h * h + <long long> r * r
-                while k >= 1:
-                    p, u = vertex[k], vertex[k - 1]
-                    # drop p when r's breakpoint with it comes no later than p's with u
-                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (r - p):
-                        k -= 1
-                    else:
-                        break
-                if k == 0 and h - height[0] <= 0:
-                    k = -1  # r is as low as vertex[0] from x = 0 on
-                k += 1
-                vertex[k] = r
-                height[k] = h
+            k = _lower_envelope(&across[j], rows, n, far, vertex, height)
             if k < 0:
                 for i in range(m):
                     out[i, j] = sqrt(<double> far)
                 continue
             last = 0
             for i in range(m):
-                x = i * step
-                # move right while the next parabola takes over at or before x
-                while last < k and height[last + 1] - height[last] <= 2 * x * (vertex[last + 1] - vertex[last]):
-                    last += 1
-                best = (<long long> (x - vertex[last]) * (x - vertex[last]) + height[last]
-                        - <long long> vertex[last] * vertex[last])
-                out[i, j] = sqrt(<double> best)
+                out[i, j] = sqrt(<double> _envelope_at(vertex, height, k, &last, i * step))
     free(across)
     free(vertex)
     free(height)
@@ -2350,11 +2362,11 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
 
     Separable and exact: per column the distance g to the nearest 0 in it (two passes down the
     rows, row by row), then per row the lower envelope of the parabolas ``(j - q)^2 + g_q^2``
-    over the columns q (Felzenszwalb and Huttenlocher), its breakpoints compared as integers.
+    over the columns q (:func:`_lower_envelope`).
     O(pixels); the peaks' pieces by a flood fill over the peaks alone."""
-    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, q, p, u, last, di, dj, at
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, p, last, di, dj, at
     cdef Py_ssize_t size = 0, capacity = 1024, pieces = 0
-    cdef long long far = m + 1, g, h, value
+    cdef long long far = m + 1, value
     cdef bint peak
     cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
     cdef long long *height = <long long *> malloc(max(n, 1) * sizeof(long long))
@@ -2379,32 +2391,10 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
                 if out[i + 1, j] + 1 < out[i, j]:
                     out[i, j] = out[i + 1, j] + 1
         for i in range(m):
-            # the envelope: parabola vertex[k] (column) with height[k] = g^2 + q^2 is lowest from
-            # its breakpoint with vertex[k - 1] to its breakpoint with vertex[k + 1]; the
-            # breakpoint of columns u < p lies at (height_p - height_u) / (2 (p - u))
-            k = -1
-            for q in range(n):
-                g = out[i, q]
-                if g >= far:
-                    continue
-                h = g * g + <long long> q * q
-                while k >= 1:
-                    p, u = vertex[k], vertex[k - 1]
-                    if (h - height[k]) * (p - u) <= (height[k] - height[k - 1]) * (q - p):
-                        k -= 1
-                    else:
-                        break
-                if k == 0 and h - height[0] <= 0:
-                    k = -1
-                k += 1
-                vertex[k] = q
-                height[k] = h
+            k = _lower_envelope(&out[i, 0], n, 1, far, vertex, height)
             last = 0
             for j in range(n):
-                while last < k and height[last + 1] - height[last] <= 2 * j * (vertex[last + 1] - vertex[last]):
-                    last += 1
-                out[i, j] = (<long long> (j - vertex[last]) * (j - vertex[last]) + height[last]
-                             - <long long> vertex[last] * vertex[last])
+                out[i, j] = _envelope_at(vertex, height, k, &last, j)
         # the peaks (flag 1), then their pieces (a piece's pixels flagged 2 as the fill reaches them)
         for i in range(m):
             for j in range(n):

@@ -8,6 +8,13 @@ per iteration: compare a run under ``OPENBLAS_NUM_THREADS=1``.  Every
 measurement runs in a fresh process, so peak RSS (``os.wait4``) is that run's alone.  The machine's
 load average is printed with the timings: compare ratios taken in the same run.
 
+The floor is one large fresh allocation, and first touches of fresh memory can dominate it: numpy
+asks the kernel for transparent huge pages (``madvise``), and where the kernel's THP ``defrag`` is
+``madvise`` and memory is fragmented, each fault compacts memory synchronously.  Measured at 4096^2
+on the 2-core machine (same run, idle otherwise): floor 1.33 s CPU with huge pages, 0.33 s without;
+our command line 4.60 s and 3.80 s, so 3.5x or 11.6x the floor.  ``--no-hugepages`` runs every
+child with ``NUMPY_MADVISE_HUGEPAGE=0``: report both.
+
 1. Cold start: wall time of ``python -m app segment disk.png -o DIR -q`` on a 256^2 noisy disk, and
    of a fresh process that reads the same PNG and runs ``skimage.segmentation.chan_vese`` with its
    defaults; interleaved, min of ``--repeat`` runs each.
@@ -157,7 +164,9 @@ def sizes(cache, sizes, max_iter):
     from activecontour import synthetic
     from activecontour.io.images import load_image
 
-    print(f"\nNoisy disk through the polygon backend, --max-iter {max_iter} ({load()})")
+    pages = "off" if os.environ.get("NUMPY_MADVISE_HUGEPAGE") == "0" else "on"
+    print(f"\nNoisy disk through the polygon backend, --max-iter {max_iter}, numpy's huge pages {pages} "
+          f"({load()})")
     print("floor: read + one float64 cumulative sum (in-process wall / CPU); CLI: whole process; library")
     print("x floor compares CPU seconds with the floor's CPU")
     header = (f"{'size':>6s} | {'floor s':>9s} | {'CLI s':>11s} {'x floor':>7s} {'RSS MB':>6s} {'iters':>5s} "
@@ -192,10 +201,14 @@ def main():
     parser.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096],
                         help="the image sizes (default 1024 2048 4096; --huge adds 8192)")
     parser.add_argument("--importtime", action="store_true")
+    parser.add_argument("--no-hugepages", action="store_true",
+                        help="run every child with NUMPY_MADVISE_HUGEPAGE=0 (see the module's docstring)")
     parser.add_argument("--cache", type=Path,
                         default=Path(tempfile.gettempdir()) / "activecontour-bench-scale")
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
+    if args.no_hugepages:
+        os.environ["NUMPY_MADVISE_HUGEPAGE"] = "0"
     if args.importtime:
         import_profile(args.cache)
     if not args.skip_cold:
