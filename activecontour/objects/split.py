@@ -4,8 +4,18 @@
 cut lines are shared by both parts, so the parts tile the object exactly and the label image stays
 the mask with ids.
 
-Three stages, each a model of how touching objects look, each cheap to skip:
+Three stages, each a model of how touching objects look, each cheap to skip, after a model of the
+whole clump:
 
+0. **Arcs grouped into ellipses** (:func:`_arc_parts`, the sub-pixel polygon, holes allowed):
+   the concave corners cut the outline into arcs, the arcs are grouped into ellipses (a group
+   joins while one ellipse fits it about as well as two, by the Bayesian information criterion)
+   and every pixel goes to the ellipse it lies deepest in, the rule by which overlapping
+   objects are drawn.  It decides alone where the ellipses explain the object -- its outline,
+   its pixels, overlaps two by two, borders that end at corners, parts of comparable size, few
+   places where three meet -- which a trefoil of three disks around one point (three corners,
+   no pair of them a cut that leaves ellipses) satisfies and a star, a flower, a bent rod or a
+   horse do not; elsewhere the three stages below decide as they did.
 1. **Necks** (:func:`_neck_parts`, pixels): the watershed of the distance to the outline (an
    inscribed-circle centre per part) whose parts are merged back while the neck between two is
    nearly as wide as the thinner part; a neck must be a waist (a concavity of the outline at both
@@ -30,7 +40,7 @@ Three stages, each a model of how touching objects look, each cheap to skip:
    one, or two separated by a dark seam, without any waist.
 
 Cost: an object whose outline lies within :data:`MIN_WAIST_DEPTH` of its convex hull has no
-waist, no neck and no concave corner: it skips stages 1 and 2 after one convex hull of its polygon
+waist, no neck and no concave corner: it skips stages 0 to 2 after one convex hull of its polygon
 (O(K log K) for K vertices), and stage 3 after a block-averaged look at its intensities
 (:func:`_block_spread`), so an image of convex objects pays almost nothing for the split.
 Past that gate, each stage stops as soon as a consequence of its own criterion shows that it
@@ -57,7 +67,10 @@ Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at
 split                                       touching ellipses  touching disks   singles cut
 ==========================================  =================  ===============  ============
 necks alone (stage 1, the split until now)  0.14 / 0.78        0.48 / 0.91      4 of 120
-necks, then concave corners (this module)   0.28 / 0.83        0.48 / 0.92      5 of 120
+necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      10 of 120
+arcs into ellipses first (this module)      0.28 / 0.85        0.53 / 0.93      10 of 120
+  on seeds 20-59                            0.50 / 0.92        0.49 / 0.92      12 of 240
+  (necks and corners: 0.50 / 0.90, 0.39 / 0.90, 12 of 240)
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -66,10 +79,15 @@ Otsu + distance watershed (the scikit-      0.42 / 0.78        0.72 / 0.96      
 image gallery pipeline, for reference)
 ==========================================  =================  ===============  ============
 
-The corner stage is what wins on elongated objects side by side; the necks keep the singles
-whole.  What is left is small and crowded: the worst seeds of both touching families have radii
-of 6-9 px at SNR 2-3 with 1-1.5 px of blur, where the converged contour rounds the contacts
-until neither a neck nor a corner is left (on those seeds the pipeline scores 0.42 and 0.72).
+(The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the same scenes'
+objects for every split.)  The corner stage is what wins on elongated objects side by side; the
+necks keep the singles whole.  What is left is crowded: the worst seeds of both touching
+families (ellipses 13, 17, 14: 0.28, 0.41, 0.50; disks 0, 6: 0.53, 0.60) hold connected pieces of
+5-8 objects, some of which own no arc of the outline (pressed inside the clump, or their contacts
+rounded away), so the arc ellipses cover 0.6-0.8 of the piece and the clump is left to the necks
+and corners, which cut off only some of its objects (the pipeline scores 0.68, 0.81, 0.78, 0.86,
+0.83 there).  The singles the split cuts (10 of 120) are cut by the necks and corners, as before
+the arc stage: bent rods and strokes.
 """
 
 from __future__ import annotations
@@ -189,6 +207,10 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if not concave and not contrast:
             result.append(curves)
             continue
+        bent = _bent(curves[0]) if concave else None
+        if concave and (clump := _arc_parts(curves, depth, labels.shape, bent)) is not None:
+            result.extend(clump)
+            continue
         low = np.array([box[0].start - 1, box[1].start - 1])
         # the outline's shape decides (holes filled, as scipy.ndimage.binary_fill_holes): the rim
         # around a hole is no neck
@@ -204,10 +226,10 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
                                     np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
         pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
         if concave:
-            # (an object its necks did not cut: its hull depth is known)
+            # (an object its necks did not cut: its hull depth and curvature are known)
             pieces = [cut for piece in pieces for cut in
                       ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
-                          piece[0], depth if piece[0] is curves[0] else None)])]
+                          piece[0], *((depth, bent) if piece[0] is curves[0] else ()))])]
         result.extend(pieces)
     return result
 
@@ -931,7 +953,7 @@ ELLIPSE_SOLIDITY = 0.9
 EXPLAINED_GAIN = 0.5
 
 
-def _corner_parts(outline, depth=None):
+def _corner_parts(outline, depth=None, bent=None):
     """The parts of a polygon (an outer boundary without holes) cut at its concave corners, as
     polygons that share their cut lines (each cut joins two vertices of the outline).
 
@@ -939,14 +961,14 @@ def _corner_parts(outline, depth=None):
     other, or one corner and the outline across, :func:`_cuts`) that are necks (``CUT_NECK``) and
     lie inside the part are ordered by their neck ratio; of the first ``CUT_OPTIONS``, the one
     whose two sides are fitted best by an ellipse each is made and its sides cut in turn.  A cut
-    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth``: the
-    outline's :func:`_hull_depth`, when it is known.
+    is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth`` and
+    ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
     """
     import shapely
 
     if _uncuttable(signed_area(outline), False):
         return [outline]
-    corners, kappa, normals = _concave_corners(outline, depth)
+    corners, kappa, normals = _concave_corners(outline, depth, bent=bent)
     if len(corners) == 0:
         return [outline]
     spacing = edge_lengths(outline).mean()
@@ -1025,17 +1047,9 @@ def _uncuttable(area, good):
     return (good and area > 0) or area < (1 - 1e-9) * 2 * np.pi * MIN_SPLIT_RADIUS**2
 
 
-def _concave_corners(outline, depth=None):
-    """The vertices at the concave corners of a polygon, its smoothed curvature and its smoothed
-    outward unit normals.
-
-    The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
-    curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
-    maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
-    ``CORNER_TURN`` and it dips ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``:
-    :func:`_hull_depth`, measured here unless given, and only once a stretch turns enough); the
-    corner is its vertex of most negative curvature.
-    """
+def _bent(outline):
+    """A polygon's curvature averaged along the arc, its smoothed outward unit normals and the
+    arc length each vertex stands for (:func:`_concave_corners`)."""
     h = edge_lengths(outline)
     ds = 0.5 * (h + np.roll(h, 1))  # the arc length each vertex stands for
     width = CORNER_SMOOTHING / h.mean()
@@ -1044,6 +1058,23 @@ def _concave_corners(outline, depth=None):
     kappa = smooth[:, 0] / smooth[:, 1]
     normals = np.ascontiguousarray(smooth[:, 2:])
     normals /= np.maximum(np.hypot(normals[:, 0], normals[:, 1]), 1e-12)[:, None]
+    return kappa, normals, ds
+
+
+def _concave_corners(outline, depth=None, turn=CORNER_TURN, bent=None):
+    """The vertices at the concave corners of a polygon, its smoothed curvature and its smoothed
+    outward unit normals.
+
+    The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
+    curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
+    maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
+    ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_parts`) and it dips
+    ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``: :func:`_hull_depth`, measured here
+    unless given, and only once a stretch turns enough); the corner is its vertex of most negative
+    curvature.  ``bent``: the outline's :func:`_bent`, when it is known (the arc stage and the
+    corner stage look at the same outline).
+    """
+    kappa, normals, ds = _bent(outline) if bent is None else bent
     concave = kappa < 0
     if concave.all() or not concave.any():
         return np.zeros(0, dtype=int), kappa, normals
@@ -1053,8 +1084,7 @@ def _concave_corners(outline, depth=None):
     corners = []
     for start, stop in zip(np.flatnonzero(steps == 1), np.flatnonzero(steps == -1), strict=True):
         stretch = order[start:stop]
-        turn = -np.sum(kappa[stretch] * ds[stretch])
-        if np.degrees(turn) < CORNER_TURN:
+        if np.degrees(-np.sum(kappa[stretch] * ds[stretch])) < turn:
             continue
         depth = _hull_depth(outline) if depth is None else depth
         if depth[stretch].max() >= MIN_WAIST_DEPTH:
@@ -1235,3 +1265,290 @@ def _explained(part, fit, region):
     if 1 - shapely.intersection(shape, region).area / shape.area > ELLIPSE_OUTSIDE:
         return area, False
     return area, area >= ELLIPSE_SOLIDITY * hull_area(part)
+
+
+# ---- stage 2, first: the outline's arcs grouped into ellipses -----------------------------------
+
+#: :func:`_arc_parts` cuts the outline into arcs at concave stretches that turn by this many
+#: degrees (and dip ``MIN_WAIST_DEPTH`` inside the hull): lower than ``CORNER_TURN``, since a
+#: stretch of noise only cuts an arc in two that the grouping joins again, while a contact whose
+#: corner the converged contour rounded below ``CORNER_TURN`` is still found.
+ARC_CORNER_TURN = 15.0
+#: Each arc loses this much (pixels of arc length) at both ends (the rounding of the corner is
+#: neither object's outline) and is fitted only when this much of it is left.
+ARC_TRIM, ARC_MIN_LENGTH = 1.5, 4.0
+#: An outline of more arcs than this is no clump of ellipses (a clump of ``FAMILY_CLUMP`` = 8
+#: objects has at most 14 contacts, 28 corners) but a ragged region of a texture: not grouped (the
+#: grouping costs the square of the arcs in ellipse fits).
+ARC_MAX = 32
+#: Two groups of arcs join when one ellipse fits their union as well as two fit them apart, up to
+#: the Bayesian information criterion of the five parameters saved: the squared Sampson distances
+#: grow by at most ``5 ln n`` noise variances for n points, the noise variance being the two fits'
+#: own, at least this (pixels) squared.
+ARC_NOISE = 0.2
+#: An arc group's ellipse is an object's when its rms Sampson distance is within
+#: ``ARC_RMS[0] + ARC_RMS[1]`` times its radius (pixels), its aspect at most ``MAX_PART_ASPECT``,
+#: its radius at least ``MIN_SPLIT_RADIUS`` and at most this fraction of it lies outside the
+#: object (the rounded contacts bulge it a little).
+ARC_RMS, ARC_OUTSIDE = (0.5, 0.04), 0.10
+#: The ellipses explain the object when they cover this fraction of its pixels ...
+ARC_COVER = 0.9
+#: ... and this fraction of the outline's vertices lies within ``ARC_GAP`` pixels of one
+#: (normalised radius off 1 by ``ARC_GAP`` over the ellipse's radius) ...
+ARC_GAP = 2.0
+#: ... at most this fraction of its pixels lies in three ellipses (objects pressed together overlap
+#: two by two; the arms of a star, fitted each by an ellipse, all reach into its centre) ...
+ARC_TRIPLE = 0.02
+#: Two ellipses may overlap by this fraction of the smaller one (two disks overlapping by a third
+#: of their diameter, the families' most, share 0.22 of a disk; a small disk pressed as deep into
+#: a large object, 0.29); of two that overlap more, the one that fits its arcs worse is dropped
+#: (an ellipse across a star's centre, through two opposite arms).
+ARC_OVERLAP = 0.3
+#: ... every point where the border between two parts meets the outline lies within this many
+#: pixels of a corner that turns by ``ARC_END_TURN`` (a waist at both ends: a bent rod or a
+#: banana cut across is not two objects), no point has four parts within that reach (a star's
+#: arms all meet at its centre; objects pressed together meet two or three at a point) ...
+ARC_REACH = 3.0
+#: The corners a border between two parts may end at turn by this many degrees: more than
+#: ``ARC_CORNER_TURN``, which only cuts the outline into arcs (a wiggle of the noise cuts one arc
+#: in two that the grouping joins again), since a border is drawn where two objects cross.  A
+#: bent rod has one concave corner, inside its bend; a wiggle of 15-20 degrees on the outside of
+#: the bend was the other end of a border cutting it into two ellipses (the singles family,
+#: seed 7: 17 degrees), while the contacts of the touching families, the rounded ones too, turn
+#: by more (seeds 0-59 split the same with 15 and with 20 degrees).
+ARC_END_TURN = 20.0
+#: ... and at most this many places have three parts within it (a chain or a tree of objects
+#: has none, a trefoil one; the petals of a flower fitted around the part that takes its centre
+#: make one with each two neighbours) ...
+ARC_TRIPLE_POINTS = 2
+#: ... and every part is at least this fraction of the largest: objects pressed into a clump are of
+#: comparable size (the families' radii differ by 1.5 at most, areas by 2.25), while the petals of
+#: a flower or the arms of a star are small beside the part that takes its centre.
+ARC_SIZE_RATIO = 0.25
+
+
+def _arc_parts(curves, depth=None, extent=None, bent=None):
+    """The parts of an object (outer boundary, then holes: a ring of objects around a gap) as a
+    clump of overlapping ellipses (lists of curves), or None when no such clump explains it.
+    ``extent``: the label image's shape, whose edge cuts an object that leaves it; ``depth`` and
+    ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
+
+    The model-based split of overlapping convex objects (nuclei): where two convex objects
+    overlap, their outlines cross at a concave corner (negative curvature kappa of (3.45), turning
+    by ``ARC_CORNER_TURN``, :func:`_concave_corners`), so the corners cut the outline into arcs
+    each of which belongs to one object, and an object of a clump owns one arc (at the clump's
+    end) or several (one on each side, in a chain).  Each arc is fitted with an ellipse
+    (:func:`_ellipse_fits`); arcs are joined, the pair that costs least first, while one ellipse
+    explains their union as well as two do (``ARC_NOISE``) or one of them alone is no object's
+    ellipse (``ARC_RMS``, ``ARC_OUTSIDE``).  Each pixel goes to the ellipse it lies deepest in
+    (its normalised radius least: the truth's rule of :func:`activecontour.synthetic.
+    render_instances` for overlaps), and the cells are cut out of the polygon (:func:`_cut`).
+
+    Of two ellipses that overlap by more than ``ARC_OVERLAP``, the worse fit is dropped.  The clump
+    stands when the ellipses' boundaries explain the outline (``ARC_COVER`` of its vertices within
+    ``ARC_GAP``), the ellipses cover ``ARC_COVER`` of the object and three of them at most
+    ``ARC_TRIPLE`` of it, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
+    ``ARC_SIZE_RATIO`` of the largest part, every border between two parts reaches the outline at
+    corners only (of ``ARC_END_TURN``), no four parts meet and at most ``ARC_TRIPLE_POINTS`` places have three
+    (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise the necks and the corner cuts decide, as
+    for an object without this stage.  Unlike a cut between two corners, the grouping
+    splits three objects pressed around one point (a trefoil has three corners, one per contact,
+    and three arcs) and takes a corner whose partner was rounded away as the end of two arcs.
+
+    An object that reaches the edge of the image (of the crop of a pointed run,
+    ``roi="init"``, where a touching neighbour is cut off by the neighbourhood) is left to the
+    stages below: part of its outline is that edge, no object's boundary, so the ellipse of its
+    cut-off arcs is not the object's (``tests/imaging/test_pointed.py``: a disk of radius 13 cut
+    in half got an ellipse of 13.5 by 8.4 px, and the touching disk's part took three pixels of
+    it at the ends of the contact, outside the lens the two share).
+    """
+    import shapely
+
+    outline = curves[0]
+    area = signed_area(outline)
+    if area < 2 * np.pi * MIN_SPLIT_RADIUS**2:
+        return None
+    if extent is not None and (outline.min() <= -0.5
+                               or (outline.max(axis=0) >= np.subtract(extent, 0.5)).any()):
+        return None
+    bent = _bent(outline) if bent is None else bent
+    corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN, bent)
+    if len(corners) < 2:
+        return None
+    arcs = _arcs(outline, corners)
+    if not 2 <= len(arcs) <= ARC_MAX:
+        return None
+    region = shapely.Polygon(outline)
+    groups = _grouped_arcs(outline, arcs, region)
+    # of two ellipses that overlap too much, the one that fits its arcs worse is no object's
+    fitted = sorted(((fit[1] / sum(arcs[k].size for k in group), ellipse) for group, fit, ellipse in groups
+                     if ellipse is not None), key=lambda entry: entry[0])
+    ellipses, shapes = [], []
+    for _, ellipse in fitted:
+        shape = _ellipse_polygon(ellipse)
+        if all(shapely.intersection(shape, other).area <= ARC_OVERLAP * min(shape.area, other.area)
+               for other in shapes):
+            ellipses.append(ellipse)
+            shapes.append(shape)
+    if len(ellipses) < 2:
+        return None
+    low = np.floor(outline.min(axis=0)).astype(int) - 1
+    window = tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2)
+    inside = rasterize([curve - low for curve in curves], window)
+    points = np.argwhere(inside)
+    depth_in = np.array([_normalised_radius(ellipse, points + low) for ellipse in ellipses])
+    covered = np.count_nonzero(depth_in <= 1, axis=0)
+    # the outline is the ellipses' visible boundary: each vertex near one (an ellipse dropped for
+    # its overlap, or never found, leaves its arc unexplained)
+    gap = np.min([np.abs(_normalised_radius(ellipse, outline) - 1) * np.sqrt(np.prod(ellipse[1]))
+                  for ellipse in ellipses], axis=0)
+    if (np.count_nonzero(gap <= ARC_GAP) < ARC_COVER * len(outline)
+            or np.count_nonzero(covered) < ARC_COVER * len(points)
+            or np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)):
+        return None
+    parts = np.zeros(inside.shape, dtype=np.int32)
+    parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
+    outer = rasterize([outline - low], window)
+    sizes = np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:]
+    ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
+    if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
+            or not _meet_at_corners(parts, outer, outline[ends] - low, len(ellipses))):
+        return None
+    pieces = _cut(curves, parts, low)
+    if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):
+        return None  # a cell in pieces, or with a hole: no clump of ellipses
+    return pieces
+
+
+def _arcs(outline, corners):
+    """The vertices (indices) of the outline between each two consecutive corners, less
+    ``ARC_TRIM`` of arc length at both ends; arcs shorter than ``ARC_MIN_LENGTH`` left out."""
+    h = edge_lengths(outline)
+    along = np.concatenate([[0.0], np.cumsum(h)])
+    total, count = along[-1], len(outline)
+    arcs = []
+    for a, b in zip(corners, np.roll(corners, -1), strict=True):
+        index = np.arange(a, b if b > a else b + count) % count
+        length = (along[b] - along[a]) % total
+        position = (along[index] - along[a]) % total
+        keep = index[(position >= ARC_TRIM) & (position <= length - ARC_TRIM)]
+        if length - 2 * ARC_TRIM >= ARC_MIN_LENGTH and keep.size >= 6:  # (5 parameters)
+            arcs.append(keep)
+    return arcs
+
+
+def _grouped_arcs(outline, arcs, region):
+    """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
+    The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
+    intersection, the dearest test) only when its cost makes it the pair to join, and a single
+    arc's only when it is left alone (the joining reads the fits)."""
+    def points(group):
+        return outline[np.concatenate([arcs[i] for i in group])]
+
+    singles = [(i,) for i in range(len(arcs))]
+    groups = [(group, fit, None) for group, fit in zip(singles, _ellipse_fits([points(g) for g in singles]),
+                                                       strict=True)]
+    joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
+    while len(groups) > 1:
+        pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
+        new = [(groups[i][0], groups[j][0]) for i, j in pairs if (groups[i][0], groups[j][0]) not in joined]
+        for key, fit in zip(new, _ellipse_fits([points(a + b) for a, b in new]), strict=True):
+            joined[key] = [fit, None]
+        options = []
+        for i, j in pairs:
+            fit, ellipse = joined[(groups[i][0], groups[j][0])]
+            if ellipse is False or fit[0] is None:
+                continue
+            # the excess of the union's squared distances over the two fits', in noise variances
+            # (a group whose fit failed joins whatever it costs, the cheapest first)
+            apart = groups[i][1][1] + groups[j][1][1]
+            count = sum(arcs[k].size for k in groups[i][0] + groups[j][0])
+            if np.isfinite(apart):
+                noise = max(apart / max(count - 10, 1), ARC_NOISE**2)
+                cost = (fit[1] - apart) / noise
+                if cost > 5 * np.log(count):
+                    continue
+            else:
+                cost = fit[1] / count - 1e12
+            options.append((cost, len(options), i, j))
+        best = None
+        for _, _, i, j in sorted(options):
+            key = (groups[i][0], groups[j][0])
+            entry = joined[key]
+            if entry[1] is None:
+                entry[1] = _arc_ellipse(points(key[0] + key[1]), entry[0], region)
+                entry[1] = False if entry[1] is None else entry[1]
+            if entry[1] is not False:
+                best = (i, j, (key[0] + key[1], entry[0], entry[1]))
+                break
+        if best is None:
+            break
+        i, j, union = best
+        groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
+    return [(group, fit, _arc_ellipse(points(group), fit, region) if len(group) == 1 else ellipse)
+            for group, fit, ellipse in groups]
+
+
+def _arc_ellipse(points, fit, region):
+    """The ellipse (centre, semi-axes, axes) of an arc group's fit when it is an object's
+    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS`` and ``ARC_OUTSIDE`` of the object's
+    ``region``, a shapely polygon), else None."""
+    import shapely
+
+    conic, residual = fit
+    ellipse = None if conic is None else _ellipse_axes(conic)
+    if ellipse is None:
+        return None
+    semi_axes = ellipse[1]
+    radius = np.sqrt(semi_axes.prod())
+    if (radius < MIN_SPLIT_RADIUS or semi_axes.max() > MAX_PART_ASPECT * semi_axes.min()
+            or np.sqrt(residual / len(points)) > ARC_RMS[0] + ARC_RMS[1] * radius):
+        return None
+    shape = _ellipse_polygon(ellipse)
+    if 1 - shapely.intersection(shape, region).area / shape.area > ARC_OUTSIDE:
+        return None
+    return ellipse
+
+
+def _ellipse_polygon(ellipse, count=48):
+    """An ellipse (centre, semi-axes, axes as columns) as a shapely polygon of ``count`` vertices."""
+    import shapely
+
+    centre, semi_axes, axes = ellipse
+    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    return shapely.Polygon(centre + np.column_stack([semi_axes[0] * np.cos(angle),
+                                                     semi_axes[1] * np.sin(angle)]) @ axes.T)
+
+
+def _normalised_radius(ellipse, points):
+    """Each point's radius in the ellipse's normalised frame (1 on the ellipse)."""
+    centre, semi_axes, axes = ellipse
+    local = (points - centre) @ axes
+    return np.hypot(local[:, 0] / semi_axes[0], local[:, 1] / semi_axes[1])
+
+
+def _meet_at_corners(parts, inside, corners, count):
+    """Whether the borders between the pixel parts reach the object's edge (``inside``: the
+    pixels within its outer boundary) within ``ARC_REACH`` of a corner (window coordinates) only,
+    no pixel has four parts within that reach and at most ``ARC_TRIPLE_POINTS`` places have
+    three."""
+    import scipy.ndimage
+
+    edge = inside & ~scipy.ndimage.binary_erosion(inside)
+    border = np.zeros_like(inside)
+    for axis in (0, 1):
+        for shift in (1, -1):
+            other = np.roll(parts, shift, axis=axis)
+            border |= (other != parts) & (other > 0) & (parts > 0)
+    ends = np.argwhere(edge & border)
+    if ends.size:
+        apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
+        if apart.min(axis=1).max() > ARC_REACH:
+            return False
+    if count < 3:
+        return True
+    reach = int(ARC_REACH)
+    rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    disk = rows**2 + cols**2 <= ARC_REACH**2
+    near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8) for k in range(1, count + 1))
+    return bool(near.max() < 4 and scipy.ndimage.label(near >= 3)[1] <= ARC_TRIPLE_POINTS)

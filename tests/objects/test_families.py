@@ -11,6 +11,7 @@ from activecontour.geometry.curve import orient
 from activecontour.objects.metrics import match_instances
 from activecontour.objects.split import (
     MIN_WAIST_DEPTH,
+    _arc_parts,
     _block_spread,
     _concave_corners,
     _corner_parts,
@@ -79,7 +80,9 @@ def test_touching_objects_are_split_from_the_level_set_too():
     assert match_instances(ac.segment(image, backend="levelset").labels, truth)["f1"] >= 0.9
 
 
-@pytest.mark.parametrize("seed", [1, 4, 5])
+# (seed 7: a rod bent sharply, whose border between two ellipses ended at a wiggle of 17 degrees
+# outside the bend, :data:`activecontour.objects.split.ARC_END_TURN`)
+@pytest.mark.parametrize("seed", [1, 4, 5, 7])
 def test_singles_are_never_split(seed):
     image, _ = synthetic.singles(seed)
     pieces = ac.segment(image, separate=False).labels
@@ -145,6 +148,92 @@ def _star(radius, amplitude, arms, n=800):
 ], ids=["ellipse aspect 3", "rod bent 60", "rod bent 120", "star 5", "star 4"])
 def test_a_single_shape_is_not_cut_at_its_corners(outline):
     assert len(_corner_parts(outline)) == 1
+
+
+def _resampled(outline, spacing=1.0):
+    """The closed polygon with vertices every ``spacing`` px of arc length (a converged contour's)."""
+    closed = np.vstack([outline, outline[:1]])
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(closed, axis=0).T))])
+    s = np.arange(0.0, along[-1], spacing)
+    return np.column_stack([np.interp(s, along, closed[:, 0]), np.interp(s, along, closed[:, 1])])
+
+
+def _disks_parts(centres, radius):
+    """The union of disks as a polygon, its parts by :func:`_arc_parts` and each disk's expected
+    part: the disk less half of each lens it shares (pixels of an overlap go to the disk they lie
+    deepest in, which for equal disks is the nearer centre)."""
+    disks = [shapely.Point(c).buffer(radius, quad_segs=256) for c in centres]
+    outline = _resampled(_union(*[np.asarray(d.exterior.coords)[:-1] for d in disks]))
+    lens = [[d.intersection(e).area if d is not e else 0.0 for e in disks] for d in disks]
+    expected = [np.pi * radius**2 - sum(row) / 2 for row in lens]
+    return outline, _arc_parts([outline]), expected
+
+
+def test_three_disks_around_one_point_are_three_objects():
+    # three disks of radius 12, each two overlapping by a sixth of the radius: three concave
+    # corners, one per contact, and three arcs, one per disk; no cut between two corners leaves two
+    # ellipses (one side holds two disks), so the corner stage alone cannot make three parts
+    r = 12.0
+    side = 2 * r - r / 6
+    centres = [(60.0, 60.0), (60.0, 60.0 + side), (60.0 + side * np.sqrt(3) / 2, 60.0 + side / 2)]
+    outline, parts, expected = _disks_parts(centres, r)
+    assert len(_corner_parts(outline)) < 3
+    assert parts is not None and len(parts) == 3
+    polygons = [shapely.Polygon(part[0]) for part in parts]
+    found = [next(p for p in polygons if p.contains(shapely.Point(c))) for c in centres]
+    # the pixel cells cut the polygon along a staircase straightened to a pixel: the area of a part
+    # is the expected within its border's length times a pixel
+    for polygon, area in zip(found, expected, strict=True):
+        assert polygon.area == pytest.approx(area, abs=2 * r)
+    # they tile it (:func:`_cut` keeps no sliver under a pixel apart from its piece)
+    assert sum(p.area for p in polygons) == pytest.approx(shapely.Polygon(outline).area, abs=1.0)
+
+
+def test_a_chain_of_three_disks_gives_the_middle_one_both_its_arcs():
+    # the middle disk owns two arcs, one on each side: the grouping joins them into one circle
+    r = 10.0
+    centres = [(50.0, 50.0), (50.0, 50.0 + 2 * r - r / 2), (50.0, 50.0 + 4 * r - r)]
+    outline, parts, expected = _disks_parts(centres, r)
+    assert parts is not None and len(parts) == 3
+    polygons = [shapely.Polygon(p[0]) for p in parts]
+    areas = [next(p for p in polygons if p.contains(shapely.Point(c))).area for c in centres]
+    np.testing.assert_allclose(areas, expected, atol=2 * r)
+
+
+def test_a_clump_that_reaches_the_image_edge_is_left_to_the_necks_and_corners():
+    # two disks overlapping by a sixth of the radius: a clump of two ellipses inside the image,
+    # none where the image ends at its last column (an object there may be cut off by the edge,
+    # whose straight piece of outline is no object's)
+    r = 12.0
+    outline, parts, _ = _disks_parts([(40.0, 30.0), (40.0, 30.0 + 2 * r - r / 6)], r)
+    columns = int(np.floor(outline[:, 1].max() + 0.5))  # the image's edge at column columns - 0.5
+    assert len(_arc_parts([outline], extent=(100, columns + 1))) == 2
+    assert _arc_parts([outline], extent=(100, columns)) is None
+    assert _arc_parts([outline - [0.0, outline[:, 1].min() + 0.5]], extent=(100, 100)) is None
+
+
+def _flower(radius, petals, length, width):
+    """Petal ellipses around a disk: one shape, the centre larger than each petal."""
+    shapes = [shapely.Point(60.0, 60.0).buffer(radius, quad_segs=128)]
+    for k in range(petals):
+        angle = 2 * np.pi * k / petals
+        centre = 60.0 + (radius + length / 2) * np.array([np.cos(angle), np.sin(angle)])
+        shapes.append(shapely.Polygon(_ellipse(centre, length, width, -angle)))
+    return orient(np.asarray(shapely.union_all(shapes).exterior.coords)[:-1])
+
+
+@pytest.mark.parametrize("outline", [
+    _ellipse((60.0, 60.0), 36.0, 12.0, 0.4),  # aspect 3
+    _capsule_v(14.0, 40.0, np.pi / 3),
+    _capsule_v(10.0, 30.0, 2 * np.pi / 3),
+    _star(30.0, 0.35, 5),
+    _star(25.0, 0.25, 4),
+    _star(30.0, 0.3, 7),
+    _star(20.0, 0.2, 6),
+    _flower(12.0, 6, 8.0, 5.0),
+], ids=["ellipse aspect 3", "rod bent 60", "rod bent 120", "star 5", "star 4", "star 7", "star 6", "flower"])
+def test_a_single_shape_is_no_clump_of_ellipses(outline):
+    assert _arc_parts([_resampled(outline)]) is None
 
 
 def test_the_ellipse_fit_is_exact_on_an_ellipse():
