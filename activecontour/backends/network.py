@@ -815,7 +815,36 @@ def segment_network(model, init, params, *, n_regions, max_num_iter, tol, callba
         return _result(model, params, network, network.nodes, n_regions, energies, start.n_iter, 2)
     flow = _Flow(network, model, params, n_regions, energies)
     status, n_iter = flow.run(max_num_iter, tol, callback, start.n_iter)
-    return _result(model, params, flow.network, flow.nodes, n_regions, flow.energies, n_iter, status)
+    network = _without_slivers(flow.network, flow.nodes)
+    return _result(model, params, network, flow.nodes, n_regions, flow.energies, n_iter, status)
+
+
+#: A region's loop is a sliver, no region, when it encloses at most this times the square of its
+#: length (the common evaluator refuses a curve under 1e-12 of it as degenerate).
+_SLIVER = 1e-9
+
+
+def _without_slivers(network, nodes):
+    """The network without the loops of region boundary that enclose no area (``_SLIVER``): three
+    nearly collinear nodes that the last step left between two regions, through a pinch node,
+    would be a degenerate contour of both, which no result may hold.  A loop's segments all have
+    the same two sides, so leaving them out merges the sliver (about 1e-12 px^2) into the region
+    around it and takes its length out of the length term."""
+    keep = np.ones(len(network.start), dtype=bool)
+    n_regions = int(max(network.inner.max(), network.outer.max())) + 1
+    for region in range(n_regions):
+        forward = np.flatnonzero((network.inner == region) & (network.outer != region))
+        backward = np.flatnonzero((network.outer == region) & (network.inner != region))
+        segments = np.concatenate([forward, backward])
+        starts = np.concatenate([network.start[forward], network.end[backward]])
+        ends = np.concatenate([network.end[forward], network.start[backward]])
+        for loop in chain_loops(starts, ends, len(nodes)):
+            a, b = nodes[starts[loop]], nodes[ends[loop]]
+            area = 0.5 * abs(float(np.sum(a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1])))
+            perimeter = float(np.hypot(*(b - a).T).sum())
+            if area <= _SLIVER * max(1.0, perimeter) ** 2:
+                keep[segments[loop]] = False
+    return network if keep.all() else network.subset(keep, nodes)
 
 
 class _Flow:

@@ -524,3 +524,20 @@ def test_interface_pieces_are_the_connected_components_at_plain_nodes():
         np.testing.assert_array_equal(found[3], closed)
         checked += count > len(closed) > 0
     assert checked >= 3
+
+
+def test_no_class_contour_is_a_sliver_through_a_pinch():
+    # this crop's last step left three nearly collinear nodes between regions 0 and 2, through a
+    # node of degree 4 (a pinch): a loop of area 4e-12 px^2, a degenerate contour of both regions
+    # that the common evaluator refuses
+    import skimage.data
+
+    from activecontour.geometry.curve import as_curve
+
+    crop = skimage.data.astronaut()[127:235, 256:363]
+    res = ac.segment(crop, n_regions=3, mu="auto", color="vector")
+    for k, curves in enumerate(res.class_contours):
+        for j, curve in enumerate(curves):
+            as_curve(curve, name=f"class_contours[{k}][{j}]")  # raises for a degenerate curve
+    assert res.energy == pytest.approx(
+        ac.chan_vese_energy(crop, regions=res.class_contours, mu=res.mu, color="vector"), rel=1e-9)
