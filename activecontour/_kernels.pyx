@@ -2069,10 +2069,12 @@ cdef inline long long _envelope_at(const Py_ssize_t *vertex, const long long *he
                                    Py_ssize_t *last, Py_ssize_t x) noexcept nogil:
     """The envelope of :func:`_lower_envelope` (last index ``k``) at ``x``, the squared distance;
     ``last`` is the parabola that was lowest at the previous, smaller x (start at 0)."""
-    while last[0] < k and height[last[0] + 1] - height[last[0]] <= 2 * x * (vertex[last[0] + 1] - vertex[last[0]]):
-        last[0] += 1
-    return (<long long> (x - vertex[last[0]]) * (x - vertex[last[0]]) + height[last[0]]
-            - <long long> vertex[last[0]] * vertex[last[0]])
+    cdef Py_ssize_t p = last[0]
+    # move right while the next parabola takes over at or before x
+    while p < k and height[p + 1] - height[p] <= 2 * x * (vertex[p + 1] - vertex[p]):
+        p += 1
+    last[0] = p
+    return <long long> (x - vertex[p]) * (x - vertex[p]) + height[p] - <long long> vertex[p] * vertex[p]
 
 
 def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, const int[::1] direction,
@@ -2089,7 +2091,8 @@ def sampled_distance(const Py_ssize_t[::1] row, const Py_ssize_t[::1] first, con
     crossings, and the distance h along the row from each sampled column to the nearest pixel
     outside; per sampled column, the lower envelope of the parabolas ``(x - r)^2 + h_r^2`` over
     the rows r (:func:`_lower_envelope`), read at the sampled rows: the least squared distance
-    as an integer, then one square root (the transform's own values).  O(rows x sampled columns + crossings)."""
+    as an integer, then one square root (the transform's own values).  O(rows x sampled columns
+    + crossings)."""
     cdef Py_ssize_t m = out.shape[0], n = out.shape[1], count = row.shape[0]
     cdef Py_ssize_t r, c, i, j, k, at = 0, start, stop, winding, before, last
     cdef long long far = (rows + cols) * (rows + cols) + 1
