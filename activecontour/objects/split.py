@@ -230,8 +230,20 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
             pieces = [cut for piece in pieces for cut in
                       ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
                           piece[0], *((depth, bent) if piece[0] is curves[0] else ()))])]
+        if len(pieces) > 1:
+            # a piece cut off may be a smaller clump, which its own arcs explain (a convex piece
+            # has no concave corner: one convex hull)
+            pieces = [part for piece in pieces for part in _clump_parts(piece, labels.shape)]
         result.extend(pieces)
     return result
+
+
+def _clump_parts(curves, extent):
+    """A piece that the necks, the contrast or the corners cut off an object, as the arc stage
+    splits it (:func:`_arc_parts`; the piece alone when it does not, or when its outline lies
+    within ``MIN_WAIST_DEPTH`` of its hull: a convex piece has no concave corner)."""
+    depth = _hull_depth(curves[0])
+    return (depth.max() >= MIN_WAIST_DEPTH and _arc_parts(curves, depth, extent)) or [curves]
 
 
 def _hull_depth(outline):
@@ -1541,6 +1553,8 @@ def _meet_at_corners(parts, inside, corners, count):
             other = np.roll(parts, shift, axis=axis)
             border |= (other != parts) & (other > 0) & (parts > 0)
     ends = np.argwhere(edge & border)
+    if ends.size and not len(corners):
+        return False  # borders reach the edge, and no corner turns enough to end one
     if ends.size:
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         if apart.min(axis=1).max() > ARC_REACH:
