@@ -238,7 +238,7 @@ def test_a_piece_cut_off_goes_through_the_arc_stage_unless_it_is_convex(monkeypa
     assert sorted(shapely.Polygon(p[0]).area for p in clump) == pytest.approx(
         sorted(shapely.Polygon(p[0]).area for p in parts), abs=1e-9)
     # a convex piece is itself, without the arc stage
-    monkeypatch.setattr(split, "_arc_parts", lambda *args: pytest.fail("a convex piece reached the arc stage"))
+    monkeypatch.setattr(split, "_arc_parts", lambda *args: pytest.fail("a convex piece reached the arcs"))
     disk = _ellipse((60.0, 60.0), 20.0, 12.0, 0.3)
     assert split._clump_parts([disk], (200, 200)) == [[disk]]
 
