@@ -25,7 +25,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   solve and the bounds of an iteration's steps);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
-  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
+  :func:`divide_spectrum`, :func:`block_means`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
   :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
   sides of phi, the front, the marching-squares segments of the zero set and their table, the
   narrow band's distances, the oriented soup of segments that the common evaluator scores by
@@ -1915,6 +1915,31 @@ cdef inline double _density(const double[:, ::1] values, Py_ssize_t p, double co
         else:
             f += linear[ch] * v
     return f
+
+
+def block_means(const float[:, ::1] a, Py_ssize_t k, float[:, ::1] out):
+    """``out[I, J]`` = the mean of ``a`` over the block of rows ``k I .. k I + k - 1`` and columns
+    ``k J .. k J + k - 1`` (cut at the edge), in one pass: the level set's coarse grid
+    (:meth:`activecontour.backends.levelset.scheme._Problem._far_flips`)."""
+    cdef Py_ssize_t m = a.shape[0], n = a.shape[1], block, i, j, bi, bj
+    cdef float rows_in, cols_in, total
+    out[:, :] = 0
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                bi = i // k
+                for bj in range(out.shape[1]):
+                    total = 0
+                    for j in range(k * bj, min(k * bj + k, n)):
+                        total += a[i, j]
+                    out[bi, bj] += total
+        PyErr_CheckSignals()
+    with nogil:
+        for bi in range(out.shape[0]):
+            rows_in = <float> (min(k * bi + k, m) - k * bi)
+            for bj in range(out.shape[1]):
+                cols_in = <float> (min(k * bj + k, n) - k * bj)
+                out[bi, bj] /= rows_in * cols_in
 
 
 def explicit_step(const float[::1] phi, const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n,

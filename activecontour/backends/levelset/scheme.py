@@ -11,6 +11,9 @@ from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
 
 _EXPLICIT = 0.25  # step (b) is explicit (stable, on the band alone) up to tau mu = 1/4
+_REACH = 8.0  # S's kernel decays as exp(-r / l), l = sqrt(tau mu): a box reaching 8 l beyond the band
+_BOX_SHARE = 0.5  # a box over more than this share of the image: the whole image
+_COARSE = 4  # the far field's test grid: blocks of 4 x 4 pixels
 
 
 def heaviside(phi, epsilon=1.0):
@@ -54,9 +57,7 @@ class _Problem:
         sample = (rows[:, None] * n + cols[None, :]).ravel()
         self.sample_values = self.values.reshape(m * n, -1)[sample]  # gathered once
         self.sample_wall = self._wall(sample)
-        # eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis, along each axis
-        self.wave_r = (4.0 * np.sin(np.pi * np.arange(m) / (2.0 * m)) ** 2).astype(np.float32)
-        self.wave_c = (4.0 * np.sin(np.pi * np.arange(n) / (2.0 * n)) ** 2).astype(np.float32)
+        self.wave_r, self.wave_c = _waves(m), _waves(n)
         self.scratch = _Scratch(self.shape)
         self._spare = []  # image-sized float32 arrays to reuse (a new one faults in every page)
 
@@ -183,7 +184,63 @@ class _Problem:
         form = self.params.load_form(*force)
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
                             tau, rhs)
-        return self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs
+        if self.params.mu <= 0:
+            return rhs
+        weight = tau * self.params.mu
+        box = self._box(state, weight)
+        if box is None or self._far_flips(state, rhs, weight, box):
+            return self._smooth(rhs, weight)
+        return self._box_smooth(state, rhs, weight, box)
+
+    def _box(self, state, weight):
+        """The rows and columns (two slices) on which step (a) is solved, or None: the whole image.
+
+        S's kernel decays as ``exp(-r / l)`` with ``l = sqrt(tau mu)``: beyond the band (where phi
+        is ``+-band``) the step changes phi near Gamma by less than ``exp(-_REACH)`` of the force's
+        jumps (~1e-4 px), so the band's bounding box widened by ``band + _REACH l`` (to a length the
+        DCT is fast on) is solved alone, with Neumann sides, when it is at most ``_BOX_SHARE`` of
+        the image.
+        """
+        if state.near_flat.size == 0:
+            return None
+        m, n = self.shape
+        reach = int(np.ceil(self.band + _REACH * np.sqrt(weight)))
+        flat = state.near_flat
+        first, last = divmod(int(flat.min()), n)[0], divmod(int(flat.max()), n)[0]
+        cols = flat % n
+        rows = _fast_span(first - reach, last + 1 + reach, m)
+        cols = _fast_span(int(cols.min()) - reach, int(cols.max()) + 1 + reach, n)
+        if (rows.stop - rows.start) * (cols.stop - cols.start) > _BOX_SHARE * m * n:
+            return None
+        return rows, cols
+
+    def _far_flips(self, state, rhs, weight, box):
+        """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
+        is ``+-band - tau S(f)``, a region far from Gamma flipping where the smoothed force
+        outweighs the band (a hole opening without a seed).  Tested on a grid coarser by
+        ``_COARSE`` (block means of ``phi - tau f``, S with the same length ``l``): a far block
+        whose value comes within half the band of zero sends the step to the whole image."""
+        m, n = self.shape
+        k = _COARSE
+        coarse = np.empty((-(-m // k), -(-n // k)), dtype=np.float32)
+        _kernels.block_means(rhs, k, coarse)
+        coarse = self._smooth(coarse, weight / (k * k), _waves(coarse.shape[0]), _waves(coarse.shape[1]))
+        rows, cols = box
+        starts_r, starts_c = np.arange(0, m, k), np.arange(0, n, k)
+        far = ((starts_r + k <= rows.start) | (starts_r >= rows.stop))[:, None] \
+            | ((starts_c + k <= cols.start) | (starts_c >= cols.stop))[None, :]
+        held = np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
+        return bool(np.any(held[far] < 0.5 * self.band))
+
+    def _box_smooth(self, state, rhs, weight, box):
+        """Step (a) solved on ``box`` (:meth:`_box`), phi held beyond it (written into ``rhs``)."""
+        rows, cols = box
+        inner = np.ascontiguousarray(rhs[rows, cols])
+        rhs[rows, cols] = self._smooth(inner, weight, _waves(inner.shape[0]), _waves(inner.shape[1]))
+        phi = state.phi
+        rhs[:rows.start], rhs[rows.stop:] = phi[:rows.start], phi[rows.stop:]
+        rhs[rows, :cols.start], rhs[rows, cols.stop:] = phi[rows, :cols.start], phi[rows, cols.stop:]
+        return rhs
 
     def _band_smooth(self, state, weight):
         """``S phi = (1 - weight Laplace)^{-1} phi`` on the band's pixels, phi held beyond them.
@@ -244,10 +301,12 @@ class _Problem:
         out.ravel()[flat] = x
         return out
 
-    def _smooth(self, rhs, weight):
-        """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can."""
+    def _smooth(self, rhs, weight, wave_r=None, wave_c=None):
+        """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can
+        (``wave_r, wave_c``: :func:`_waves` of rhs's shape when it is not the image's)."""
         spectrum = scipy.fft.dctn(rhs, norm="ortho", overwrite_x=True)
-        _kernels.divide_spectrum(spectrum, self.wave_r, self.wave_c, np.float32(weight))
+        _kernels.divide_spectrum(spectrum, self.wave_r if wave_r is None else wave_r,
+                                 self.wave_c if wave_c is None else wave_c, np.float32(weight))
         return scipy.fft.idctn(spectrum, norm="ortho", overwrite_x=True)
 
     def _explicit_step(self, state, force, tau):
@@ -262,6 +321,21 @@ class _Problem:
                                self.values.reshape(m * n, -1), form.constant, form.linear, form.square,
                                self.params.mu, tau, out.reshape(-1))
         return out
+
+
+def _waves(size):
+    """The eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis along an axis of ``size``."""
+    return (4.0 * np.sin(np.pi * np.arange(size) / (2.0 * size)) ** 2).astype(np.float32)
+
+
+def _fast_span(start, stop, size):
+    """``start:stop`` cut to ``0:size`` and widened to a length the DCT is fast on (or the axis)."""
+    start, stop = max(start, 0), min(stop, size)
+    length = scipy.fft.next_fast_len(stop - start, real=True)
+    if length >= size:
+        return slice(0, size)
+    start = min(start, size - length)
+    return slice(start, start + length)
 
 
 def _swept_area(old, new, mark=None):
