@@ -1855,37 +1855,43 @@ def swept_area(const real[::1] old, const real[::1] new, const Py_ssize_t[::1] o
 
 def force_step(const float[:, ::1] phi, const double[:, :, ::1] values, double constant,
                const double[::1] linear, const double[::1] square, double wall, double tau,
-               float[:, ::1] out):
+               float[:, ::1] out, Py_ssize_t row0=0, Py_ssize_t col0=0):
     """``phi - tau f`` over the image, rounded to float32: the right-hand side of the level set's
     smoothed-force step (:meth:`activecontour.backends.levelset.scheme._Problem.step`).
 
     ``f = constant + sum_c v_c (linear_c + square_c v_c)`` is the integrand of (6.41), a
     quadratic form in the channels ``values (M, N, C)`` (``QuadraticForm.density``, term by term
-    in the same order), plus ``wall`` per side of the image that a pixel lies on."""
+    in the same order), plus ``wall`` per side of the image that a pixel lies on.  ``out`` may be
+    a box of the image: its pixel ``(i, j)`` is the image's ``(row0 + i, col0 + j)``."""
     cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], channels = values.shape[2]
-    cdef Py_ssize_t block, i, j, ch
+    cdef Py_ssize_t rows = out.shape[0], cols = out.shape[1]
+    cdef Py_ssize_t block, i, j, r, c, ch
     cdef double f, v
-    for block in range(0, m, _POLL_ROWS):
+    if row0 < 0 or col0 < 0 or row0 + rows > m or col0 + cols > n:
+        raise ValueError("force_step: the box lies outside the image")
+    for block in range(0, rows, _POLL_ROWS):
         with nogil:
-            for i in range(block, min(block + _POLL_ROWS, m)):
-                for j in range(n):
+            for i in range(block, min(block + _POLL_ROWS, rows)):
+                r = row0 + i
+                for j in range(cols):
+                    c = col0 + j
                     f = constant
                     for ch in range(channels):
-                        v = values[i, j, ch]
+                        v = values[r, c, ch]
                         if square[ch] != 0:
                             f += v * (linear[ch] + square[ch] * v)
                         else:
                             f += linear[ch] * v
                     if wall > 0:  # the wall term, columns first as in the numpy blocks
-                        if j == 0:
+                        if c == 0:
                             f += wall
-                        if j == n - 1:
+                        if c == n - 1:
                             f += wall
-                        if i == 0:
+                        if r == 0:
                             f += wall
-                        if i == m - 1:
+                        if r == m - 1:
                             f += wall
-                    out[i, j] = <float> (phi[i, j] - tau * f)
+                    out[i, j] = <float> (phi[r, c] - tau * f)
         PyErr_CheckSignals()
 
 

@@ -60,6 +60,7 @@ class _Problem:
         self.wave_r, self.wave_c = _waves(m), _waves(n)
         self.scratch = _Scratch(self.shape)
         self._spare = []  # image-sized float32 arrays to reuse (a new one faults in every page)
+        self._coarse = None  # the far field's test grid (_coarse_tables)
 
     def take(self):
         """An image-sized float32 array to write into (contents undefined)."""
@@ -179,18 +180,16 @@ class _Problem:
             near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
             rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
             return rhs
+        form = self.params.load_form(*force)
+        if self.params.mu > 0:
+            box = self._box(state, tau * self.params.mu)
+            if box is not None and not self._far_flips(state, form, tau, box):
+                return self._box_step(state, form, tau, box)
         # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
         rhs = self.take()
-        form = self.params.load_form(*force)
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
                             tau, rhs)
-        if self.params.mu <= 0:
-            return rhs
-        weight = tau * self.params.mu
-        box = self._box(state, weight)
-        if box is None or self._far_flips(state, rhs, weight, box):
-            return self._smooth(rhs, weight)
-        return self._box_smooth(state, rhs, weight, box)
+        return self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs
 
     def _box(self, state, weight):
         """The rows and columns (two slices) on which step (a) is solved, or None: the whole image.
@@ -214,33 +213,68 @@ class _Problem:
             return None
         return rows, cols
 
-    def _far_flips(self, state, rhs, weight, box):
+    def _far_flips(self, state, form, tau, box):
         """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
         is ``+-band - tau S(f)``, a region far from Gamma flipping where the smoothed force
         outweighs the band (a hole opening without a seed).  Tested on a grid coarser by
-        ``_COARSE`` (block means of ``phi - tau f``, S with the same length ``l``): a far block
-        whose value comes within half the band of zero sends the step to the whole image."""
-        m, n = self.shape
+        ``_COARSE`` (block means of ``phi - tau f``, f from the block means of the channels and
+        their squares, S with the same length ``l``): a far block whose value comes within half
+        the band of zero sends the step to the whole image."""
         k = _COARSE
-        coarse = np.empty((-(-m // k), -(-n // k)), dtype=np.float32)
-        _kernels.block_means(rhs, k, coarse)
-        coarse = self._smooth(coarse, weight / (k * k), _waves(coarse.shape[0]), _waves(coarse.shape[1]))
-        rows, cols = box
-        starts_r, starts_c = np.arange(0, m, k), np.arange(0, n, k)
-        far = ((starts_r + k <= rows.start) | (starts_r >= rows.stop))[:, None] \
-            | ((starts_c + k <= cols.start) | (starts_c >= cols.stop))[None, :]
+        means, squares, wall = self._coarse_tables()
+        coarse = np.empty(wall.shape, dtype=np.float32)
+        _kernels.block_means(state.phi, k, coarse)
+        force = wall * np.float32(self.params.mu)  # f's terms in the kernel's order, in float32
+        force += np.float32(form.constant)
+        for channel, (linear, square) in enumerate(zip(form.linear, form.square, strict=True)):
+            force += np.float32(linear) * means[channel]
+            if square != 0:
+                force += np.float32(square) * squares[channel]
+        coarse -= np.float32(tau) * force
+        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
+                              _waves(coarse.shape[1]))
         held = np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
-        return bool(np.any(held[far] < 0.5 * self.band))
-
-    def _box_smooth(self, state, rhs, weight, box):
-        """Step (a) solved on ``box`` (:meth:`_box`), phi held beyond it (written into ``rhs``)."""
+        # the blocks that reach into the box are not far: the rest are four strips around them
         rows, cols = box
-        inner = np.ascontiguousarray(rhs[rows, cols])
-        rhs[rows, cols] = self._smooth(inner, weight, _waves(inner.shape[0]), _waves(inner.shape[1]))
-        phi = state.phi
-        rhs[:rows.start], rhs[rows.stop:] = phi[:rows.start], phi[rows.stop:]
-        rhs[rows, :cols.start], rhs[rows, cols.stop:] = phi[rows, :cols.start], phi[rows, cols.stop:]
-        return rhs
+        first, last = rows.start // k, -(-rows.stop // k)
+        left, right = cols.start // k, -(-cols.stop // k)
+        strips = (held[:first], held[last:], held[first:last, :left], held[first:last, right:])
+        return any(strip.size and strip.min() < 0.5 * self.band for strip in strips)
+
+    def _coarse_tables(self):
+        """Block means (``_COARSE`` x ``_COARSE`` pixels, float32) of the channels ``(C, m, n)``, of
+        their squares, and of the number of image sides a pixel lies on (the wall term); made once."""
+        if self._coarse is None:
+            m, n = self.shape
+            k, channels = _COARSE, self.values.shape[2]
+            size = (-(-m // k), -(-n // k))
+            means = np.empty((channels,) + size, dtype=np.float32)
+            squares = np.empty_like(means)
+            for channel in range(channels):
+                values = self.values[..., channel].astype(np.float32)
+                _kernels.block_means(values, k, means[channel])
+                _kernels.block_means(np.square(values, out=values), k, squares[channel])
+            # a block on an image side holds one line of pixels on it: 1 / (its pixels across it)
+            sides = []
+            for blocks, length in zip(size, self.shape, strict=True):
+                starts = np.arange(blocks) * k
+                across = np.minimum(starts + k, length) - starts
+                sides.append(((starts == 0).astype(np.float64) + (starts == starts[-1])) / across)
+            self._coarse = means, squares, (sides[0][:, None] + sides[1][None, :]).astype(np.float32)
+        return self._coarse
+
+    def _box_step(self, state, form, tau, box):
+        """Step (a) solved on ``box`` (:meth:`_box`), phi held beyond it."""
+        rows, cols = box
+        inner = np.empty((rows.stop - rows.start, cols.stop - cols.start), dtype=np.float32)
+        _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
+                            tau, inner, rows.start, cols.start)
+        out, phi = self.take(), state.phi
+        out[rows, cols] = self._smooth(inner, tau * self.params.mu, _waves(inner.shape[0]),
+                                       _waves(inner.shape[1]))
+        out[:rows.start], out[rows.stop:] = phi[:rows.start], phi[rows.stop:]
+        out[rows, :cols.start], out[rows, cols.stop:] = phi[rows, :cols.start], phi[rows, cols.stop:]
+        return out
 
     def _band_smooth(self, state, weight):
         """``S phi = (1 - weight Laplace)^{-1} phi`` on the band's pixels, phi held beyond them.
