@@ -164,9 +164,10 @@ def test_smoothed_step_on_the_band_box_is_the_whole_image_step():
     stepped = problem.step(state, force, tau, True)
     whole, rhs = _whole_image_step(problem, state, force, tau)
     # the Neumann sides lie band + 8 l beyond the band and S's kernel decays as exp(-r / l): near
-    # Gamma the two differ by less than exp(-8) of the right-hand side's range
+    # Gamma the two differ by exp(-8) of the force's jumps, the 1e-4 px the box's docstring
+    # promises (a box reaching 2 l beyond the band differs by ~5e-4 px here and fails this)
     near = np.abs(whole) < problem.band
-    assert np.abs(stepped[near] - whole[near]).max() <= np.exp(-8.0) * np.ptp(rhs)
+    assert np.abs(stepped[near] - whole[near]).max() <= 1e-4
     assert np.array_equal(stepped > 0, whole > 0)  # the same zero set's sides everywhere
 
 
