@@ -1542,6 +1542,8 @@ def _meet_at_corners(parts, inside, corners, count):
             border |= (other != parts) & (other > 0) & (parts > 0)
     ends = np.argwhere(edge & border)
     if ends.size:
+        if not len(corners):  # a border reaches the edge, and there is no corner for it to end at
+            return False
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         if apart.min(axis=1).max() > ARC_REACH:
             return False
