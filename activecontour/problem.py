@@ -82,9 +82,6 @@ class Problem:
         The crop of a region of interest (:meth:`restricted`), None for the whole image.
     domain : bool ndarray (r1 - r0, c1 - c0) or None
         The region of interest within the box, None for all of it.
-    whole_mu : float or None
-        On a mask's crop, the whole image's length weight in the crop's normalised units
-        (:meth:`restricted`); None otherwise.
     """
 
     settings: Settings
@@ -93,7 +90,6 @@ class Problem:
     units: tuple
     box: tuple | None = None
     domain: np.ndarray | None = None
-    whole_mu: float | None = None
 
     @property
     def shape(self):
@@ -113,18 +109,13 @@ class Problem:
     @functools.cached_property
     def auto_mu(self):
         """The default length weight in the working frame, from the noise of :attr:`values`
-        (:func:`activecontour.imaging.noise.auto_mu`): ``MU_PER_NOISE_VARIANCE`` sigma^2; on a
-        mask's crop, the whole image's (:attr:`whole_mu`)."""
-        if self.whole_mu is not None:
-            return self.whole_mu / self.frame[1]**2
+        (:func:`activecontour.imaging.noise.auto_mu`): ``MU_PER_NOISE_VARIANCE`` sigma^2."""
         return auto_mu(self.values)
 
     @functools.cached_property
     def mu(self):
         """The length weight, in normalised units: ``settings.mu``, or for ``"auto"``
         :attr:`auto_mu` carried out of the working frame (``result.mu``)."""
-        if self.whole_mu is not None:
-            return self.whole_mu
         return self.auto_mu * self.frame[1]**2 if is_auto(self.settings.mu) else self.settings.mu
 
     @functools.cached_property
@@ -187,16 +178,6 @@ class Problem:
         """The whole image's problem on the crop ``box`` of a region of interest, the pixels outside
         ``domain`` filled (:func:`activecontour.imaging.roi.restrict_values`); with
         ``normalize="range"`` the crop is scaled by its own range, as ``segment(image[box])`` would.
-        A box is an image of its own, its length weight its own (``mu``, or for ``"auto"`` from
-        its noise).  A mask (``roi="init"``'s neighbourhood, and the domain a pointed result
-        hands on) is a domain of the whole image: its length weight is the whole image's
-        (:attr:`mu`), carried into the crop's units.  The crop's own estimate reads its fill,
-        which has no noise, and puts ``MU_FLOOR`` in the crop's stretched units: in the image's
-        units, the neighbourhoods of ``benchmarks/bench_pointed.py``'s blobs got 0.046-0.063 (10th
-        to 90th percentile) for the image's 0.082, DSB's 0.003-0.007 for the image's 0.01 (read
-        on the domain's pixels alone, 0.074-0.094 and 0.004-0.007).  So the neighbourhood's
-        contour, and the split of its objects, are those the whole image's run draws, and a run
-        continued on a pointed result's domain runs under the same mu.
 
         Parameters
         ----------
@@ -211,6 +192,4 @@ class Problem:
             span = high - low if high > low else 1.0
             values = (values - low) / span
         offset, scale = self.units
-        whole_mu = None if domain is None else self.mu / span**2
-        return Problem(self.settings, self.image, values, (offset + scale * low, scale * span), box, domain,
-                       whole_mu)
+        return Problem(self.settings, self.image, values, (offset + scale * low, scale * span), box, domain)

@@ -82,27 +82,6 @@ def test_box_roi_is_the_crop_exactly(blobs):
     assert synthetic.dice(res.mask, truths[3]) > 0.97
 
 
-def test_a_mask_runs_under_the_whole_images_mu_and_a_box_under_its_own(blobs):
-    """A mask is a domain of the image: its length weight is the whole image's, carried into the
-    crop's units (its values span its own range, mu scales as their square); a box is the crop."""
-    from activecontour.imaging.roi import drawn_region, init_neighbourhood, resolve_roi
-    from activecontour.problem import prepare
-
-    image, _, _ = blobs
-    whole = prepare(image)
-    neighbourhood = init_neighbourhood(drawn_region(ac.circle(CENTERS[4], 1.3 * RADIUS), image.shape))
-    part = whole.restricted(*resolve_roi(neighbourhood, image.shape))
-    span = part.units[1] / whole.units[1]
-    assert span < 0.99  # the crop's range is narrower: the units differ
-    assert part.mu * span**2 == pytest.approx(whole.mu, rel=1e-12)
-    # the crop's own estimate (its fill has no noise) is not the image's
-    own = prepare(part.normalised)
-    assert abs(own.mu * span**2 / whole.mu - 1) > 0.05
-    box = (40, 5, 80, 45)
-    assert whole.restricted(*resolve_roi(box, image.shape)).mu == pytest.approx(
-        prepare(image[40:80, 5:45]).mu, rel=1e-12)
-
-
 def test_mask_roi_keeps_the_result_inside_the_mask(blobs):
     image, _, truths = blobs
     domain = np.zeros(image.shape, bool)
