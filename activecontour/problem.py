@@ -109,8 +109,9 @@ class Problem:
     @functools.cached_property
     def auto_mu(self):
         """The default length weight in the working frame, from the noise of :attr:`values`
-        (:func:`activecontour.imaging.noise.auto_mu`): ``MU_PER_NOISE_VARIANCE`` sigma^2."""
-        return auto_mu(self.values)
+        (:func:`activecontour.imaging.noise.auto_mu`): ``MU_PER_NOISE_VARIANCE`` sigma^2; on a
+        region of interest, of the pixels of its domain (the fill outside it has no noise)."""
+        return auto_mu(self.values, self.domain)
 
     @functools.cached_property
     def mu(self):

@@ -19,12 +19,16 @@ MU_FLOOR = 0.01
 _NOISE_MASK = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
 
 
-def estimate_noise(values):
+def estimate_noise(values, where=None):
     """Robust standard deviation of the pixel noise, per channel, of (M, N, C) values.
 
     The median absolute response to Immerkaer's Laplacian-difference mask, scaled to a standard
     deviation (1.4826 / 6 for Gaussian noise).  The median, not the mean, ignores edges and other
-    structure that covers a minority of the pixels.
+    structure that covers a minority of the pixels.  With ``where`` (bool (M, N)), only the
+    responses whose 3 x 3 window lies within it count: a region of interest's crop, whose pixels
+    outside the region are a constant fill (:func:`activecontour.imaging.roi.restrict_values`),
+    answers those with zero and would pull the median towards no noise at all.  When no window
+    lies within ``where``, all of them count.
     """
     import cv2  # not scipy.ndimage: it costs ~0.2 s to import on every cold start
 
@@ -32,14 +36,19 @@ def estimate_noise(values):
     if min(values.shape[:2]) < 3:
         return sigma
     step = max(1, int(np.sqrt(values.shape[0] * values.shape[1] / 1e6)))  # ~1 Mpx is plenty
+    within = None
+    if where is not None:  # the windows inside: the region eroded by the mask's 3 x 3 square
+        within = cv2.erode(np.ascontiguousarray(where[::step, ::step], dtype=np.uint8),
+                           np.ones((3, 3), np.uint8))[1:-1, 1:-1].astype(bool)
+        within = within if within.any() else None
     for ch in range(values.shape[2]):
         plane = values[::step, ::step, ch] if step > 1 else values[:, :, ch]
         response = cv2.filter2D(np.ascontiguousarray(plane), cv2.CV_64F, _NOISE_MASK)[1:-1, 1:-1]
-        sigma[ch] = 1.4826 / 6.0 * float(np.median(np.abs(response)))
+        sigma[ch] = 1.4826 / 6.0 * float(np.median(np.abs(response if within is None else response[within])))
     return sigma
 
 
-def auto_mu(values):
+def auto_mu(values, where=None):
     """The default length weight ``mu = MU_PER_NOISE_VARIANCE * sigma^2``, at least ``MU_FLOOR``.
 
     Read (6.38) as a MAP estimate: with Gaussian noise of variance sigma^2 the fitting terms are
@@ -54,12 +63,14 @@ def auto_mu(values):
     ----------
     values : ndarray (M, N, C)
         Normalised intensities.
+    where : bool ndarray (M, N), optional
+        The pixels that are the image's (a region of interest's domain): :func:`estimate_noise`.
 
     Returns
     -------
     float
     """
-    variance = float(np.mean(estimate_noise(values) ** 2))
+    variance = float(np.mean(estimate_noise(values, where) ** 2))
     return max(MU_FLOOR, MU_PER_NOISE_VARIANCE * variance)
 
 

@@ -1574,6 +1574,8 @@ def _meet_at_corners(parts, inside, corners, count):
     if ends.size and not len(corners):
         return False  # borders reach the edge, and no corner turns enough to end one
     if ends.size:
+        if not len(corners):  # a border reaches the edge, and there is no corner for it to end at
+            return False
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         if apart.min(axis=1).max() > ARC_REACH:
             return False

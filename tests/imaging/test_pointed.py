@@ -48,15 +48,16 @@ def test_the_field_is_dense_and_the_pair_touches():
 #: One of the touching pair from a tight curve: the split (objects/split.py) cuts the pair on a
 #: straight line about 2 px inside blob 9 (the full run's too: 19 of its pixels go to blob 6),
 #: and the pointed object ends at that line (its neighbour is taken out of the domain there), so
-#: the circle gets Dice 0.941 and the box one pixel of blob 6.  Strict: passes once the split's
-#: line sits at the contact.
+#: the box gets two pixels of blob 6 (the circle got Dice 0.941 until the neighbourhood's noise
+#: was read on its domain's pixels, not its fill, Problem.auto_mu: 0.964 now).  Strict: passes
+#: once the split's line sits at the contact.
 SPLIT_LINE_OFF = pytest.mark.xfail(strict=True, reason="the split's line lies ~2 px inside blob 9")
 
 
-@pytest.mark.parametrize("kind", ["circle", "box"])
-@pytest.mark.parametrize(("target", "factor"), [
-    pytest.param(target, factor, marks=[SPLIT_LINE_OFF] if (target, factor) == (9, 1.1) else [])
-    for target in TARGETS for factor in (1.1, 1.8)])
+@pytest.mark.parametrize(("target", "factor", "kind"), [
+    pytest.param(target, factor, kind,
+                 marks=[SPLIT_LINE_OFF] if (target, factor, kind) == (9, 1.1, "box") else [])
+    for target in TARGETS for factor in (1.1, 1.8) for kind in ("circle", "box")])
 def test_a_curve_around_one_blob_gives_that_blob_alone(field, target, factor, kind):
     image, truths = field
     centre, radius = BLOBS[target]

@@ -82,6 +82,23 @@ def test_box_roi_is_the_crop_exactly(blobs):
     assert synthetic.dice(res.mask, truths[3]) > 0.97
 
 
+def test_a_masks_noise_is_read_on_its_pixels_not_its_fill(blobs):
+    """The crop of a mask fills the pixels outside it with one value (no noise): the length weight
+    comes from the noise of the domain's own pixels, the same as that of the pixels of the box
+    that lies within the domain."""
+    from activecontour.imaging.noise import auto_mu
+    from activecontour.imaging.roi import resolve_roi
+    from activecontour.problem import prepare
+
+    image, _, _ = blobs
+    domain = np.zeros(image.shape, bool)
+    domain[20:100, 20:100] = np.hypot(*np.mgrid[-40:40, -40:40]) < 40  # a disk: most of its box filled
+    part = prepare(image).restricted(*resolve_roi(domain, image.shape))
+    inner = part.values[14:66, 14:66]  # a square inside the disk: the image's own pixels
+    assert part.auto_mu == pytest.approx(auto_mu(inner), rel=0.15)
+    assert auto_mu(part.values) < 0.8 * part.auto_mu  # the fill's zero responses pull it down
+
+
 def test_mask_roi_keeps_the_result_inside_the_mask(blobs):
     image, _, truths = blobs
     domain = np.zeros(image.shape, bool)

@@ -18,6 +18,7 @@ from activecontour.objects.split import (
     _ellipse_axes,
     _ellipse_fit,
     _hull_depth,
+    _meet_at_corners,
     split_touching,
 )
 
@@ -263,6 +264,18 @@ def _flower(radius, petals, length, width):
         centre = 60.0 + (radius + length / 2) * np.array([np.cos(angle), np.sin(angle)])
         shapes.append(shapely.Polygon(_ellipse(centre, length, width, -angle)))
     return orient(np.asarray(shapely.union_all(shapes).exterior.coords)[:-1])
+
+
+def test_parts_whose_border_reaches_an_edge_without_corners_do_not_meet_at_corners():
+    """Two halves of a square (no concave corner at all) share a border that reaches the edge far
+    from any corner: not a clump's parts (an empty corner list crashed the distance's minimum)."""
+    inside = np.zeros((20, 20), dtype=bool)
+    inside[2:18, 2:18] = True
+    parts = np.where(inside, 1, 0)
+    parts[2:18, 10:18] = 2
+    assert not _meet_at_corners(parts, inside, np.zeros((0, 2)), 2)
+    corners = np.array([[2.0, 10.0], [17.0, 10.0]])  # corners where the border ends: they meet
+    assert _meet_at_corners(parts, inside, corners, 2)
 
 
 @pytest.mark.parametrize("outline", SINGLE_SHAPES + [
