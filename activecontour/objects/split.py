@@ -1571,8 +1571,6 @@ def _meet_at_corners(parts, inside, corners, count):
             other = np.roll(parts, shift, axis=axis)
             border |= (other != parts) & (other > 0) & (parts > 0)
     ends = np.argwhere(edge & border)
-    if ends.size and not len(corners):
-        return False  # borders reach the edge, and no corner turns enough to end one
     if ends.size:
         if not len(corners):  # a border reaches the edge, and there is no corner for it to end at
             return False

@@ -245,8 +245,6 @@ def test_a_piece_cut_off_goes_through_the_arc_stage_unless_it_is_convex(monkeypa
 
 
 def test_borders_that_reach_the_outline_where_no_corner_is_are_no_clump():
-    from activecontour.objects.split import _meet_at_corners
-
     inside = np.zeros((20, 30), dtype=bool)
     inside[2:18, 2:28] = True
     parts = np.where(inside, np.where(np.arange(30) < 15, 1, 2), 0).astype(np.int32)
@@ -264,18 +262,6 @@ def _flower(radius, petals, length, width):
         centre = 60.0 + (radius + length / 2) * np.array([np.cos(angle), np.sin(angle)])
         shapes.append(shapely.Polygon(_ellipse(centre, length, width, -angle)))
     return orient(np.asarray(shapely.union_all(shapes).exterior.coords)[:-1])
-
-
-def test_parts_whose_border_reaches_an_edge_without_corners_do_not_meet_at_corners():
-    """Two halves of a square (no concave corner at all) share a border that reaches the edge far
-    from any corner: not a clump's parts (an empty corner list crashed the distance's minimum)."""
-    inside = np.zeros((20, 20), dtype=bool)
-    inside[2:18, 2:18] = True
-    parts = np.where(inside, 1, 0)
-    parts[2:18, 10:18] = 2
-    assert not _meet_at_corners(parts, inside, np.zeros((0, 2)), 2)
-    corners = np.array([[2.0, 10.0], [17.0, 10.0]])  # corners where the border ends: they meet
-    assert _meet_at_corners(parts, inside, corners, 2)
 
 
 @pytest.mark.parametrize("outline", SINGLE_SHAPES + [
