@@ -838,12 +838,16 @@ def _without_slivers(network, nodes):
         segments = np.concatenate([forward, backward])
         starts = np.concatenate([network.start[forward], network.end[backward]])
         ends = np.concatenate([network.end[forward], network.start[backward]])
-        for loop in chain_loops(starts, ends, len(nodes)):
-            a, b = nodes[starts[loop]], nodes[ends[loop]]
-            area = 0.5 * abs(float(np.sum(a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1])))
-            perimeter = float(np.hypot(*(b - a).T).sum())
-            if area <= _SLIVER * max(1.0, perimeter) ** 2:
-                keep[segments[loop]] = False
+        order, offsets = loop_order(starts, ends, len(nodes))
+        if len(offsets) < 2:
+            continue
+        # every loop's area and length at once (sums in each loop's order)
+        a, b = nodes.take(starts[order], axis=0), nodes.take(ends[order], axis=0)
+        firsts = offsets[:-1]
+        area = 0.5 * np.abs(np.add.reduceat(a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1], firsts))
+        perimeter = np.add.reduceat(np.hypot(*(b - a).T), firsts)
+        sliver = np.repeat(area <= _SLIVER * np.maximum(1.0, perimeter) ** 2, np.diff(offsets))
+        keep[segments[order[sliver]]] = False
     return network if keep.all() else network.subset(keep, nodes)
 
 
