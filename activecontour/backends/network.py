@@ -467,15 +467,29 @@ class Network:
         """The interfaces that are closed loops (no junction, off the border), each as
         ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
         the interface segments, joined at the nodes of degree two (:meth:`_interface_pieces`)."""
+        areas = self.closed_areas(nodes)[0]
+        return [(self.loop_segments(k), area) for k, area in enumerate(areas)]
+
+    def closed_areas(self, nodes, interest=None):
+        """The enclosed area of every loop of :meth:`closed_loops` (in their order, the segments of
+        loop k :meth:`loop_segments`), and, given ``interest`` (bool per node), whether each passes
+        a node of it (None without): the loops' numbers, no list of their segments."""
         if self._pieces is None:
             self._pieces = self._interface_pieces()
-        chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
+        chosen, piece, count, closed, sign = self._pieces[:5]
         if chosen.size == 0:
-            return []
+            return np.zeros(0), None if interest is None else np.zeros(0, dtype=bool)
         a, b = nodes.take(self.start[chosen], axis=0), nodes.take(self.end[chosen], axis=0)
         twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
                                  minlength=count)
-        return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k])) for k in closed]
+        through = None if interest is None else np.bincount(
+            piece, weights=interest[self.start[chosen]], minlength=count)[closed] > 0
+        return 0.5 * np.abs(twice_area[closed]), through
+
+    def loop_segments(self, k):
+        """The segment indices of loop k of :meth:`closed_loops` (:meth:`closed_areas`)."""
+        chosen, _, _, closed, _, by_piece, bounds = self._pieces
+        return chosen[by_piece[bounds[closed[k]]:bounds[closed[k] + 1]]]
 
     def _interface_pieces(self):
         """The graph part of :meth:`closed_loops`: the interface segments, the piece of each, the
@@ -882,12 +896,13 @@ class _Flow:
         does not rise: the network cannot change its topology by moving, so a region the flow
         shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
         network, nodes = self.network, self.nodes
+        interest = None
         if nodes_of_interest is not None:
             interest = np.zeros(len(nodes), dtype=bool)
             interest[nodes_of_interest] = True
-        candidates = [loop for loop, area in network.closed_loops(nodes)
-                      if (area < _ISLAND_AREA if nodes_of_interest is None
-                          else interest[network.start[loop]].any())]
+        areas, through = network.closed_areas(nodes, interest)
+        chosen = areas < _ISLAND_AREA if interest is None else through
+        candidates = [network.loop_segments(k) for k in np.flatnonzero(chosen)]
         if not candidates:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
