@@ -76,7 +76,8 @@ class ChanVeseParameters:
             for name in ("lambda_in", "lambda_out"):
                 value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
                 if value.size not in (1, n_channels):
-                    raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} channels")
+                    raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} "
+                                     "channels")
                 out.append(np.broadcast_to(value / n_channels, (n_channels,)))
             cache[n_channels] = out
         return list(cache[n_channels])
