@@ -390,6 +390,14 @@ class Network:
                                        pairs, _NO_WHERE)
         return np.flatnonzero(self.interface)[pairs[:min(found, limit)]]
 
+    def meet_among(self, nodes, segments):
+        """Whether two of the interface segments ``segments`` (indices among all segments) meet at
+        ``nodes`` other than at a common node (:meth:`simple`'s test, on them alone: True means
+        the network is not simple there)."""
+        start, end = _indices(self.start[segments]), _indices(self.end[segments])
+        return _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, 1,
+                                      np.empty((0, 2), dtype=np.intp), _NO_WHERE) > 0
+
     def reconnected(self, pairs, nodes):
         """The network with each pair of interface segments ``e = (a, b)``, ``f = (c, d)`` between
         the same two regions, oriented alike (``f`` read backwards where its sides are swapped),
@@ -1019,17 +1027,22 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_next is None else min(dt_next, _MAX_STEP / spread)
-            crossings, steps = [], network.steps(nodes, velocity)
+            crossings, steps, pinched = [], network.steps(nodes, velocity), None
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
                 if steps.admissible(dt, trial):
-                    # the crossing test first: it costs a fraction of the energy's
-                    if network.simple(trial):
+                    # the crossing test first: it costs a fraction of the energy's.  After a
+                    # crossing, the segments that met are tested alone first: where two of them
+                    # still meet, the shorter step crosses too, without a pass over the network
+                    if pinched is not None and network.meet_among(trial, pinched):
+                        crossings.append((dt, trial))
+                    elif (pairs := network.meeting_pairs(trial)).size == 0:
                         candidate = self.evaluate(network, trial)
                         if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                             break
                     else:
                         crossings.append((dt, trial))
+                        pinched = np.unique(pairs)
                 dt *= 0.5
             else:
                 # a region folding over itself as the flow shrinks it: drop it and go on (the
