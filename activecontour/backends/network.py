@@ -657,8 +657,11 @@ class Network:
     def inheriting(self, network):
         """This network, to reuse ``network``'s orders of the free nodes (:meth:`_band`): made from
         it by a change that moves no node and frees no other (:meth:`reconnected`,
-        :meth:`collapsed`, :meth:`subset`: the nodes they leave out are dropped from the order)."""
-        self._orders = {component: band[0] for component, band in network._bands.items()}
+        :meth:`collapsed`, :meth:`subset`: the nodes they leave out are dropped from the order).
+        Where ``network`` found no order of its own (it was never factored: a change on a change,
+        as a pinch resolved and the islands then dropped), it passes on the one it inherited."""
+        self._orders = dict(network._orders)
+        self._orders.update({component: band[0] for component, band in network._bands.items()})
         return self
 
     def _reverse_cuthill_mckee(self, index):
