@@ -25,7 +25,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   solve and the bounds of an iteration's steps);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
-  :func:`divide_spectrum`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
+  :func:`divide_spectrum`, :func:`block_means`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
   :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
   sides of phi, the front, the marching-squares segments of the zero set and their table, the
   narrow band's distances, the oriented soup of segments that the common evaluator scores by
@@ -1863,37 +1863,43 @@ def swept_area(const real[::1] old, const real[::1] new, const Py_ssize_t[::1] o
 
 def force_step(const float[:, ::1] phi, const double[:, :, ::1] values, double constant,
                const double[::1] linear, const double[::1] square, double wall, double tau,
-               float[:, ::1] out):
+               float[:, ::1] out, Py_ssize_t row0=0, Py_ssize_t col0=0):
     """``phi - tau f`` over the image, rounded to float32: the right-hand side of the level set's
     smoothed-force step (:meth:`activecontour.backends.levelset.scheme._Problem.step`).
 
     ``f = constant + sum_c v_c (linear_c + square_c v_c)`` is the integrand of (6.41), a
     quadratic form in the channels ``values (M, N, C)`` (``QuadraticForm.density``, term by term
-    in the same order), plus ``wall`` per side of the image that a pixel lies on."""
+    in the same order), plus ``wall`` per side of the image that a pixel lies on.  ``out`` may be
+    a box of the image: its pixel ``(i, j)`` is the image's ``(row0 + i, col0 + j)``."""
     cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], channels = values.shape[2]
-    cdef Py_ssize_t block, i, j, ch
+    cdef Py_ssize_t rows = out.shape[0], cols = out.shape[1]
+    cdef Py_ssize_t block, i, j, r, c, ch
     cdef double f, v
-    for block in range(0, m, _POLL_ROWS):
+    if row0 < 0 or col0 < 0 or row0 + rows > m or col0 + cols > n:
+        raise ValueError("force_step: the box lies outside the image")
+    for block in range(0, rows, _POLL_ROWS):
         with nogil:
-            for i in range(block, min(block + _POLL_ROWS, m)):
-                for j in range(n):
+            for i in range(block, min(block + _POLL_ROWS, rows)):
+                r = row0 + i
+                for j in range(cols):
+                    c = col0 + j
                     f = constant
                     for ch in range(channels):
-                        v = values[i, j, ch]
+                        v = values[r, c, ch]
                         if square[ch] != 0:
                             f += v * (linear[ch] + square[ch] * v)
                         else:
                             f += linear[ch] * v
                     if wall > 0:  # the wall term, columns first as in the numpy blocks
-                        if j == 0:
+                        if c == 0:
                             f += wall
-                        if j == n - 1:
+                        if c == n - 1:
                             f += wall
-                        if i == 0:
+                        if r == 0:
                             f += wall
-                        if i == m - 1:
+                        if r == m - 1:
                             f += wall
-                    out[i, j] = <float> (phi[i, j] - tau * f)
+                    out[i, j] = <float> (phi[r, c] - tau * f)
         PyErr_CheckSignals()
 
 
@@ -1923,6 +1929,31 @@ cdef inline double _density(const double[:, ::1] values, Py_ssize_t p, double co
         else:
             f += linear[ch] * v
     return f
+
+
+def block_means(const float[:, ::1] a, Py_ssize_t k, float[:, ::1] out):
+    """``out[I, J]`` = the mean of ``a`` over the block of rows ``k I .. k I + k - 1`` and columns
+    ``k J .. k J + k - 1`` (cut at the edge), in one pass: the level set's coarse grid
+    (:meth:`activecontour.backends.levelset.scheme._Problem._far_flips`)."""
+    cdef Py_ssize_t m = a.shape[0], n = a.shape[1], block, i, j, bi, bj
+    cdef float rows_in, cols_in, total
+    out[:, :] = 0
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                bi = i // k
+                for bj in range(out.shape[1]):
+                    total = 0
+                    for j in range(k * bj, min(k * bj + k, n)):
+                        total += a[i, j]
+                    out[bi, bj] += total
+        PyErr_CheckSignals()
+    with nogil:
+        for bi in range(out.shape[0]):
+            rows_in = <float> (min(k * bi + k, m) - k * bi)
+            for bj in range(out.shape[1]):
+                cols_in = <float> (min(k * bj + k, n) - k * bj)
+                out[bi, bj] /= rows_in * cols_in
 
 
 def explicit_step(const float[::1] phi, const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n,

@@ -15,7 +15,10 @@ whole clump:
    its pixels, overlaps two by two, borders that end at corners, parts of comparable size, few
    places where three meet -- which a trefoil of three disks around one point (three corners,
    no pair of them a cut that leaves ellipses) satisfies and a star, a flower, a bent rod or a
-   horse do not; elsewhere the three stages below decide as they did.
+   horse do not; elsewhere the three stages below decide as they did, and each piece they cut
+   off goes through this stage on its own (:func:`_clump_parts`): a smaller clump, cut off at
+   a neck, has its own outline explained by its arcs where the whole object's was not (an
+   object pressed inside it, or a contact rounded away, left part of it unexplained).
 1. **Necks** (:func:`_neck_parts`, pixels): the watershed of the distance to the outline (an
    inscribed-circle centre per part) whose parts are merged back while the neck between two is
    nearly as wide as the thinner part; a neck must be a waist (a concavity of the outline at both
@@ -68,8 +71,11 @@ split                                       touching ellipses  touching disks   
 ==========================================  =================  ===============  ============
 necks alone (stage 1, the split until now)  0.14 / 0.78        0.48 / 0.91      4 of 120
 necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      10 of 120
-arcs into ellipses first (this module)      0.28 / 0.85        0.53 / 0.93      10 of 120
+arcs into ellipses first                    0.28 / 0.85        0.53 / 0.93      10 of 120
   on seeds 20-59                            0.50 / 0.92        0.49 / 0.92      12 of 240
+the same, and arcs again on each piece cut  0.28 / 0.87        0.65 / 0.94      10 of 120
+off by the necks or corners (this module)
+  on seeds 20-59                            0.50 / 0.92        0.49 / 0.93      12 of 240
   (necks and corners: 0.50 / 0.90, 0.39 / 0.90, 12 of 240)
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
@@ -79,15 +85,27 @@ Otsu + distance watershed (the scikit-      0.42 / 0.78        0.72 / 0.96      
 image gallery pipeline, for reference)
 ==========================================  =================  ===============  ============
 
-(The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the same scenes'
-objects for every split.)  The corner stage is what wins on elongated objects side by side; the
-necks keep the singles whole.  What is left is crowded: the worst seeds of both touching
-families (ellipses 13, 17, 14: 0.28, 0.41, 0.50; disks 0, 6: 0.53, 0.60) hold connected pieces of
-5-8 objects, some of which own no arc of the outline (pressed inside the clump, or their contacts
-rounded away), so the arc ellipses cover 0.6-0.8 of the piece and the clump is left to the necks
-and corners, which cut off only some of its objects (the pipeline scores 0.68, 0.81, 0.78, 0.86,
-0.83 there).  The singles the split cuts (10 of 120) are cut by the necks and corners, as before
-the arc stage: bent rods and strokes.
+(The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the fourth on that of
+5d1d5b5, the same scenes' objects for every split.)  The corner stage is what wins on elongated
+objects side by side; the necks keep the singles whole. What is left is crowded: the worst seeds
+of both touching families (ellipses 13, 14, 17: 0.28, 0.50, 0.52; disks 6, 0: 0.65, 0.67; seeds
+20-59: disks 38, ellipses 49: 0.49, 0.50) hold connected pieces of 5-8 objects, some of which own
+no arc of the outline (pressed inside the clump, or their contacts rounded away), so the arc
+ellipses cover 0.6-0.8 of the piece and the clump is left to the necks and corners, which cut off
+only some of its objects (the pipeline scores 0.68, 0.78, 0.81, 0.83, 0.86, 0.98, 0.67 there).
+Most errors are objects left merged (on seeds 0-59, before the pieces went through the arcs again:
+50 pieces holding 135 disks, 48 holding 160 ellipses), nearly all in clumps that the arc stage
+declined. Two things tried did not pay: ellipses added for the area the arc ellipses leave
+uncovered (the moment ellipse of each large piece of it, split at its own distance peaks) took the
+disks to 0.53 / 0.93 and the ellipses to 0.28 / 0.85-0.86 with the clump tests kept, and with the
+border and size tests dropped only to 0.67 / 0.93 and 0.43 / 0.91 while cutting 54 of 120 singles:
+the ellipses fitted to the arcs are themselves wrong there (one across two disks whose contact was
+rounded away). The distance-transform watershed put in an object's place when all its parts are
+ellipse-like (moment-ellipse IoU) and its borders end at corners changed F1 by 0.005 at most (its
+cells' ragged borders and spurious peaks fail those tests nearly everywhere). On a 3-disk piece of
+disks seed 48 the pixel distance has a single maximum (a small disk pressed a third of its
+diameter into a larger one): no neck to find. The singles the split cuts (10 of 120) are cut by
+the necks and corners, as before the arc stage: bent rods and strokes.
 """
 
 from __future__ import annotations
@@ -230,8 +248,20 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
             pieces = [cut for piece in pieces for cut in
                       ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
                           piece[0], *((depth, bent) if piece[0] is curves[0] else ()))])]
+        if len(pieces) > 1:
+            # a piece cut off may be a smaller clump, which its own arcs explain (a convex piece
+            # has no concave corner: one convex hull)
+            pieces = [part for piece in pieces for part in _clump_parts(piece, labels.shape)]
         result.extend(pieces)
     return result
+
+
+def _clump_parts(curves, extent):
+    """A piece that the necks, the contrast or the corners cut off an object, as the arc stage
+    splits it (:func:`_arc_parts`; the piece alone when it does not, or when its outline lies
+    within ``MIN_WAIST_DEPTH`` of its hull: a convex piece has no concave corner)."""
+    depth = _hull_depth(curves[0])
+    return (depth.max() >= MIN_WAIST_DEPTH and _arc_parts(curves, depth, extent)) or [curves]
 
 
 def _hull_depth(outline):
@@ -1541,6 +1571,8 @@ def _meet_at_corners(parts, inside, corners, count):
             other = np.roll(parts, shift, axis=axis)
             border |= (other != parts) & (other > 0) & (parts > 0)
     ends = np.argwhere(edge & border)
+    if ends.size and not len(corners):
+        return False  # borders reach the edge, and no corner turns enough to end one
     if ends.size:
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         if apart.min(axis=1).max() > ARC_REACH:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import activecontour as ac
+from activecontour import _kernels
 from activecontour import synthetic as sy
 from activecontour.backends.levelset import (
     DEFAULT_OPTIONS,
@@ -127,6 +128,59 @@ def test_energy_does_not_change_under_reinitialisation():
     # (0.36 + mu / R) |Gamma| 0.005 with |Gamma| = 2 pi 25
     bound = (0.36 + MU / 25.0) * 2 * np.pi * 25.0 * 0.005
     assert abs(second - first) <= bound
+
+
+def _smoothed_step_problem(centres, start_centre, step=8.0):
+    """Two-region problem on 200^2 with bright disks of radius 12 at ``centres``, a start circle of
+    radius 15 around ``start_centre``, and the smoothed step's constants and tau there."""
+    shape = (200, 200)
+    image = 0.2 + 0.15 * np.indices(shape)[1] / shape[1]  # a ramp: the far field is not uniform
+    for centre in centres:
+        image[_circle_distance(shape, centre, 12.0) > 0] = 0.8
+    image = sy.add_noise(image, 0.1, 0)
+    # mu = 0.05: a smoothing length sqrt(tau mu) of about 2 px, so that the band's box is small
+    problem = _Problem(ImageModel(normalize_image(image)), ChanVeseParameters(mu=0.05), DEFAULT_OPTIONS)
+    state = problem.redistance(_circle_distance(shape, start_centre, 15.0).astype(np.float32))
+    current = problem.evaluate(state)
+    force, scale = problem.force(current.c_in, current.c_out)
+    return problem, state, force, problem.time_step(step, scale)
+
+
+def _whole_image_step(problem, state, force, tau):
+    """Step (a) ``S (phi - tau f)`` by one DCT pair over the whole image."""
+    rhs = np.empty_like(state.phi)
+    form = problem.params.load_form(*force)
+    mu = problem.params.mu
+    _kernels.force_step(state.phi, problem.values, form.constant, form.linear, form.square, mu, tau, rhs)
+    return problem._smooth(rhs, tau * mu), rhs
+
+
+def test_smoothed_step_on_the_band_box_is_the_whole_image_step():
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    box = problem._box(state, tau * problem.params.mu)
+    assert box is not None  # the box is solved alone
+    rows, cols = box
+    assert (rows.stop - rows.start) * (cols.stop - cols.start) < 200 * 200 / 2
+    stepped = problem.step(state, force, tau, True)
+    whole, rhs = _whole_image_step(problem, state, force, tau)
+    # the Neumann sides lie band + 8 l beyond the band and S's kernel decays as exp(-r / l): near
+    # Gamma the two differ by less than exp(-8) of the right-hand side's range
+    near = np.abs(whole) < problem.band
+    assert np.abs(stepped[near] - whole[near]).max() <= np.exp(-8.0) * np.ptp(rhs)
+    assert np.array_equal(stepped > 0, whole > 0)  # the same zero set's sides everywhere
+
+
+def test_smoothed_step_that_flips_a_far_region_is_solved_on_the_whole_image():
+    # a second disk far from the start: the smoothed force outweighs the band there (a region
+    # flips without a seed), so the step is the whole image's, which the band's box would miss
+    problem, state, force, tau = _smoothed_step_problem([(50.0, 50.0), (150.0, 150.0)], (50.0, 50.0),
+                                                        step=16.0)
+    rows, cols = problem._box(state, tau * problem.params.mu)
+    assert not (rows.start <= 150 < rows.stop and cols.start <= 150 < cols.stop)
+    stepped = problem.step(state, force, tau, True)
+    whole, _ = _whole_image_step(problem, state, force, tau)
+    assert stepped[150, 150] > 0
+    np.testing.assert_array_equal(stepped, whole)
 
 
 def test_contours_are_oriented_and_measure_the_annulus():

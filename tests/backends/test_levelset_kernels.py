@@ -215,6 +215,22 @@ def test_force_step_is_phi_minus_tau_f_with_the_wall_term(channels, mu, omega):
     out = np.empty_like(phi)
     _kernels.force_step(phi, values, form.constant, form.linear, form.square, mu, tau, out)
     np.testing.assert_allclose(out, phi - tau * f, rtol=1e-6, atol=1e-6)  # float32
+    # a box of the image (its last row on the image's side, its first column not): the same pixels
+    box = np.empty((4, 5), dtype=np.float32)
+    _kernels.force_step(phi, values, form.constant, form.linear, form.square, mu, tau, box, 3, 2)
+    np.testing.assert_array_equal(box, out[3:7, 2:7])
+    with pytest.raises(ValueError, match="outside the image"):
+        _kernels.force_step(phi, values, form.constant, form.linear, form.square, mu, tau, box, 4, 2)
+
+
+@pytest.mark.parametrize("shape, k", [((12, 8), 4), ((13, 10), 4), ((5, 7), 3)])
+def test_block_means_are_the_means_of_the_blocks_cut_at_the_edge(shape, k):
+    a = np.random.default_rng(19).normal(size=shape).astype(np.float32)
+    out = np.empty((-(-shape[0] // k), -(-shape[1] // k)), dtype=np.float32)
+    _kernels.block_means(a, k, out)
+    expected = [[a[i:i + k, j:j + k].mean(dtype=np.float64) for j in range(0, shape[1], k)]
+                for i in range(0, shape[0], k)]
+    np.testing.assert_allclose(out, expected, rtol=1e-6, atol=1e-6)
 
 
 def test_divide_spectrum_applies_the_inverse_of_one_minus_weight_laplace():

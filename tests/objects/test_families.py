@@ -75,6 +75,15 @@ def test_touching_objects_are_split(family, seed, least):
     assert match_instances(ac.segment(image, separate=False).labels, truth)["f1"] < least - 0.3
 
 
+# (pieces that the necks or the corners cut off a clump whose whole outline the arc stage did not
+# explain, and that are clumps of their own: :func:`activecontour.objects.split._clump_parts`)
+@pytest.mark.parametrize(("family", "seed", "least"), [("ellipses", 4, 0.95), ("ellipses", 9, 0.95),
+                                                       ("disks", 44, 0.9)])
+def test_a_clump_cut_off_an_object_is_split_by_its_own_arcs(family, seed, least):
+    image, truth = synthetic.FAMILIES[family](seed)
+    assert match_instances(ac.segment(image).labels, truth)["f1"] >= least
+
+
 def test_touching_objects_are_split_from_the_level_set_too():
     image, truth = synthetic.touching_disks(3)
     assert match_instances(ac.segment(image, backend="levelset").labels, truth)["f1"] >= 0.9
@@ -214,6 +223,36 @@ def test_a_clump_that_reaches_the_image_edge_is_left_to_the_necks_and_corners():
     assert len(_arc_parts([outline], extent=(100, columns + 1))) == 2
     assert _arc_parts([outline], extent=(100, columns)) is None
     assert _arc_parts([outline - [0.0, outline[:, 1].min() + 0.5]], extent=(100, 100)) is None
+
+
+def test_a_piece_cut_off_goes_through_the_arc_stage_unless_it_is_convex(monkeypatch):
+    import activecontour.objects.split as split
+
+    r = 12.0
+    side = 2 * r - r / 6
+    centres = [(60.0, 60.0), (60.0, 60.0 + side), (60.0 + side * np.sqrt(3) / 2, 60.0 + side / 2)]
+    outline, parts, _ = _disks_parts(centres, r)
+    # a trefoil of disks is split as the arc stage splits it
+    clump = split._clump_parts([outline], (200, 200))
+    assert len(clump) == 3
+    assert sorted(shapely.Polygon(p[0]).area for p in clump) == pytest.approx(
+        sorted(shapely.Polygon(p[0]).area for p in parts), abs=1e-9)
+    # a convex piece is itself, without the arc stage
+    monkeypatch.setattr(split, "_arc_parts", lambda *args: pytest.fail("a convex piece reached the arcs"))
+    disk = _ellipse((60.0, 60.0), 20.0, 12.0, 0.3)
+    assert split._clump_parts([disk], (200, 200)) == [[disk]]
+
+
+def test_borders_that_reach_the_outline_where_no_corner_is_are_no_clump():
+    from activecontour.objects.split import _meet_at_corners
+
+    inside = np.zeros((20, 30), dtype=bool)
+    inside[2:18, 2:28] = True
+    parts = np.where(inside, np.where(np.arange(30) < 15, 1, 2), 0).astype(np.int32)
+    # the border between the two halves reaches the outline at rows 2 and 17, columns 14-15
+    assert _meet_at_corners(parts, inside, np.array([[2.0, 14.5], [17.0, 14.5]]), 2)
+    assert not _meet_at_corners(parts, inside, np.array([[2.0, 14.5]]), 2)
+    assert not _meet_at_corners(parts, inside, np.zeros((0, 2)), 2)
 
 
 def _flower(radius, petals, length, width):

@@ -97,14 +97,17 @@ included.
 
 Cost and memory: phi is float32 (a distance of a few pixels, rounded to ~2e-7 px, far below
 what the energy or the flow resolve; the marching-squares crossings, the distances and the energy
-are computed in float64 from it).  A step (a) is one DCT pair over the image (O(MN log MN),
-float32, its force computed in one compiled pass); a step (b) works on the band only (explicit, or
-conjugate gradients), but for one copy of phi.  The reinitialisation costs one sign pass over
-the image (the front is searched next to the previous one and the pixels that changed side) plus
-O(band) and a copy of phi for an accepted step (a rejected one costs its front), with work arrays
-kept between iterations; the energy is O(|Gamma|) from the cells the reinitialisation found.
-The image itself stays float64 (the model's tables and the common evaluator are exact in
-float64; the polygon backend shares them).
+are computed in float64 from it).  A step (a) is one DCT pair (O(MN log MN), float32, its force
+computed in one compiled pass) over the band's bounding box widened by ``band + 8 sqrt(tau mu)``
+(S's kernel decays as ``exp(-r / sqrt(tau mu))``: near Gamma the box's Neumann sides change the
+step by < 1e-4 px), phi held beyond it, when the box is at most half the image and the step,
+solved on a 4x coarser grid, flips no block beyond it; else over the image; a step (b) works on
+the band only (explicit, or conjugate gradients), but for one copy of phi.  The reinitialisation
+costs one sign pass over the image (the front is searched next to the previous one and the pixels
+that changed side) plus O(band) and a copy of phi for an accepted step (a rejected one costs its
+front), with work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
+reinitialisation found.  The image itself stays float64 (the model's tables and the common
+evaluator are exact in float64; the polygon backend shares them).
 
 The energy
 ----------

@@ -11,6 +11,9 @@ from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
 
 _EXPLICIT = 0.25  # step (b) is explicit (stable, on the band alone) up to tau mu = 1/4
+_REACH = 8.0  # S's kernel decays as exp(-r / l), l = sqrt(tau mu): a box reaching 8 l beyond the band
+_BOX_SHARE = 0.5  # a box over more than this share of the image: the whole image
+_COARSE = 4  # the far field's test grid: blocks of 4 x 4 pixels
 
 
 def heaviside(phi, epsilon=1.0):
@@ -54,11 +57,10 @@ class _Problem:
         sample = (rows[:, None] * n + cols[None, :]).ravel()
         self.sample_values = self.values.reshape(m * n, -1)[sample]  # gathered once
         self.sample_wall = self._wall(sample)
-        # eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis, along each axis
-        self.wave_r = (4.0 * np.sin(np.pi * np.arange(m) / (2.0 * m)) ** 2).astype(np.float32)
-        self.wave_c = (4.0 * np.sin(np.pi * np.arange(n) / (2.0 * n)) ** 2).astype(np.float32)
+        self.wave_r, self.wave_c = _waves(m), _waves(n)
         self.scratch = _Scratch(self.shape)
         self._spare = []  # image-sized float32 arrays to reuse (a new one faults in every page)
+        self._coarse = None  # the far field's test grid (_coarse_tables)
 
     def take(self):
         """An image-sized float32 array to write into (contents undefined)."""
@@ -178,12 +180,101 @@ class _Problem:
             near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
             rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
             return rhs
+        form = self.params.load_form(*force)
+        if self.params.mu > 0:
+            box = self._box(state, tau * self.params.mu)
+            if box is not None and not self._far_flips(state, form, tau, box):
+                return self._box_step(state, form, tau, box)
         # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
         rhs = self.take()
-        form = self.params.load_form(*force)
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
                             tau, rhs)
         return self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs
+
+    def _box(self, state, weight):
+        """The rows and columns (two slices) on which step (a) is solved, or None: the whole image.
+
+        S's kernel decays as ``exp(-r / l)`` with ``l = sqrt(tau mu)``: beyond the band (where phi
+        is ``+-band``) the step changes phi near Gamma by less than ``exp(-_REACH)`` of the force's
+        jumps (~1e-4 px), so the band's bounding box widened by ``band + _REACH l`` (to a length the
+        DCT is fast on) is solved alone, with Neumann sides, when it is at most ``_BOX_SHARE`` of
+        the image.
+        """
+        if state.near_flat.size == 0:
+            return None
+        m, n = self.shape
+        reach = int(np.ceil(self.band + _REACH * np.sqrt(weight)))
+        flat = state.near_flat
+        first, last = divmod(int(flat.min()), n)[0], divmod(int(flat.max()), n)[0]
+        cols = flat % n
+        rows = _fast_span(first - reach, last + 1 + reach, m)
+        cols = _fast_span(int(cols.min()) - reach, int(cols.max()) + 1 + reach, n)
+        if (rows.stop - rows.start) * (cols.stop - cols.start) > _BOX_SHARE * m * n:
+            return None
+        return rows, cols
+
+    def _far_flips(self, state, form, tau, box):
+        """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
+        is ``+-band - tau S(f)``, a region far from Gamma flipping where the smoothed force
+        outweighs the band (a hole opening without a seed).  Tested on a grid coarser by
+        ``_COARSE`` (block means of ``phi - tau f``, f from the block means of the channels and
+        their squares, S with the same length ``l``): a far block whose value comes within half
+        the band of zero sends the step to the whole image."""
+        k = _COARSE
+        means, squares, wall = self._coarse_tables()
+        coarse = np.empty(wall.shape, dtype=np.float32)
+        _kernels.block_means(state.phi, k, coarse)
+        force = wall * np.float32(self.params.mu)  # f's terms in the kernel's order, in float32
+        force += np.float32(form.constant)
+        for channel, (linear, square) in enumerate(zip(form.linear, form.square, strict=True)):
+            force += np.float32(linear) * means[channel]
+            if square != 0:
+                force += np.float32(square) * squares[channel]
+        coarse -= np.float32(tau) * force
+        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
+                              _waves(coarse.shape[1]))
+        held = np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
+        # the blocks that reach into the box are not far: the rest are four strips around them
+        rows, cols = box
+        first, last = rows.start // k, -(-rows.stop // k)
+        left, right = cols.start // k, -(-cols.stop // k)
+        strips = (held[:first], held[last:], held[first:last, :left], held[first:last, right:])
+        return any(strip.size and strip.min() < 0.5 * self.band for strip in strips)
+
+    def _coarse_tables(self):
+        """Block means (``_COARSE`` x ``_COARSE`` pixels, float32) of the channels ``(C, m, n)``, of
+        their squares, and of the number of image sides a pixel lies on (the wall term); made once."""
+        if self._coarse is None:
+            m, n = self.shape
+            k, channels = _COARSE, self.values.shape[2]
+            size = (-(-m // k), -(-n // k))
+            means = np.empty((channels,) + size, dtype=np.float32)
+            squares = np.empty_like(means)
+            for channel in range(channels):
+                values = self.values[..., channel].astype(np.float32)
+                _kernels.block_means(values, k, means[channel])
+                _kernels.block_means(np.square(values, out=values), k, squares[channel])
+            # a block on an image side holds one line of pixels on it: 1 / (its pixels across it)
+            sides = []
+            for blocks, length in zip(size, self.shape, strict=True):
+                starts = np.arange(blocks) * k
+                across = np.minimum(starts + k, length) - starts
+                sides.append(((starts == 0).astype(np.float64) + (starts == starts[-1])) / across)
+            self._coarse = means, squares, (sides[0][:, None] + sides[1][None, :]).astype(np.float32)
+        return self._coarse
+
+    def _box_step(self, state, form, tau, box):
+        """Step (a) solved on ``box`` (:meth:`_box`), phi held beyond it."""
+        rows, cols = box
+        inner = np.empty((rows.stop - rows.start, cols.stop - cols.start), dtype=np.float32)
+        _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
+                            tau, inner, rows.start, cols.start)
+        out, phi = self.take(), state.phi
+        out[rows, cols] = self._smooth(inner, tau * self.params.mu, _waves(inner.shape[0]),
+                                       _waves(inner.shape[1]))
+        out[:rows.start], out[rows.stop:] = phi[:rows.start], phi[rows.stop:]
+        out[rows, :cols.start], out[rows, cols.stop:] = phi[rows, :cols.start], phi[rows, cols.stop:]
+        return out
 
     def _band_smooth(self, state, weight):
         """``S phi = (1 - weight Laplace)^{-1} phi`` on the band's pixels, phi held beyond them.
@@ -244,10 +335,12 @@ class _Problem:
         out.ravel()[flat] = x
         return out
 
-    def _smooth(self, rhs, weight):
-        """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can."""
+    def _smooth(self, rhs, weight, wave_r=None, wave_c=None):
+        """``(1 - weight Laplace)^{-1} rhs`` (Neumann) by a DCT-II pair, in place where it can
+        (``wave_r, wave_c``: :func:`_waves` of rhs's shape when it is not the image's)."""
         spectrum = scipy.fft.dctn(rhs, norm="ortho", overwrite_x=True)
-        _kernels.divide_spectrum(spectrum, self.wave_r, self.wave_c, np.float32(weight))
+        _kernels.divide_spectrum(spectrum, self.wave_r if wave_r is None else wave_r,
+                                 self.wave_c if wave_c is None else wave_c, np.float32(weight))
         return scipy.fft.idctn(spectrum, norm="ortho", overwrite_x=True)
 
     def _explicit_step(self, state, force, tau):
@@ -262,6 +355,21 @@ class _Problem:
                                self.values.reshape(m * n, -1), form.constant, form.linear, form.square,
                                self.params.mu, tau, out.reshape(-1))
         return out
+
+
+def _waves(size):
+    """The eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis along an axis of ``size``."""
+    return (4.0 * np.sin(np.pi * np.arange(size) / (2.0 * size)) ** 2).astype(np.float32)
+
+
+def _fast_span(start, stop, size):
+    """``start:stop`` cut to ``0:size`` and widened to a length the DCT is fast on (or the axis)."""
+    start, stop = max(start, 0), min(stop, size)
+    length = scipy.fft.next_fast_len(stop - start, real=True)
+    if length >= size:
+        return slice(0, size)
+    start = min(start, size - length)
+    return slice(start, start + length)
 
 
 def _swept_area(old, new, mark=None):
