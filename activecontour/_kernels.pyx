@@ -1250,6 +1250,7 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, area, length = 0.0
     cdef double t_edge, t, w, g1, g2, weight, intensity
     cdef double *acc
+    cdef double *part
     cdef double *carry
     cdef double length_carry = 0.0
     cdef Cell *cells
@@ -1258,10 +1259,12 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
             parts.shape[0] != count or parts.shape[1] != 2 or parts.shape[2] != 2 * channels)):
         raise ValueError("moments must be (K, 1 + 2C) and parts (S, 2, 2C) or empty")
     acc = <double *> malloc((2 * channels + 1) * sizeof(double))
+    part = <double *> malloc(4 * channels * sizeof(double))  # a segment's parts, in registers' reach
     cells = <Cell *> malloc(channels * sizeof(Cell))
     carry = <double *> calloc(moments.shape[0] * moments.shape[1], sizeof(double))
-    if acc == NULL or cells == NULL or carry == NULL:
+    if acc == NULL or part == NULL or cells == NULL or carry == NULL:
         free(acc)
+        free(part)
         free(cells)
         free(carry)
         raise MemoryError()
@@ -1273,9 +1276,8 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
             du, dv = ends[e, 0] + 1.0 - u0, ends[e, 1] + 1.0 - v0
             for ch in range(2 * channels):
                 acc[ch] = 0.0
-                if with_parts:
-                    parts[e, 0, ch] = 0.0
-                    parts[e, 1, ch] = 0.0
+            for ch in range(4 * channels):
+                part[ch] = 0.0
             # next grid lines in the direction of travel
             k_u = _floor(u0) + 1.0 if du > 0 else -_floor(-u0) - 1.0
             k_v = _floor(v0) + 1.0 if dv > 0 else -_floor(-v0) - 1.0
@@ -1306,10 +1308,11 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
                             acc[channels + ch] += weight * dv * g2
                             if with_parts:
                                 intensity = (1.0 - w) * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
-                                parts[e, 0, ch] += weight * (1.0 - t_edge) * intensity
-                                parts[e, 1, ch] += weight * t_edge * intensity
-                                parts[e, 0, channels + ch] += weight * (1.0 - t_edge) * intensity * intensity
-                                parts[e, 1, channels + ch] += weight * t_edge * intensity * intensity
+                                # part: [start's I, start's I^2, end's I, end's I^2] per channel
+                                part[4 * ch] += weight * (1.0 - t_edge) * intensity
+                                part[4 * ch + 2] += weight * t_edge * intensity
+                                part[4 * ch + 1] += weight * (1.0 - t_edge) * intensity * intensity
+                                part[4 * ch + 3] += weight * t_edge * intensity * intensity
                 if t_next >= 1.0:
                     break
                 if t_u <= t_next:
@@ -1317,6 +1320,10 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
                 if t_v <= t_next:
                     k_v += 1.0 if dv > 0 else -1.0
                 t_prev = t_next
+            if with_parts:
+                for ch in range(channels):
+                    parts[e, 0, ch], parts[e, 0, channels + ch] = part[4 * ch], part[4 * ch + 1]
+                    parts[e, 1, ch], parts[e, 1, channels + ch] = part[4 * ch + 2], part[4 * ch + 3]
             i, o = inner[e], outer[e]
             acc[2 * channels] = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])  # the area
             for ch in range(2 * channels + 1):
@@ -1329,6 +1336,7 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
         for i in range(moments.shape[0] * moments.shape[1]):
             moments[i // moments.shape[1], i % moments.shape[1]] += carry[i]
     free(acc)
+    free(part)
     free(cells)
     free(carry)
     return length + length_carry

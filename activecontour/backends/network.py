@@ -390,6 +390,14 @@ class Network:
                                        pairs, _NO_WHERE)
         return np.flatnonzero(self.interface)[pairs[:min(found, limit)]]
 
+    def meet_among(self, nodes, segments):
+        """Whether two of the interface segments ``segments`` (indices among all segments) meet at
+        ``nodes`` other than at a common node (:meth:`simple`'s test, on them alone: True means
+        the network is not simple there)."""
+        start, end = _indices(self.start[segments]), _indices(self.end[segments])
+        return _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, 1,
+                                      np.empty((0, 2), dtype=np.intp), _NO_WHERE) > 0
+
     def reconnected(self, pairs, nodes):
         """The network with each pair of interface segments ``e = (a, b)``, ``f = (c, d)`` between
         the same two regions, oriented alike (``f`` read backwards where its sides are swapped),
@@ -467,15 +475,29 @@ class Network:
         """The interfaces that are closed loops (no junction, off the border), each as
         ``(segment indices, enclosed area)``: the connected pieces of the graph whose vertices are
         the interface segments, joined at the nodes of degree two (:meth:`_interface_pieces`)."""
+        areas = self.closed_areas(nodes)[0]
+        return [(self.loop_segments(k), area) for k, area in enumerate(areas)]
+
+    def closed_areas(self, nodes, interest=None):
+        """The enclosed area of every loop of :meth:`closed_loops` (in their order, the segments of
+        loop k :meth:`loop_segments`), and, given ``interest`` (bool per node), whether each passes
+        a node of it (None without): the loops' numbers, no list of their segments."""
         if self._pieces is None:
             self._pieces = self._interface_pieces()
-        chosen, piece, count, closed, sign, by_piece, bounds = self._pieces
+        chosen, piece, count, closed, sign = self._pieces[:5]
         if chosen.size == 0:
-            return []
+            return np.zeros(0), None if interest is None else np.zeros(0, dtype=bool)
         a, b = nodes.take(self.start[chosen], axis=0), nodes.take(self.end[chosen], axis=0)
         twice_area = np.bincount(piece, weights=sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]),
                                  minlength=count)
-        return [(chosen[by_piece[bounds[k]:bounds[k + 1]]], 0.5 * abs(twice_area[k])) for k in closed]
+        through = None if interest is None else np.bincount(
+            piece, weights=interest[self.start[chosen]], minlength=count)[closed] > 0
+        return 0.5 * np.abs(twice_area[closed]), through
+
+    def loop_segments(self, k):
+        """The segment indices of loop k of :meth:`closed_loops` (:meth:`closed_areas`)."""
+        chosen, _, _, closed, _, by_piece, bounds = self._pieces
+        return chosen[by_piece[bounds[closed[k]]:bounds[closed[k] + 1]]]
 
     def _interface_pieces(self):
         """The graph part of :meth:`closed_loops`: the interface segments, the piece of each, the
@@ -635,8 +657,11 @@ class Network:
     def inheriting(self, network):
         """This network, to reuse ``network``'s orders of the free nodes (:meth:`_band`): made from
         it by a change that moves no node and frees no other (:meth:`reconnected`,
-        :meth:`collapsed`, :meth:`subset`: the nodes they leave out are dropped from the order)."""
-        self._orders = {component: band[0] for component, band in network._bands.items()}
+        :meth:`collapsed`, :meth:`subset`: the nodes they leave out are dropped from the order).
+        Where ``network`` found no order of its own (it was never factored: a change on a change,
+        as a pinch resolved and the islands then dropped), it passes on the one it inherited."""
+        self._orders = dict(network._orders)
+        self._orders.update({component: band[0] for component, band in network._bands.items()})
         return self
 
     def _reverse_cuthill_mckee(self, index):
@@ -838,12 +863,16 @@ def _without_slivers(network, nodes):
         segments = np.concatenate([forward, backward])
         starts = np.concatenate([network.start[forward], network.end[backward]])
         ends = np.concatenate([network.end[forward], network.start[backward]])
-        for loop in chain_loops(starts, ends, len(nodes)):
-            a, b = nodes[starts[loop]], nodes[ends[loop]]
-            area = 0.5 * abs(float(np.sum(a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1])))
-            perimeter = float(np.hypot(*(b - a).T).sum())
-            if area <= _SLIVER * max(1.0, perimeter) ** 2:
-                keep[segments[loop]] = False
+        order, offsets = loop_order(starts, ends, len(nodes))
+        if len(offsets) < 2:
+            continue
+        # every loop's area and length at once (sums in each loop's order)
+        a, b = nodes.take(starts[order], axis=0), nodes.take(ends[order], axis=0)
+        firsts = offsets[:-1]
+        area = 0.5 * np.abs(np.add.reduceat(a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1], firsts))
+        perimeter = np.add.reduceat(np.hypot(*(b - a).T), firsts)
+        sliver = np.repeat(area <= _SLIVER * np.maximum(1.0, perimeter) ** 2, np.diff(offsets))
+        keep[segments[order[sliver]]] = False
     return network if keep.all() else network.subset(keep, nodes)
 
 
@@ -878,12 +907,13 @@ class _Flow:
         does not rise: the network cannot change its topology by moving, so a region the flow
         shrinks to nothing would otherwise fold over itself.  Returns whether any was removed."""
         network, nodes = self.network, self.nodes
+        interest = None
         if nodes_of_interest is not None:
             interest = np.zeros(len(nodes), dtype=bool)
             interest[nodes_of_interest] = True
-        candidates = [loop for loop, area in network.closed_loops(nodes)
-                      if (area < _ISLAND_AREA if nodes_of_interest is None
-                          else interest[network.start[loop]].any())]
+        areas, through = network.closed_areas(nodes, interest)
+        chosen = areas < _ISLAND_AREA if interest is None else through
+        candidates = [network.loop_segments(k) for k in np.flatnonzero(chosen)]
         if not candidates:
             return False
         # J after a removal from the regions' moments: the island's (Green's theorem on its loop)
@@ -1000,17 +1030,22 @@ class _Flow:
             if not spread > 0 or slope >= 0:
                 return 4, n_iter
             dt = _MAX_STEP / spread if dt_next is None else min(dt_next, _MAX_STEP / spread)
-            crossings, steps = [], network.steps(nodes, velocity)
+            crossings, steps, pinched = [], network.steps(nodes, velocity), None
             for _ in range(_BACKTRACKS):
                 trial = nodes + dt * velocity
                 if steps.admissible(dt, trial):
-                    # the crossing test first: it costs a fraction of the energy's
-                    if network.simple(trial):
+                    # the crossing test first: it costs a fraction of the energy's.  After a
+                    # crossing, the segments that met are tested alone first: where two of them
+                    # still meet, the shorter step crosses too, without a pass over the network
+                    if pinched is not None and network.meet_among(trial, pinched):
+                        crossings.append((dt, trial))
+                    elif (pairs := network.meeting_pairs(trial)).size == 0:
                         candidate = self.evaluate(network, trial)
                         if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                             break
                     else:
                         crossings.append((dt, trial))
+                        pinched = np.unique(pairs)
                 dt *= 0.5
             else:
                 # a region folding over itself as the flow shrinks it: drop it and go on (the

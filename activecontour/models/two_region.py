@@ -66,14 +66,21 @@ class ChanVeseParameters:
         Sandberg and Vese's sum with weights lambda / C), so mu and omega mean the same relative to
         the contrast of a gray image and of a colour one: three equal channels segment exactly
         like their gray image.
+
+        Kept per ``n_channels`` (read-only views; the fields are frozen): every evaluation of a
+        partition asks for them once per region.
         """
-        out = []
-        for name in ("lambda_in", "lambda_out"):
-            value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
-            if value.size not in (1, n_channels):
-                raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} channels")
-            out.append(np.broadcast_to(value / n_channels, (n_channels,)))
-        return out
+        cache = self.__dict__.setdefault("_weights", {})
+        if n_channels not in cache:
+            out = []
+            for name in ("lambda_in", "lambda_out"):
+                value = np.atleast_1d(np.asarray(getattr(self, name), dtype=np.float64))
+                if value.size not in (1, n_channels):
+                    raise ValueError(f"{name} has {value.size} weights for an image with {n_channels} "
+                                     "channels")
+                out.append(np.broadcast_to(value / n_channels, (n_channels,)))
+            cache[n_channels] = out
+        return list(cache[n_channels])
 
     def constant(self, name, n_channels):
         """The fixed constant ``name`` broadcast to ``n_channels``, or None when optimised."""
