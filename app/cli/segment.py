@@ -208,9 +208,14 @@ def _interrupt_at_once():
     holds the interpreter for as long as it runs (20 s in ``topology.winding_number`` on a
     speckle init).  Nothing is being written in this phase (the files of an image are written
     after it, all or none), so the signal's default action, ending the process, loses nothing that
-    was finished.  Left alone when SIGINT is not Python's default (ignored, or the caller's).
+    was finished.  Left alone when SIGINT is not Python's default (ignored, or the caller's), and
+    in a worker process of ``--jobs``: there the interrupt must come back to the parent as the
+    item's KeyboardInterrupt (the pool kills a worker that does not stop), not as a worker that
+    died, which the parent reports as a failed image and goes on.
     """
+    processes = sys.modules.get("multiprocessing")  # a worker has it; one image need not import it
     if (threading.current_thread() is not threading.main_thread()
+            or (processes is not None and processes.parent_process() is not None)
             or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
         yield
         return
