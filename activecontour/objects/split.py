@@ -1334,11 +1334,18 @@ ARC_TRIPLE = 0.02
 #: a large object, 0.29); of two that overlap more, the one that fits its arcs worse is dropped
 #: (an ellipse across a star's centre, through two opposite arms).
 ARC_OVERLAP = 0.3
-#: ... every point where the border between two parts meets the outline lies within this many
-#: pixels of a corner that turns by ``ARC_END_TURN`` (a waist at both ends: a bent rod or a
-#: banana cut across is not two objects), no point has four parts within that reach (a star's
-#: arms all meet at its centre; objects pressed together meet two or three at a point) ...
+#: ... every point where the border between two parts meets the outline lies within
+#: ``ARC_END_REACH`` pixels of a corner that turns by ``ARC_END_TURN`` (a waist at both ends: a
+#: bent rod or a banana cut across is not two objects), no point has four parts within
+#: ``ARC_REACH`` (a star's arms all meet at its centre; objects pressed together meet two or
+#: three at a point) ...
 ARC_REACH = 3.0
+#: The border ends' reach: the ellipses fitted to the arcs of a contact that the converged
+#: contour rounded (blur, noise, the length term) cross up to several pixels from the corner
+#: found.  On the touching families (seeds 0-59) the clumps whose ellipses explain them had ends
+#: 3-23 px from a corner (3 px declined 101 of them); the bent rods of the singles family are cut
+#: across by a border that ends 11-14 px from their one corner (singles seeds 38 and 45), so 10.
+ARC_END_REACH = 10.0
 #: The corners a border between two parts may end at turn by this many degrees: more than
 #: ``ARC_CORNER_TURN``, which only cuts the outline into arcs (a wiggle of the noise cuts one arc
 #: in two that the grouping joins again), since a border is drawn where two objects cross.  A
@@ -1355,6 +1362,14 @@ ARC_TRIPLE_POINTS = 2
 #: comparable size (the families' radii differ by 1.5 at most, areas by 2.25), while the petals of
 #: a flower or the arms of a star are small beside the part that takes its centre.
 ARC_SIZE_RATIO = 0.25
+#: Where the ellipses leave part of the object uncovered (an object pressed inside the clump owns
+#: no arc; an arc too short for its ellipse leaves its object without one), each piece of it as
+#: large as a part (``ARC_SIZE_RATIO``) is an object of its own when the ellipses still explain
+#: this fraction of the outline: the uncovered pieces then lie mostly inside the clump.  The arms
+#: of a star, each fitted by an ellipse that overlaps its neighbours too much to be kept, leave
+#: more of the outline unexplained (singles seeds 0-59: 0.39-0.55 explained; the clumps so
+#: split, 0.62-0.96).
+ARC_HIDDEN_OUTLINE = 0.6
 
 
 def _arc_parts(curves, depth=None, extent=None, bent=None):
@@ -1377,13 +1392,16 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     Of two ellipses that overlap by more than ``ARC_OVERLAP``, the worse fit is dropped.  The clump
     stands when the ellipses' boundaries explain the outline (``ARC_COVER`` of its vertices within
     ``ARC_GAP``), the ellipses cover ``ARC_COVER`` of the object and three of them at most
-    ``ARC_TRIPLE`` of it, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
+    ``ARC_TRIPLE`` of it -- or, where they cover less or explain less of the outline but
+    ``ARC_HIDDEN_OUTLINE`` of it, the uncovered pieces are objects of their own
+    (:func:`_uncovered_parts`) --, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
     ``ARC_SIZE_RATIO`` of the largest part, every border between two parts reaches the outline at
-    corners only (of ``ARC_END_TURN``), no four parts meet and at most ``ARC_TRIPLE_POINTS`` places have three
-    (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise the necks and the corner cuts decide, as
-    for an object without this stage.  Unlike a cut between two corners, the grouping
-    splits three objects pressed around one point (a trefoil has three corners, one per contact,
-    and three arcs) and takes a corner whose partner was rounded away as the end of two arcs.
+    corners only (of ``ARC_END_TURN``, within ``ARC_END_REACH``), no four parts meet and at most
+    ``ARC_TRIPLE_POINTS`` places have three (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise
+    the necks and the corner cuts decide, as for an object without this stage.  Unlike a cut
+    between two corners, the grouping splits three objects pressed around one point (a trefoil
+    has three corners, one per contact, and three arcs) and takes a corner whose partner was
+    rounded away as the end of two arcs.
 
     An object that reaches the edge of the image (of the crop of a pointed run,
     ``roi="init"``, where a touching neighbour is cut off by the neighbourhood) is left to the
@@ -1432,22 +1450,49 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     # its overlap, or never found, leaves its arc unexplained)
     gap = np.min([np.abs(_normalised_radius(ellipse, outline) - 1) * np.sqrt(np.prod(ellipse[1]))
                   for ellipse in ellipses], axis=0)
-    if (np.count_nonzero(gap <= ARC_GAP) < ARC_COVER * len(outline)
-            or np.count_nonzero(covered) < ARC_COVER * len(points)
-            or np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)):
+    explained = np.count_nonzero(gap <= ARC_GAP)
+    if (np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)
+            or explained < ARC_HIDDEN_OUTLINE * len(outline)):
         return None
     parts = np.zeros(inside.shape, dtype=np.int32)
     parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
+    if explained < ARC_COVER * len(outline) or np.count_nonzero(covered) < ARC_COVER * len(points):
+        uncovered = np.zeros(inside.shape, dtype=bool)
+        uncovered[tuple(points[covered == 0].T)] = True
+        if not _uncovered_parts(parts, uncovered):
+            return None
+    count = int(parts.max())
     outer = rasterize([outline - low], window)
-    sizes = np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:]
+    sizes = np.bincount(parts.ravel(), minlength=count + 1)[1:]
     ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
     if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
-            or not _meet_at_corners(parts, outer, outline[ends] - low, len(ellipses))):
+            or not _meet_at_corners(parts, outer, outline[ends] - low, count)):
         return None
     pieces = _cut(curves, parts, low)
-    if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):
+    if len(pieces) != count or any(len(piece) != 1 for piece in pieces):
         return None  # a cell in pieces, or with a hole: no clump of ellipses
     return pieces
+
+
+def _uncovered_parts(parts, uncovered):
+    """Give each 4-connected piece of the ``uncovered`` pixels (those in no ellipse) at least as
+    large as a part may be -- pi ``MIN_SPLIT_RADIUS``^2 and ``ARC_SIZE_RATIO`` of the largest
+    ellipse's cell -- an id of its own in ``parts`` (the cells of the ellipses, each pixel in
+    the one it lies deepest in); smaller pieces, the slivers between ellipses that meet, stay in
+    their nearest ellipse's cell.  Whether any piece was large enough."""
+    import scipy.ndimage
+
+    pieces, count = scipy.ndimage.label(uncovered)
+    if count == 0:
+        return False
+    smallest = max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * np.bincount(parts[~uncovered])[1:].max())
+    large = np.flatnonzero(np.bincount(pieces.ravel())[1:] >= smallest) + 1
+    if large.size == 0:
+        return False
+    lookup = np.zeros(count + 1, dtype=parts.dtype)
+    lookup[large] = parts.max() + np.arange(1, large.size + 1)
+    parts[uncovered] = np.where(lookup[pieces[uncovered]] > 0, lookup[pieces[uncovered]], parts[uncovered])
+    return True
 
 
 def _arcs(outline, corners):
@@ -1559,7 +1604,7 @@ def _normalised_radius(ellipse, points):
 
 def _meet_at_corners(parts, inside, corners, count):
     """Whether the borders between the pixel parts reach the object's edge (``inside``: the
-    pixels within its outer boundary) within ``ARC_REACH`` of a corner (window coordinates) only,
+    pixels within its outer boundary) within ``ARC_END_REACH`` of a corner (window coordinates) only,
     no pixel has four parts within that reach and at most ``ARC_TRIPLE_POINTS`` places have
     three."""
     import scipy.ndimage
@@ -1575,7 +1620,7 @@ def _meet_at_corners(parts, inside, corners, count):
         if not len(corners):  # a border reaches the edge, and there is no corner for it to end at
             return False
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
-        if apart.min(axis=1).max() > ARC_REACH:
+        if apart.min(axis=1).max() > ARC_END_REACH:
             return False
     if count < 3:
         return True
