@@ -12,8 +12,10 @@ whole clump:
    joins while one ellipse fits it about as well as two, by the Bayesian information criterion)
    and every pixel goes to the ellipse it lies deepest in, the rule by which overlapping
    objects are drawn.  It decides alone where the ellipses explain the object -- its outline,
-   its pixels, overlaps two by two, borders that end at corners, parts of comparable size, few
-   places where three meet -- which a trefoil of three disks around one point (three corners,
+   its pixels (or most of the outline, the pieces they leave uncovered being objects of their
+   own: pressed inside the clump, or without an arc long enough for its ellipse), overlaps two by
+   two, borders that end at corners, parts of comparable size, few places where three meet --
+   which a trefoil of three disks around one point (three corners,
    no pair of them a cut that leaves ellipses) satisfies and a star, a flower, a bent rod or a
    horse do not; elsewhere the three stages below decide as they did, and each piece they cut
    off goes through this stage on its own (:func:`_clump_parts`): a smaller clump, cut off at
@@ -74,9 +76,14 @@ necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      
 arcs into ellipses first                    0.28 / 0.85        0.53 / 0.93      10 of 120
   on seeds 20-59                            0.50 / 0.92        0.49 / 0.92      12 of 240
 the same, and arcs again on each piece cut  0.28 / 0.87        0.65 / 0.94      10 of 120
-off by the necks or corners (this module)
+off by the necks or corners
   on seeds 20-59                            0.50 / 0.92        0.49 / 0.93      12 of 240
   (necks and corners: 0.50 / 0.90, 0.39 / 0.90, 12 of 240)
+the same, and the pieces the arc ellipses   0.41 / 0.89        0.77 / 0.94      10 of 120
+leave uncovered objects of their own,
+borders ending 10 px from a corner (not 3;
+this module)
+  on seeds 20-59                            0.65 / 0.94        0.68 / 0.94      12 of 240
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -86,26 +93,32 @@ image gallery pipeline, for reference)
 ==========================================  =================  ===============  ============
 
 (The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the fourth on that of
-5d1d5b5, the same scenes' objects for every split.)  The corner stage is what wins on elongated
-objects side by side; the necks keep the singles whole. What is left is crowded: the worst seeds
-of both touching families (ellipses 13, 14, 17: 0.28, 0.50, 0.52; disks 6, 0: 0.65, 0.67; seeds
-20-59: disks 38, ellipses 49: 0.49, 0.50) hold connected pieces of 5-8 objects, some of which own
-no arc of the outline (pressed inside the clump, or their contacts rounded away), so the arc
-ellipses cover 0.6-0.8 of the piece and the clump is left to the necks and corners, which cut off
-only some of its objects (the pipeline scores 0.68, 0.78, 0.81, 0.83, 0.86, 0.98, 0.67 there).
-Most errors are objects left merged (on seeds 0-59, before the pieces went through the arcs again:
-50 pieces holding 135 disks, 48 holding 160 ellipses), nearly all in clumps that the arc stage
-declined. Two things tried did not pay: ellipses added for the area the arc ellipses leave
-uncovered (the moment ellipse of each large piece of it, split at its own distance peaks) took the
-disks to 0.53 / 0.93 and the ellipses to 0.28 / 0.85-0.86 with the clump tests kept, and with the
-border and size tests dropped only to 0.67 / 0.93 and 0.43 / 0.91 while cutting 54 of 120 singles:
-the ellipses fitted to the arcs are themselves wrong there (one across two disks whose contact was
-rounded away). The distance-transform watershed put in an object's place when all its parts are
-ellipse-like (moment-ellipse IoU) and its borders end at corners changed F1 by 0.005 at most (its
-cells' ragged borders and spurious peaks fail those tests nearly everywhere). On a 3-disk piece of
-disks seed 48 the pixel distance has a single maximum (a small disk pressed a third of its
-diameter into a larger one): no neck to find. The singles the split cuts (10 of 120) are cut by
-the necks and corners, as before the arc stage: bent rods and strokes.
+5d1d5b5, the fifth on that of 1ac25e4, the same scenes' objects for every split.) The corner stage
+is what wins on elongated objects side by side; the necks keep the singles whole. Until the fifth
+row, most errors were objects left merged in clumps that the arc stage declined (on seeds 0-59: 50
+pieces holding 135 disks, 48 holding 160 ellipses): of the pieces of two objects or more, 106 were
+declined by the border test alone, nearly all with as many arc ellipses as objects, explaining the
+outline and the pixels: a border ended 3-23 px from a corner (the fitted ellipses of a rounded
+contact cross away from the corner found, ``ARC_END_REACH``); 116 had their ellipses cover less than
+``ARC_COVER`` of them, an object pressed inside the clump owning no arc, or an arc too short for its
+ellipse (``ARC_OUTSIDE``, ``ARC_RMS``) leaving its object without one (:func:`_uncovered_parts`).
+The fifth row takes the worst seeds from 0.28, 0.65 (seeds 0-19) and 0.50, 0.49 (20-59) to 0.41,
+0.77 and 0.65, 0.68; the ellipses' mean is now 0.11 and 0.18 above the pipeline's. What is left: the
+worst seeds (ellipses 13, 14, 17: 0.41, 0.50, 0.64; disks 8, 6: 0.76, 0.79; seeds 20-59: ellipses
+48, 25: 0.65, 0.69; disks 38, 41: 0.68, 0.73; the pipeline 0.68, 0.78, 0.81, 0.97, 0.83, 0.92, 0.85,
+0.98, 0.92) hold pieces of 6-8 objects still left to the necks and corners: the border test
+(``ARC_END_REACH``: 14 px cuts two bent rods of the singles) or the size test declines them, or an
+uncovered piece holds two objects and is kept as one (a distance watershed of such pieces, or
+declining them, cost as much as it gained: ellipses 0.893 -> 0.897-0.902, disks worst 0.765 ->
+0.667). Tried and not kept before: ellipses added for the uncovered area (the moment ellipse of each
+large piece of it, split at its own distance peaks), with the border test at 3 px, gained nothing;
+the distance-transform watershed put in an object's place when all its parts are ellipse-like
+changed F1 by 0.005 at most. On a 3-disk piece of disks seed 48 the pixel distance has a single
+maximum (a small disk pressed a third of its diameter into a larger one): no neck to find. The
+singles the split cuts (10 of 120, 12 of 240) are cut by the necks (7 of them) and the corners (7,
+one after a neck): bent rods but one star (seed 39). The rods' necks are noise of the outline (a rod
+24 px wide narrowed by 1-2 px at two dents); a ``NECK_RATIO`` of 0.8 keeps them whole (3 of 120, 6
+of 240 cut, all by the corners) but costs the clumps more (disks worst 0.765 -> 0.50).
 """
 
 from __future__ import annotations
