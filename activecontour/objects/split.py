@@ -1381,7 +1381,7 @@ ARC_SIZE_RATIO = 0.25
 #: this fraction of the outline: the uncovered pieces then lie mostly inside the clump.  The arms
 #: of a star, each fitted by an ellipse that overlaps its neighbours too much to be kept, leave
 #: more of the outline unexplained (singles seeds 0-59: 0.39-0.55 explained; the clumps so
-#: split, 0.62-0.96).
+#: split, 0.62-0.96: a narrow margin, at 0.65 the worst ellipse seed, 13, falls back to 0.28).
 ARC_HIDDEN_OUTLINE = 0.6
 
 
