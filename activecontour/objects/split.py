@@ -12,8 +12,10 @@ whole clump:
    joins while one ellipse fits it about as well as two, by the Bayesian information criterion)
    and every pixel goes to the ellipse it lies deepest in, the rule by which overlapping
    objects are drawn.  It decides alone where the ellipses explain the object -- its outline,
-   its pixels, overlaps two by two, borders that end at corners, parts of comparable size, few
-   places where three meet -- which a trefoil of three disks around one point (three corners,
+   its pixels (or most of the outline, the pieces they leave uncovered being objects of their
+   own: pressed inside the clump, or without an arc long enough for its ellipse), overlaps two by
+   two, borders that end at corners, parts of comparable size, few places where three meet --
+   which a trefoil of three disks around one point (three corners,
    no pair of them a cut that leaves ellipses) satisfies and a star, a flower, a bent rod or a
    horse do not; elsewhere the three stages below decide as they did, and each piece they cut
    off goes through this stage on its own (:func:`_clump_parts`): a smaller clump, cut off at
@@ -74,9 +76,14 @@ necks, then concave corners                 0.28 / 0.82        0.48 / 0.91      
 arcs into ellipses first                    0.28 / 0.85        0.53 / 0.93      10 of 120
   on seeds 20-59                            0.50 / 0.92        0.49 / 0.92      12 of 240
 the same, and arcs again on each piece cut  0.28 / 0.87        0.65 / 0.94      10 of 120
-off by the necks or corners (this module)
+off by the necks or corners
   on seeds 20-59                            0.50 / 0.92        0.49 / 0.93      12 of 240
   (necks and corners: 0.50 / 0.90, 0.39 / 0.90, 12 of 240)
+the same, and the pieces the arc ellipses   0.41 / 0.89        0.77 / 0.94      10 of 120
+leave uncovered objects of their own,
+borders ending 10 px from a corner (not 3;
+this module)
+  on seeds 20-59                            0.65 / 0.94        0.68 / 0.94      12 of 240
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -86,26 +93,32 @@ image gallery pipeline, for reference)
 ==========================================  =================  ===============  ============
 
 (The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the fourth on that of
-5d1d5b5, the same scenes' objects for every split.)  The corner stage is what wins on elongated
-objects side by side; the necks keep the singles whole. What is left is crowded: the worst seeds
-of both touching families (ellipses 13, 14, 17: 0.28, 0.50, 0.52; disks 6, 0: 0.65, 0.67; seeds
-20-59: disks 38, ellipses 49: 0.49, 0.50) hold connected pieces of 5-8 objects, some of which own
-no arc of the outline (pressed inside the clump, or their contacts rounded away), so the arc
-ellipses cover 0.6-0.8 of the piece and the clump is left to the necks and corners, which cut off
-only some of its objects (the pipeline scores 0.68, 0.78, 0.81, 0.83, 0.86, 0.98, 0.67 there).
-Most errors are objects left merged (on seeds 0-59, before the pieces went through the arcs again:
-50 pieces holding 135 disks, 48 holding 160 ellipses), nearly all in clumps that the arc stage
-declined. Two things tried did not pay: ellipses added for the area the arc ellipses leave
-uncovered (the moment ellipse of each large piece of it, split at its own distance peaks) took the
-disks to 0.53 / 0.93 and the ellipses to 0.28 / 0.85-0.86 with the clump tests kept, and with the
-border and size tests dropped only to 0.67 / 0.93 and 0.43 / 0.91 while cutting 54 of 120 singles:
-the ellipses fitted to the arcs are themselves wrong there (one across two disks whose contact was
-rounded away). The distance-transform watershed put in an object's place when all its parts are
-ellipse-like (moment-ellipse IoU) and its borders end at corners changed F1 by 0.005 at most (its
-cells' ragged borders and spurious peaks fail those tests nearly everywhere). On a 3-disk piece of
-disks seed 48 the pixel distance has a single maximum (a small disk pressed a third of its
-diameter into a larger one): no neck to find. The singles the split cuts (10 of 120) are cut by
-the necks and corners, as before the arc stage: bent rods and strokes.
+5d1d5b5, the fifth on that of 1ac25e4, the same scenes' objects for every split.) The corner stage
+is what wins on elongated objects side by side; the necks keep the singles whole. Until the fifth
+row, most errors were objects left merged in clumps that the arc stage declined (on seeds 0-59: 50
+pieces holding 135 disks, 48 holding 160 ellipses): of the pieces of two objects or more, 106 were
+declined by the border test alone, nearly all with as many arc ellipses as objects, explaining the
+outline and the pixels: a border ended 3-23 px from a corner (the fitted ellipses of a rounded
+contact cross away from the corner found, ``ARC_END_REACH``); 116 had their ellipses cover less than
+``ARC_COVER`` of them, an object pressed inside the clump owning no arc, or an arc too short for its
+ellipse (``ARC_OUTSIDE``, ``ARC_RMS``) leaving its object without one (:func:`_uncovered_parts`).
+The fifth row takes the worst seeds from 0.28, 0.65 (seeds 0-19) and 0.50, 0.49 (20-59) to 0.41,
+0.77 and 0.65, 0.68; the ellipses' mean is now 0.11 and 0.18 above the pipeline's. What is left: the
+worst seeds (ellipses 13, 14, 17: 0.41, 0.50, 0.64; disks 8, 6: 0.76, 0.79; seeds 20-59: ellipses
+48, 25: 0.65, 0.69; disks 38, 41: 0.68, 0.73; the pipeline 0.68, 0.78, 0.81, 0.97, 0.83, 0.92, 0.85,
+0.98, 0.92) hold pieces of 6-8 objects still left to the necks and corners: the border test
+(``ARC_END_REACH``: 14 px cuts two bent rods of the singles) or the size test declines them, or an
+uncovered piece holds two objects and is kept as one (a distance watershed of such pieces, or
+declining them, cost as much as it gained: ellipses 0.893 -> 0.897-0.902, disks worst 0.765 ->
+0.667). Tried and not kept before: ellipses added for the uncovered area (the moment ellipse of each
+large piece of it, split at its own distance peaks), with the border test at 3 px, gained nothing;
+the distance-transform watershed put in an object's place when all its parts are ellipse-like
+changed F1 by 0.005 at most. On a 3-disk piece of disks seed 48 the pixel distance has a single
+maximum (a small disk pressed a third of its diameter into a larger one): no neck to find. The
+singles the split cuts (10 of 120, 12 of 240) are cut by the necks (7 of them) and the corners (7,
+one after a neck): bent rods but one star (seed 39). The rods' necks are noise of the outline (a rod
+24 px wide narrowed by 1-2 px at two dents); a ``NECK_RATIO`` of 0.8 keeps them whole (3 of 120, 6
+of 240 cut, all by the corners) but costs the clumps more (disks worst 0.765 -> 0.50).
 """
 
 from __future__ import annotations
@@ -1334,11 +1347,18 @@ ARC_TRIPLE = 0.02
 #: a large object, 0.29); of two that overlap more, the one that fits its arcs worse is dropped
 #: (an ellipse across a star's centre, through two opposite arms).
 ARC_OVERLAP = 0.3
-#: ... every point where the border between two parts meets the outline lies within this many
-#: pixels of a corner that turns by ``ARC_END_TURN`` (a waist at both ends: a bent rod or a
-#: banana cut across is not two objects), no point has four parts within that reach (a star's
-#: arms all meet at its centre; objects pressed together meet two or three at a point) ...
+#: ... every point where the border between two parts meets the outline lies within
+#: ``ARC_END_REACH`` pixels of a corner that turns by ``ARC_END_TURN`` (a waist at both ends: a
+#: bent rod or a banana cut across is not two objects), no point has four parts within
+#: ``ARC_REACH`` (a star's arms all meet at its centre; objects pressed together meet two or
+#: three at a point) ...
 ARC_REACH = 3.0
+#: The border ends' reach: the ellipses fitted to the arcs of a contact that the converged
+#: contour rounded (blur, noise, the length term) cross up to several pixels from the corner
+#: found.  On the touching families (seeds 0-59) the clumps whose ellipses explain them had ends
+#: 3-23 px from a corner (3 px declined 101 of them); the bent rods of the singles family are cut
+#: across by a border that ends 11-14 px from their one corner (singles seeds 38 and 45), so 10.
+ARC_END_REACH = 10.0
 #: The corners a border between two parts may end at turn by this many degrees: more than
 #: ``ARC_CORNER_TURN``, which only cuts the outline into arcs (a wiggle of the noise cuts one arc
 #: in two that the grouping joins again), since a border is drawn where two objects cross.  A
@@ -1355,6 +1375,14 @@ ARC_TRIPLE_POINTS = 2
 #: comparable size (the families' radii differ by 1.5 at most, areas by 2.25), while the petals of
 #: a flower or the arms of a star are small beside the part that takes its centre.
 ARC_SIZE_RATIO = 0.25
+#: Where the ellipses leave part of the object uncovered (an object pressed inside the clump owns
+#: no arc; an arc too short for its ellipse leaves its object without one), each piece of it as
+#: large as a part (``ARC_SIZE_RATIO``) is an object of its own when the ellipses still explain
+#: this fraction of the outline: the uncovered pieces then lie mostly inside the clump.  The arms
+#: of a star, each fitted by an ellipse that overlaps its neighbours too much to be kept, leave
+#: more of the outline unexplained (singles seeds 0-59: 0.39-0.55 explained; the clumps so
+#: split, 0.62-0.96: a narrow margin, at 0.65 the worst ellipse seed, 13, falls back to 0.28).
+ARC_HIDDEN_OUTLINE = 0.6
 
 
 def _arc_parts(curves, depth=None, extent=None, bent=None):
@@ -1377,13 +1405,16 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     Of two ellipses that overlap by more than ``ARC_OVERLAP``, the worse fit is dropped.  The clump
     stands when the ellipses' boundaries explain the outline (``ARC_COVER`` of its vertices within
     ``ARC_GAP``), the ellipses cover ``ARC_COVER`` of the object and three of them at most
-    ``ARC_TRIPLE`` of it, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
+    ``ARC_TRIPLE`` of it -- or, where they cover less or explain less of the outline but
+    ``ARC_HIDDEN_OUTLINE`` of it, the uncovered pieces are objects of their own
+    (:func:`_uncovered_parts`) --, every part holds pi ``MIN_SPLIT_RADIUS``^2 pixels and
     ``ARC_SIZE_RATIO`` of the largest part, every border between two parts reaches the outline at
-    corners only (of ``ARC_END_TURN``), no four parts meet and at most ``ARC_TRIPLE_POINTS`` places have three
-    (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise the necks and the corner cuts decide, as
-    for an object without this stage.  Unlike a cut between two corners, the grouping
-    splits three objects pressed around one point (a trefoil has three corners, one per contact,
-    and three arcs) and takes a corner whose partner was rounded away as the end of two arcs.
+    corners only (of ``ARC_END_TURN``, within ``ARC_END_REACH``), no four parts meet and at most
+    ``ARC_TRIPLE_POINTS`` places have three (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise
+    the necks and the corner cuts decide, as for an object without this stage.  Unlike a cut
+    between two corners, the grouping splits three objects pressed around one point (a trefoil
+    has three corners, one per contact, and three arcs) and takes a corner whose partner was
+    rounded away as the end of two arcs.
 
     An object that reaches the edge of the image (of the crop of a pointed run,
     ``roi="init"``, where a touching neighbour is cut off by the neighbourhood) is left to the
@@ -1432,22 +1463,49 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     # its overlap, or never found, leaves its arc unexplained)
     gap = np.min([np.abs(_normalised_radius(ellipse, outline) - 1) * np.sqrt(np.prod(ellipse[1]))
                   for ellipse in ellipses], axis=0)
-    if (np.count_nonzero(gap <= ARC_GAP) < ARC_COVER * len(outline)
-            or np.count_nonzero(covered) < ARC_COVER * len(points)
-            or np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)):
+    explained = np.count_nonzero(gap <= ARC_GAP)
+    if (np.count_nonzero(covered >= 3) > ARC_TRIPLE * len(points)
+            or explained < ARC_HIDDEN_OUTLINE * len(outline)):
         return None
     parts = np.zeros(inside.shape, dtype=np.int32)
     parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
+    if explained < ARC_COVER * len(outline) or np.count_nonzero(covered) < ARC_COVER * len(points):
+        uncovered = np.zeros(inside.shape, dtype=bool)
+        uncovered[tuple(points[covered == 0].T)] = True
+        if not _uncovered_parts(parts, uncovered):
+            return None
+    count = int(parts.max())
     outer = rasterize([outline - low], window)
-    sizes = np.bincount(parts.ravel(), minlength=len(ellipses) + 1)[1:]
+    sizes = np.bincount(parts.ravel(), minlength=count + 1)[1:]
     ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
     if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
-            or not _meet_at_corners(parts, outer, outline[ends] - low, len(ellipses))):
+            or not _meet_at_corners(parts, outer, outline[ends] - low, count)):
         return None
     pieces = _cut(curves, parts, low)
-    if len(pieces) != len(ellipses) or any(len(piece) != 1 for piece in pieces):
+    if len(pieces) != count or any(len(piece) != 1 for piece in pieces):
         return None  # a cell in pieces, or with a hole: no clump of ellipses
     return pieces
+
+
+def _uncovered_parts(parts, uncovered):
+    """Give each 4-connected piece of the ``uncovered`` pixels (those in no ellipse) at least as
+    large as a part may be -- pi ``MIN_SPLIT_RADIUS``^2 and ``ARC_SIZE_RATIO`` of the largest
+    ellipse's cell -- an id of its own in ``parts`` (the cells of the ellipses, each pixel in
+    the one it lies deepest in); smaller pieces, the slivers between ellipses that meet, stay in
+    their nearest ellipse's cell.  Whether any piece was large enough."""
+    import scipy.ndimage
+
+    pieces, count = scipy.ndimage.label(uncovered)
+    if count == 0:
+        return False
+    smallest = max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * np.bincount(parts[~uncovered])[1:].max())
+    large = np.flatnonzero(np.bincount(pieces.ravel())[1:] >= smallest) + 1
+    if large.size == 0:
+        return False
+    lookup = np.zeros(count + 1, dtype=parts.dtype)
+    lookup[large] = parts.max() + np.arange(1, large.size + 1)
+    parts[uncovered] = np.where(lookup[pieces[uncovered]] > 0, lookup[pieces[uncovered]], parts[uncovered])
+    return True
 
 
 def _arcs(outline, corners):
@@ -1559,7 +1617,7 @@ def _normalised_radius(ellipse, points):
 
 def _meet_at_corners(parts, inside, corners, count):
     """Whether the borders between the pixel parts reach the object's edge (``inside``: the
-    pixels within its outer boundary) within ``ARC_REACH`` of a corner (window coordinates) only,
+    pixels within its outer boundary) within ``ARC_END_REACH`` of a corner (window coordinates) only,
     no pixel has four parts within that reach and at most ``ARC_TRIPLE_POINTS`` places have
     three."""
     import scipy.ndimage
@@ -1575,7 +1633,7 @@ def _meet_at_corners(parts, inside, corners, count):
         if not len(corners):  # a border reaches the edge, and there is no corner for it to end at
             return False
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
-        if apart.min(axis=1).max() > ARC_REACH:
+        if apart.min(axis=1).max() > ARC_END_REACH:
             return False
     if count < 3:
         return True

@@ -8,6 +8,7 @@ import shapely
 import activecontour as ac
 from activecontour import synthetic
 from activecontour.geometry.curve import orient
+from activecontour.objects.measure import label_image
 from activecontour.objects.metrics import match_instances
 from activecontour.objects.split import (
     MIN_WAIST_DEPTH,
@@ -19,6 +20,7 @@ from activecontour.objects.split import (
     _ellipse_fit,
     _hull_depth,
     _meet_at_corners,
+    _uncovered_parts,
     split_touching,
 )
 
@@ -83,6 +85,47 @@ def test_touching_objects_are_split(family, seed, least):
 def test_a_clump_cut_off_an_object_is_split_by_its_own_arcs(family, seed, least):
     image, truth = synthetic.FAMILIES[family](seed)
     assert match_instances(ac.segment(image).labels, truth)["f1"] >= least
+
+
+def _clump_of(family, seed, count):
+    """The connected piece of a family scene's segmentation (``separate=False``) that holds
+    ``count`` true objects (20 px of each at least): its curves, its pixels, the true labels of
+    the objects it holds (others 0) and the image."""
+    image, truth = synthetic.FAMILIES[family](seed)
+    pieces = ac.segment(image, separate=False)
+    for k, curves in enumerate(pieces.object_contours):
+        ids, sizes = np.unique(truth[(pieces.labels == k + 1) & (truth > 0)], return_counts=True)
+        if np.count_nonzero(sizes >= 20) == count:
+            return curves, pieces.labels == k + 1, np.where(np.isin(truth, ids[sizes >= 20]), truth, 0), image
+    raise AssertionError(f"no piece of {count} objects")
+
+
+# (ellipses seed 11: 7 objects whose contacts the contour rounded, so that the borders between the
+# arcs' ellipses end 4-9 px from the corners found, :data:`activecontour.objects.split.
+# ARC_END_REACH`; disks seed 0: 7 disks of which two are pressed inside the clump and own no arc,
+# :func:`activecontour.objects.split._uncovered_parts`)
+@pytest.mark.parametrize(("family", "seed", "least"), [("ellipses", 11, 0.9), ("disks", 0, 0.7)])
+def test_a_clump_the_arcs_explain_only_in_part_is_split_by_them(family, seed, least):
+    curves, inside, truth, image = _clump_of(family, seed, 7)
+    parts = split_touching([curves], inside.astype(np.int32), image)
+    assert match_instances(label_image(parts, truth.shape), truth)["f1"] >= least
+
+
+def test_uncovered_pieces_as_large_as_a_part_are_parts_of_their_own():
+    # two ellipses' cells of 20 x 20 px; uncovered: a block of 10 x 12 px (0.3 of a cell, above
+    # ARC_SIZE_RATIO) in the first, and a sliver of 2 x 5 px in the second
+    parts = np.zeros((30, 50), dtype=np.int32)
+    parts[5:25, 5:25], parts[5:25, 25:45] = 1, 2
+    block, sliver = np.zeros(parts.shape, dtype=bool), np.zeros(parts.shape, dtype=bool)
+    block[8:18, 8:20], sliver[10:12, 30:35] = True, True
+    before = parts.copy()
+    assert _uncovered_parts(parts, block | sliver)
+    assert (parts[block] == 3).all()  # a part of its own
+    np.testing.assert_array_equal(parts[~block], before[~block])  # the sliver stays in its cell
+    # nothing as large as a part: no part added, and the caller declines the clump
+    parts = before.copy()
+    assert not _uncovered_parts(parts, sliver)
+    np.testing.assert_array_equal(parts, before)
 
 
 def test_touching_objects_are_split_from_the_level_set_too():
