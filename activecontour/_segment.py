@@ -150,7 +150,9 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
         that drawing around one object gives that object (grown while the object reaches its
         edge, so a curve drawn inside the object works too).  The result is in the whole image's
         frame; ``result.roi`` is the domain used (a bool mask) and ``result.energy`` is (6.38) on
-        its bounding box.
+        its bounding box.  Intensities keep the whole image's normalisation: ``mu`` means the
+        same as on the whole image, and ``result.mu``, ``c_in``, ``c_out`` and the energies are
+        in the units of a run on it (:meth:`~activecontour.problem.Problem.restricted`).
     separate : bool
         Objects that touch get their own ids in ``result.labels`` (split along the necks of the
         inside region, :func:`activecontour.objects.split.split_touching`); False: one id per connected

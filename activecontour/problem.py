@@ -75,7 +75,7 @@ class Problem:
         results are reported in its frame).
     normalised : ndarray (M', N', C)
         The values (6.38) reads, in the normalised units results report (``result.c_in``, ``mu``):
-        of the whole image, or of the crop of a region of interest.
+        of the whole image, or of the crop of a region of interest (in the whole image's units).
     units : tuple (offset, scale)
         An input intensity is ``offset + scale * normalised``.
     box : tuple (r0, c0, r1, c1) or None
@@ -177,8 +177,13 @@ class Problem:
 
     def restricted(self, box, domain):
         """The whole image's problem on the crop ``box`` of a region of interest, the pixels outside
-        ``domain`` filled (:func:`activecontour.imaging.roi.restrict_values`); with
-        ``normalize="range"`` the crop is scaled by its own range, as ``segment(image[box])`` would.
+        ``domain`` filled (:func:`activecontour.imaging.roi.restrict_values`): the domain D of (6.38)
+        restricted, the rest of the functional as it is.  The crop keeps the whole image's
+        normalised units and working frame, so a result on it reports ``mu``, ``c_in``, ``c_out``
+        and energies in the units of a run on the whole image (continuing with ``mu=result.mu``
+        on the image means the same weight), a given ``mu`` means the same on both, and the
+        default mu's floor (:data:`~activecontour.imaging.noise.MU_FLOOR`) is the whole image's
+        (its noise is still read on the domain's pixels, :attr:`auto_mu`).
 
         Parameters
         ----------
@@ -186,11 +191,7 @@ class Problem:
         domain : bool ndarray or None
             As :func:`activecontour.imaging.roi.resolve_roi` returns them.
         """
-        values = restrict_values(self.normalised, box, domain)
-        low, span = 0.0, 1.0
-        if self.settings.normalize == "range":
-            low, high = float(values.min()), float(values.max())
-            span = high - low if high > low else 1.0
-            values = (values - low) / span
-        offset, scale = self.units
-        return Problem(self.settings, self.image, values, (offset + scale * low, scale * span), box, domain)
+        part = Problem(self.settings, self.image, restrict_values(self.normalised, box, domain), self.units,
+                       box, domain)
+        part.__dict__["frame"] = self.frame  # the whole image's (the crop's values lie within its span)
+        return part

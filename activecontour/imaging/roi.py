@@ -4,7 +4,10 @@
 that drawing around one object segments that object and nothing else:
 
 * a box ``(r0, c0, r1, c1)`` (rows r0..r1-1, columns c0..c1-1, as a slice): exact; the image is
-  cropped, the flow runs on the crop, and the contours are shifted back;
+  cropped, the flow runs on the crop, and the contours are shifted back.  The crop keeps the
+  whole image's normalised intensities (not stretched by its own range): (6.38) with the same
+  ``mu``, ``omega`` and constants as on the whole image, only D smaller, so a result reports them
+  in the units of a run on the whole image;
 * a bool mask of the image's shape: the image is cropped to the mask's bounding box, and the
   pixels of the box outside the mask are given the median intensity of the mask's edge pixels
   (those inside the mask with a neighbour outside), so that they read as the background the user

@@ -72,14 +72,44 @@ def test_box_roi_is_the_crop_exactly(blobs):
     image, _, truths = blobs
     box = (40, 5, 80, 45)  # holds the blob at (60, 25) only
     res = ac.segment(image, roi=box)
-    crop = ac.segment(image[40:80, 5:45])
+    np.testing.assert_array_equal(res.mask[40:80, 5:45], ac.segment(image[40:80, 5:45]).mask)
+    # the crop in the whole image's normalised units (its range onto [0, 1]), which a result reports
+    crop = ac.segment(((image - image.min()) / np.ptp(image))[40:80, 5:45], normalize=None)
     np.testing.assert_array_equal(res.mask[40:80, 5:45], crop.mask)
     assert not res.mask[:40].any() and not res.mask[80:].any()
     assert res.roi[40:80, 5:45].all() and res.roi.sum() == 40 * 40
     assert res.energy == pytest.approx(crop.energy, rel=1e-12)
-    assert res.energy == pytest.approx(
-        chan_vese_energy(image[40:80, 5:45], [c - (40, 5) for c in res.contours], mu=res.mu), rel=1e-9)
+    assert (res.mu, res.c_in, res.c_out) == pytest.approx((crop.mu, crop.c_in, crop.c_out), rel=1e-12)
     assert synthetic.dice(res.mask, truths[3]) > 0.97
+
+
+@pytest.mark.parametrize("mu", ["auto", 0.05])
+@pytest.mark.parametrize("noise", [0.0, 0.05])
+def test_a_roi_result_is_in_the_whole_images_units(mu, noise):
+    """A crop whose own range is a quarter of the image's (a dim disk in the box, a bright one
+    outside it): ``mu``, ``c_in``, ``c_out`` and the energy are those of (6.38) on the image's
+    normalised intensities, the units of a run on the whole image; a given mu means the same on
+    both, and a noise-free image's default mu is the whole image's floor."""
+    from activecontour.imaging.noise import MU_FLOOR
+
+    dim, bright = synthetic.disk((30, 30), 12.0), synthetic.disk((30, 90), 12.0)
+    image = 0.25 * synthetic.render(dim, (60, 120))[0] + synthetic.render(bright, (60, 120))[0]
+    image = synthetic.add_noise(image, noise, seed=2) if noise else image
+    normalised = (image - image.min()) / np.ptp(image)
+    res = ac.segment(image, roi=(5, 5, 55, 55), mu=mu)
+    inside, outside = ((value - image.min()) / np.ptp(image) for value in (0.25, 0.0))
+    assert res.c_in == pytest.approx(inside, abs=0.01) and res.c_out == pytest.approx(outside, abs=0.01)
+    assert res.c_in_image == pytest.approx(image.min() + res.c_in * np.ptp(image), rel=1e-12)
+    if mu == "auto" and not noise:
+        assert res.mu == MU_FLOOR == ac.segment(image).mu
+    if mu != "auto":
+        assert res.mu == mu
+    shifted = [c - (5, 5) for c in res.contours]
+    assert res.energy == pytest.approx(chan_vese_energy(normalised[5:55, 5:55], shifted, mu=res.mu,
+                                                        normalize=None), rel=1e-9)
+    assert res.energy == pytest.approx(chan_vese_energy(normalised[5:55, 5:55], shifted, mu=res.mu,
+                                                        c_in=res.c_in, c_out=res.c_out, normalize=None),
+                                       rel=1e-9)
 
 
 def test_a_masks_noise_is_read_on_its_pixels_not_its_fill(blobs):
