@@ -35,6 +35,13 @@ Canonical forms (what is hashed, and why):
   workers): ``-j`` workers then do not oversubscribe the cores, and a case's CPU time is its own.
   It is not needed for the hashes: 23 cases run with two BLAS and two OpenCV threads in one process
   hashed the same.
+* The same bytes on every x86-64 machine with AVX2 (:data:`PINNED`, set before numpy is imported):
+  OpenBLAS picks its kernels by the processor, and numpy and OpenCV dispatch some loops to AVX-512
+  where it exists; each gives results that differ in the last bits (a dot product summed in another
+  order, ``exp`` by another polynomial). Taken on an Intel machine, 76 of the 103 cases hashed
+  differently on an AMD EPYC with AVX-512 (OpenBLAS's Zen kernels), the library unchanged. So the
+  corpus runs with OpenBLAS's Haswell kernels and numpy and OpenCV kept to AVX2: any machine with
+  AVX2 runs the same instructions. A caller's own setting of these variables is kept.
 
 usage:
     python3 benchmarks/golden.py --write         # compute every case and store benchmarks/golden.json
@@ -51,8 +58,14 @@ from __future__ import annotations
 
 import os
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # before numpy: one BLAS thread (see the docstring)
+#: Set before numpy is imported (see the docstring): one BLAS thread, and the same kernels on every
+#: x86-64 machine with AVX2.
+PINNED = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+          "OPENBLAS_CORETYPE": "Haswell",
+          "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR",
+          "OPENCV_CPU_DISABLE": "AVX512_SKX,AVX512_COMMON,AVX512_KNL,AVX512_KNM,AVX512_CNL,AVX512_CLX,AVX512_ICL"}
+for _name, _value in PINNED.items():
+    os.environ.setdefault(_name, _value)
 
 import argparse  # noqa: E402
 import fnmatch  # noqa: E402

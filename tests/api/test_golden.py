@@ -5,6 +5,7 @@ marked slow: ``pytest -m slow tests/api/test_golden.py``, or ``python3 benchmark
 """
 
 import importlib.util
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -35,12 +36,25 @@ def test_every_case_is_stored(golden):
     assert len(stored) == len(golden.SAMPLES) * 4 + 1 + len(golden.FILE_CASES)
 
 
-@pytest.mark.parametrize("name", CHEAP)
-def test_cheap_case_is_unchanged(golden, name):
-    stored = golden.load_golden()[name]
-    name, parts, summary, seconds, error = golden.run_case(name)
-    assert error is None, error
-    assert golden.compare(name, parts, stored) == "same"
+def test_cheap_cases_are_unchanged():
+    """In a fresh process: golden.py pins the BLAS, numpy and OpenCV kernels before numpy is imported
+    (its PINNED), which this process, numpy loaded, cannot do; in here the objects table of cell
+    hashed differently on an AMD EPYC than on the machine that stored it."""
+    only = [arg for name in CHEAP for arg in ("--only", name)]
+    run = subprocess.run([sys.executable, str(SCRIPT), "-j", "1", *only], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout[-4000:] + run.stderr[-4000:]
+    assert run.stdout.count(" same") == len(CHEAP), run.stdout
+
+
+def test_the_kernels_are_pinned_before_numpy_loads():
+    code = (f"import runpy, sys; runpy.run_path({str(SCRIPT)!r}, run_name='golden_pin'); "
+            "import numpy as np; info = np.lib.introspect.opt_func_info('exp', 'float64'); "
+            "print(info['exp']['dd']['current'])")
+    env = {key: value for key, value in os.environ.items()
+           if key not in ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE", "OPENCV_CPU_DISABLE")}
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert run.returncode == 0, run.stderr
+    assert "V4" not in run.stdout and "AVX512" not in run.stdout, run.stdout
 
 
 @pytest.mark.slow
