@@ -26,7 +26,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
   :func:`divide_spectrum`, :func:`block_means`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
-  :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
+  :func:`sides_at`, :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
   sides of phi, the front, the marching-squares segments of the zero set and their table, the
   narrow band's distances, the oriented soup of segments that the common evaluator scores by
   (6.38), the area swept by Gamma, the steps (a) and (b)).
@@ -2048,6 +2048,24 @@ def sides(const real[:, ::1] phi, const unsigned char[:, ::1] before, unsigned c
                         switched[count] = r * n + c
                         count += 1
         PyErr_CheckSignals()
+    return count
+
+
+def sides_at(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,
+             const Py_ssize_t[::1] flat, Py_ssize_t[::1] switched):
+    """:func:`sides` at the pixels ``flat`` only (flat indices, each once: the band a step (b)
+    changed): ``positive[p] = phi[p] > 0`` there, and ``switched`` (room for ``flat.size``) gets
+    those whose side differs from ``before``, in the order of ``flat``; returns how many."""
+    cdef Py_ssize_t i, p, count = 0
+    cdef unsigned char side
+    with nogil:
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            side = phi[p] > 0
+            positive[p] = side
+            if side != before[p]:
+                switched[count] = p
+                count += 1
     return count
 
 

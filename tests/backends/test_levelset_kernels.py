@@ -305,6 +305,20 @@ def test_sides_are_phi_above_zero_and_the_pixels_that_changed_side(dtype):
     np.testing.assert_array_equal(switched[:count], np.flatnonzero((phi > 0) != before))
 
 
+def test_sides_at_some_pixels_leave_the_rest_as_it_was():
+    rng = np.random.default_rng(24)
+    phi = rng.normal(size=3000).astype(np.float32)
+    before = rng.random(3000) < 0.5
+    flat = rng.permutation(3000)[:700]
+    positive = ~before  # every pixel wrong: only those of flat are written
+    switched = np.empty(flat.size, dtype=np.intp)
+    count = _kernels.sides_at(phi, before.view(np.uint8), positive.view(np.uint8), flat, switched)
+    at = np.zeros(3000, dtype=bool)
+    at[flat] = True
+    np.testing.assert_array_equal(positive, np.where(at, phi > 0, ~before))
+    np.testing.assert_array_equal(switched[:count], flat[(phi[flat] > 0) != before[flat]])
+
+
 def test_sides_of_a_box_leave_the_rest_as_it_was():
     # a step that changed phi in a box only: the sides are read there, the rest is left alone
     rng = np.random.default_rng(22)

@@ -180,10 +180,11 @@ def _sides(phi, before, changed):
     phi only where it ``changed`` (a box or flat indices; :func:`_locate`)."""
     if not isinstance(changed, tuple):  # pixels: the band of a step (b)
         positive = before.copy()
-        side = phi.reshape(-1)[changed] > 0
-        switched = changed[side != before.reshape(-1)[changed]]
-        positive.reshape(-1)[changed] = side
-        return positive, switched
+        switched = np.empty(changed.size, dtype=np.intp)
+        count = _kernels.sides_at(np.ascontiguousarray(phi).reshape(-1), before.reshape(-1).view(np.uint8),
+                                  positive.reshape(-1).view(np.uint8),
+                                  np.ascontiguousarray(changed, dtype=np.intp), switched)
+        return positive, switched[:count]
     rows, cols = changed
     # beyond the box the sides are before's; one pass over the box
     whole = rows.stop - rows.start == phi.shape[0] and cols.stop - cols.start == phi.shape[1]
