@@ -26,7 +26,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
   :func:`divide_spectrum`, :func:`block_means`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
-  :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
+  :func:`sides_at`, :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
   sides of phi, the front, the marching-squares segments of the zero set and their table, the
   narrow band's distances, the oriented soup of segments that the common evaluator scores by
   (6.38), the area swept by Gamma, the steps (a) and (b)).
@@ -2027,23 +2027,45 @@ def band_couplings(const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n, int[:
             index[(p // n + 1) * width + p % n + 1] = -1
 
 
-def sides(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,
-          Py_ssize_t[::1] switched):
+def sides(const real[:, ::1] phi, const unsigned char[:, ::1] before, unsigned char[:, ::1] positive,
+          Py_ssize_t row0, Py_ssize_t row1, Py_ssize_t col0, Py_ssize_t col1, Py_ssize_t[::1] switched):
     """``positive = phi > 0`` and the pixels whose side differs from ``before``, in one pass over the
-    image (:func:`activecontour.backends.levelset.redistancing._redistance`): ``switched`` (room for
-    every pixel) gets their flat indices in increasing order; returns how many."""
-    cdef Py_ssize_t size = phi.shape[0], block, i, count = 0
+    box of rows ``row0:row1`` and columns ``col0:col1`` (where a step changed phi; beyond it
+    ``positive`` is left as it is) (:func:`activecontour.backends.levelset.redistancing._locate`):
+    ``switched`` (room for every pixel of the box) gets their flat indices in the image in
+    increasing order; returns how many."""
+    cdef Py_ssize_t n = phi.shape[1], block, r, c, count = 0
     cdef unsigned char side
-    cdef Py_ssize_t rows = _POLL_ROWS * 1024
-    for block in range(0, size, rows):
+    if row0 < 0 or col0 < 0 or row1 > phi.shape[0] or col1 > n:
+        raise ValueError("sides: the box lies outside the image")
+    for block in range(row0, row1, _POLL_ROWS):
         with nogil:
-            for i in range(block, min(block + rows, size)):
-                side = phi[i] > 0
-                positive[i] = side
-                if side != before[i]:
-                    switched[count] = i
-                    count += 1
+            for r in range(block, min(block + _POLL_ROWS, row1)):
+                for c in range(col0, col1):
+                    side = phi[r, c] > 0
+                    positive[r, c] = side
+                    if side != before[r, c]:
+                        switched[count] = r * n + c
+                        count += 1
         PyErr_CheckSignals()
+    return count
+
+
+def sides_at(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,
+             const Py_ssize_t[::1] flat, Py_ssize_t[::1] switched):
+    """:func:`sides` at the pixels ``flat`` only (flat indices, each once: the band a step (b)
+    changed): ``positive[p] = phi[p] > 0`` there, and ``switched`` (room for ``flat.size``) gets
+    those whose side differs from ``before``, in the order of ``flat``; returns how many."""
+    cdef Py_ssize_t i, p, count = 0
+    cdef unsigned char side
+    with nogil:
+        for i in range(flat.shape[0]):
+            p = flat[i]
+            side = phi[p] > 0
+            positive[p] = side
+            if side != before[p]:
+                switched[count] = p
+                count += 1
     return count
 
 

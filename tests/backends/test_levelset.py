@@ -161,7 +161,7 @@ def test_smoothed_step_on_the_band_box_is_the_whole_image_step():
     assert box is not None  # the box is solved alone
     rows, cols = box
     assert (rows.stop - rows.start) * (cols.stop - cols.start) < 200 * 200 / 2
-    stepped = problem.step(state, force, tau, True)
+    stepped, _ = problem.step(state, force, tau, True)
     whole, rhs = _whole_image_step(problem, state, force, tau)
     # the Neumann sides lie band + 8 l beyond the band and S's kernel decays as exp(-r / l): near
     # Gamma the two differ by exp(-8) of the force's jumps, the 1e-4 px the box's docstring
@@ -178,7 +178,7 @@ def test_smoothed_step_that_flips_a_far_region_is_solved_on_the_whole_image():
                                                         step=16.0)
     rows, cols = problem._box(state, tau * problem.params.mu)
     assert not (rows.start <= 150 < rows.stop and cols.start <= 150 < cols.stop)
-    stepped = problem.step(state, force, tau, True)
+    stepped, _ = problem.step(state, force, tau, True)
     whole, _ = _whole_image_step(problem, state, force, tau)
     assert stepped[150, 150] > 0
     np.testing.assert_array_equal(stepped, whole)

@@ -296,18 +296,50 @@ def test_band_couplings_name_each_neighbour_in_the_band_or_held_beyond_it():
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_sides_are_phi_above_zero_and_the_pixels_that_changed_side(dtype):
     rng = np.random.default_rng(20)
-    phi = np.round(rng.normal(size=5000)).astype(dtype)  # zeros are outside
-    before = rng.random(5000) < 0.5
-    positive = np.empty(5000, dtype=bool)
+    phi = np.round(rng.normal(size=(50, 100))).astype(dtype)  # zeros are outside
+    before = rng.random((50, 100)) < 0.5
+    positive = np.empty((50, 100), dtype=bool)
     switched = np.empty(5000, dtype=np.intp)
-    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), switched)
+    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), 0, 50, 0, 100, switched)
     np.testing.assert_array_equal(positive, phi > 0)
     np.testing.assert_array_equal(switched[:count], np.flatnonzero((phi > 0) != before))
 
 
-def test_a_located_step_scores_as_its_reinitialised_state():
+def test_sides_at_some_pixels_leave_the_rest_as_it_was():
+    rng = np.random.default_rng(24)
+    phi = rng.normal(size=3000).astype(np.float32)
+    before = rng.random(3000) < 0.5
+    flat = rng.permutation(3000)[:700]
+    positive = ~before  # every pixel wrong: only those of flat are written
+    switched = np.empty(flat.size, dtype=np.intp)
+    count = _kernels.sides_at(phi, before.view(np.uint8), positive.view(np.uint8), flat, switched)
+    at = np.zeros(3000, dtype=bool)
+    at[flat] = True
+    np.testing.assert_array_equal(positive, np.where(at, phi > 0, ~before))
+    np.testing.assert_array_equal(switched[:count], flat[(phi[flat] > 0) != before[flat]])
+
+
+def test_sides_of_a_box_leave_the_rest_as_it_was():
+    # a step that changed phi in a box only: the sides are read there, the rest is left alone
+    rng = np.random.default_rng(22)
+    phi = rng.normal(size=(40, 60)).astype(np.float32)
+    before = rng.random((40, 60)) < 0.5
+    positive = ~before  # every pixel wrong: only the box's are written
+    switched = np.empty(phi.size, dtype=np.intp)
+    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), 5, 17, 20, 51, switched)
+    box = np.zeros(phi.shape, dtype=bool)
+    box[5:17, 20:51] = True
+    np.testing.assert_array_equal(positive, np.where(box, phi > 0, ~before))
+    np.testing.assert_array_equal(switched[:count], np.flatnonzero(box & ((phi > 0) != before)))
+    with pytest.raises(ValueError, match="outside the image"):
+        _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), 0, 41, 0, 60, switched)
+
+
+@pytest.mark.parametrize("where", ["anywhere", "box", "band"])
+def test_a_located_step_scores_as_its_reinitialised_state(where):
     # the front pixels' distances alone fix the zero set (marching squares reads only them): a
-    # step scored before its band is grown has the energy of the state it becomes
+    # step scored before its band is grown has the energy of the state it becomes.  A step that
+    # changed phi in a box or on the band only is located and finished there only, in place
     from activecontour.backends.levelset.redistancing import _locate, _Located
     from activecontour.energy import evaluate
     from activecontour.imaging.tables import ImageModel
@@ -325,13 +357,25 @@ def test_a_located_step_scores_as_its_reinitialised_state():
         centre = rng.uniform(15, 35, 2)
         previous = _redistance((14 - np.hypot(rows - centre[0], cols - centre[1])).astype(np.float32), 4.0,
                                dtype=np.float32)
-        stepped = (previous.phi + rng.normal(scale=0.8, size=previous.phi.shape)).astype(np.float32)
-        located = _locate(stepped.copy(), 4.0, np.float32, None, previous)
+        noise = rng.normal(scale=0.8, size=previous.phi.shape)
+        changed = {"anywhere": None, "box": (slice(2, 47), slice(1, 53)), "band": previous.near_flat}[where]
+        if changed is not None:
+            held = np.ones(noise.shape, dtype=bool)
+            if where == "box":
+                held[changed] = False
+            else:
+                held.ravel()[changed] = False
+            noise[held] = 0.0
+        stepped = (previous.phi + noise).astype(np.float32)
+        located = _locate(stepped.copy(), 4.0, np.float32, None, previous, changed)
         assert isinstance(located, _Located)
+        np.testing.assert_array_equal(located.positive, stepped > 0)
         located.front_distances(4.0)
-        final = located.finish(4.0, np.float32, None, previous, np.empty_like(stepped))
-        np.testing.assert_array_equal(located.phi.ravel()[final.front], final.phi.ravel()[final.front])
-        assert energy(located) == energy(final)
+        scored, at_front = energy(located), located.phi.ravel()[located.front].copy()
+        final = located.finish(4.0, np.float32, None, previous)
+        assert final.phi is located.phi
+        np.testing.assert_array_equal(at_front, final.phi.ravel()[final.front])
+        assert scored == energy(final)
         # and the same as reinitialising the stepped phi from scratch (an image-wide front search)
         np.testing.assert_array_equal(final.phi, _redistance(stepped, 4.0, dtype=np.float32).phi)
 

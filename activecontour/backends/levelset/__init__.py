@@ -103,9 +103,11 @@ computed in one compiled pass) over the band's bounding box widened by ``band + 
 step by < 1e-4 px), phi held beyond it, when the box is at most half the image and the step,
 solved on a 4x coarser grid, flips no block beyond it; else over the image; a step (b) works on
 the band only (explicit, or conjugate gradients), but for one copy of phi.  The reinitialisation
-costs one sign pass over the image (the front is searched next to the previous one and the pixels
-that changed side) plus O(band) and a copy of phi for an accepted step (a rejected one costs its
-front), with work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
+reads the sides only where the step changed phi (its box, the image, or for a step (b) the band's
+pixels; the front is searched next to the previous one and the pixels that changed side) and,
+for an accepted step, is written into the stepped array itself: the previous phi copied back over
+the step's box (nothing for a step (b)), then O(band) (a rejected step costs its front), with
+work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
 reinitialisation found.  The image itself stays float64 (the model's tables and the common
 evaluator are exact in float64; the polygon backend shares them).
 

@@ -126,15 +126,16 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
         # a smoothed-force stage whose step fails twice has reached its (biased) fixed point
         tries = 3 if smooth_force else settings["max_backtracks"] + 1
         for attempt in range(tries):  # noqa: B007 (attempt is read after the loop)
-            stepped = problem.step(state, force, tau, smooth_force)
-            located = problem.locate(stepped, state)  # scored before its band is grown
+            stepped, changed = problem.step(state, force, tau, smooth_force)
+            located = problem.locate(stepped, state, changed)  # scored before its band is grown
             evaluation = problem.evaluate(located)
             # Emptying or filling the image is left to the unsmoothed force: a smoothed step that
             # does it has flattened phi rather than followed the force.
             degenerate = smooth_force and (not located.positive.any() or located.positive.all())
             if evaluation.energy <= current.energy and not degenerate:
-                trial = problem.finish(located, state)
-                problem.recycle(stepped)
+                trial = problem.finish(located, state)  # written into stepped where it has a front
+                if trial.phi is not stepped:
+                    problem.recycle(stepped)
                 break
             problem.recycle(stepped)
             if located.phi is not stepped:  # a state without a front

@@ -102,9 +102,10 @@ class _Located:
     (marching squares reads only them), so an energy can be scored before the band is grown
     (:meth:`front_distances`, :meth:`finish`)."""
 
-    def __init__(self, phi, positive, front, cells, segments, nearest, switched):
+    def __init__(self, phi, positive, front, cells, segments, nearest, switched, changed=None):
         self.phi, self.positive, self.front, self.cells = phi, positive, front, cells
         self.segments, self.nearest, self.switched = segments, nearest, switched
+        self.changed = changed  # where phi may differ from the previous state's (see _locate)
 
     def front_distances(self, band):
         """Write the front pixels' signed distances (those :meth:`finish` gives them) into phi."""
@@ -112,12 +113,14 @@ class _Located:
                                  band, _MIN_DISTANCE, self.positive.reshape(-1).view(np.uint8),
                                  self.phi.reshape(-1))
 
-    def finish(self, band, dtype, scratch=None, previous=None, out=None, keep_front=False):
+    def finish(self, band, dtype, scratch=None, previous=None, keep_front=False):
         """The :class:`_Redistanced` state: the band grown from the front (:func:`_redistance`).
 
-        ``previous``: the state that phi was stepped from (as for :func:`_locate`) and ``out`` an
-        array of phi's shape and ``dtype`` to write the result into: a copy of the previous state
-        with its band and the switched pixels reset, rather than a new array.
+        ``previous``: the state that phi was stepped from (as for :func:`_locate`); the state is
+        then written into phi itself: where the step ``changed`` it (a box) phi is first the
+        previous state's again, and beyond the previous band and the switched pixels that is
+        ``+-band`` on the same side, so those are reset and the band grown.  Where the step
+        changed only the band's pixels nothing is copied: O(band) rather than a copy of the image.
         """
         positive, front = self.positive, self.front
         rows, cols = np.divmod(front, positive.shape[1])
@@ -125,10 +128,10 @@ class _Located:
         # of a narrow band, one sweep and the walk along Gamma are
         sweeps = 1 if band <= _ONE_SWEEP_BAND else 2
         base = None
-        if previous is not None and out is not None:
-            # beyond the previous band and the switched pixels phi is +-band on the same side as before
-            base = out
-            np.copyto(base, previous.phi)
+        if previous is not None:
+            base = self.phi
+            if isinstance(self.changed, tuple):  # a box: the previous state's phi there
+                np.copyto(base[self.changed], previous.phi[self.changed])
             reset = np.concatenate([previous.near_flat, self.switched])
             base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
         state = _propagate(positive, rows, cols, self.segments, self.nearest, band, sweeps,
@@ -140,7 +143,7 @@ class _Located:
         return state
 
 
-def _locate(phi, band, dtype=np.float64, scratch=None, previous=None):
+def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=None):
     """The :class:`_Located` zero set of phi, or the final :class:`_Redistanced` state where phi has
     no front (all inside or all outside).
 
@@ -148,20 +151,17 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None):
     :class:`_Redistanced` that phi was stepped from; the front is then searched only next to the
     previous front and the pixels that changed side (a front pixel whose side and whose
     neighbours' sides are unchanged was a front pixel before), which gives the same front and
-    cells as a search over the image at the cost of one pass instead of a dozen.
+    cells as a search over the image at the cost of one pass instead of a dozen.  ``changed``:
+    where phi may differ from ``previous.phi``: a box (two slices), the flat indices of pixels,
+    or None (anywhere); the sides are read there only.
     """
     switched = None
     if previous is None:
         positive = phi > 0
         front = np.flatnonzero(_front_pixels(positive))
     else:
-        # the sides and the pixels that changed side, in one pass over the image
-        positive = np.empty(phi.shape, dtype=bool)
-        switched = np.empty(phi.size, dtype=np.intp)  # only the pages written are touched
-        before = np.ascontiguousarray(previous.positive).reshape(-1).view(np.uint8)
-        count = _kernels.sides(np.ascontiguousarray(phi).reshape(-1), before,
-                               positive.reshape(-1).view(np.uint8), switched)
-        switched = switched[:count].copy()
+        changed = (slice(0, phi.shape[0]), slice(0, phi.shape[1])) if changed is None else changed
+        positive, switched = _sides(phi, previous.positive, changed)
         mark = np.zeros(phi.size, dtype=np.uint8) if scratch is None else scratch.mark
         front, cells = _front_and_cells(positive, np.concatenate([previous.front, switched]), mark)
     if front.size == 0 and positive.all():
@@ -172,7 +172,27 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None):
     if previous is None:
         cells = _change_cells(positive)
     segments, nearest = _front_segments(phi, front, cells)
-    return _Located(phi, positive, front, cells, segments, nearest, switched)
+    return _Located(phi, positive, front, cells, segments, nearest, switched, changed)
+
+
+def _sides(phi, before, changed):
+    """``phi > 0`` and the flat indices of the pixels whose side differs from ``before``, reading
+    phi only where it ``changed`` (a box or flat indices; :func:`_locate`)."""
+    if not isinstance(changed, tuple):  # pixels: the band of a step (b)
+        positive = before.copy()
+        switched = np.empty(changed.size, dtype=np.intp)
+        count = _kernels.sides_at(np.ascontiguousarray(phi).reshape(-1), before.reshape(-1).view(np.uint8),
+                                  positive.reshape(-1).view(np.uint8),
+                                  np.ascontiguousarray(changed, dtype=np.intp), switched)
+        return positive, switched[:count]
+    rows, cols = changed
+    # beyond the box the sides are before's; one pass over the box
+    whole = rows.stop - rows.start == phi.shape[0] and cols.stop - cols.start == phi.shape[1]
+    positive = np.empty(phi.shape, dtype=bool) if whole else before.copy()
+    switched = np.empty((rows.stop - rows.start) * (cols.stop - cols.start), dtype=np.intp)
+    count = _kernels.sides(np.ascontiguousarray(phi), np.ascontiguousarray(before).view(np.uint8),
+                           positive.view(np.uint8), rows.start, rows.stop, cols.start, cols.stop, switched)
+    return positive, switched[:count].copy()
 
 
 def _front_and_cells(positive, seeds, mark):

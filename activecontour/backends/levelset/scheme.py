@@ -77,21 +77,23 @@ class _Problem:
         previous result's, see :func:`_redistance`)."""
         return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front)
 
-    def locate(self, stepped, previous):
-        """The zero set of ``stepped`` (a step from the state ``previous``) located, and the signed
-        distances of its front pixels written into ``stepped``: these alone fix the zero set of the
-        reinitialised state, so :meth:`evaluate` scores it as it will be, and the band is grown
-        (:meth:`finish`) only for a step that is accepted."""
-        located = _locate(stepped, self.band, np.float32, self.scratch, previous)
+    def locate(self, stepped, previous, changed=None):
+        """The zero set of ``stepped`` (a step from the state ``previous`` that ``changed`` phi
+        there only, as :meth:`step` returns it) located, and the signed distances of its front
+        pixels written into ``stepped``: these alone fix the zero set of the reinitialised state,
+        so :meth:`evaluate` scores it as it will be, and the band is grown (:meth:`finish`) only
+        for a step that is accepted."""
+        located = _locate(stepped, self.band, np.float32, self.scratch, previous, changed)
         if isinstance(located, _Located):
             located.front_distances(self.band)
         return located
 
     def finish(self, located, previous):
-        """The reinitialised state of a located step from ``previous`` (:meth:`locate`)."""
+        """The reinitialised state of a located step from ``previous`` (:meth:`locate`), written
+        into the stepped array itself."""
         if not isinstance(located, _Located):
             return located  # no front: final already
-        return located.finish(self.band, np.float32, self.scratch, previous, self.take())
+        return located.finish(self.band, np.float32, self.scratch, previous)
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
@@ -163,33 +165,35 @@ class _Problem:
         fixed point is that of (6.41) for every tau (:meth:`explicit_limit`), so it is taken on the
         band's pixels alone (O(band) instead of a DCT pair over the image), and otherwise S is
         solved on the band (:meth:`_band_smooth`) when that is cheaper than the DCT pair.
-        ``force``: the constants from :meth:`force`.
+        ``force``: the constants from :meth:`force`.  Returns the stepped phi and where it may
+        differ from ``state.phi``: the band's pixels (flat indices), a box (two slices) or None
+        (anywhere), so that its sides are read there only (:meth:`locate`).
         """
         if not smooth_force and tau * self.params.mu <= _EXPLICIT:
-            return self._explicit_step(state, force, tau)
+            return self._explicit_step(state, force, tau), state.near_flat
         if not smooth_force:
             weight = tau * self.params.mu
             # S on the band by conjugate gradients (about sqrt(1 + 8 weight) sweeps of the band)
             # or on the image by a DCT pair, whichever costs less (measured: a sweep of a band
             # pixel costs about 6 times a pixel of the DCT pair)
-            if state.near_flat.size * np.sqrt(1.0 + 8.0 * weight) < state.phi.size / 6.0:
-                rhs = self._band_smooth(state, weight)
-            else:
-                rhs = self._smooth(state.phi.copy(), weight)
             flat = state.near_flat
+            if flat.size * np.sqrt(1.0 + 8.0 * weight) < state.phi.size / 6.0:
+                rhs, changed = self._band_smooth(state, weight), flat
+            else:
+                rhs, changed = self._smooth(state.phi.copy(), weight), None
             near = flat[np.abs(state.phi.ravel()[flat]) < self.band]
             rhs.ravel()[near] -= (tau * self.force_at(near, force)).astype(np.float32)
-            return rhs
+            return rhs, changed
         form = self.params.load_form(*force)
         if self.params.mu > 0:
             box = self._box(state, tau * self.params.mu)
             if box is not None and not self._far_flips(state, form, tau, box):
-                return self._box_step(state, form, tau, box)
+                return self._box_step(state, form, tau, box), box
         # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
         rhs = self.take()
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
                             tau, rhs)
-        return self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs
+        return (self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs), None
 
     def _box(self, state, weight):
         """The rows and columns (two slices) on which step (a) is solved, or None: the whole image.
