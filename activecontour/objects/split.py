@@ -60,8 +60,8 @@ assigned to cores when the cores' areas already make a piece too small
 transform at the pixel centres only (:func:`activecontour._kernels.sampled_distance`); a
 distance compared with a radius of a few pixels is the squared transform up to that radius
 (:func:`_near_distance`); the ellipse fits' sums and residuals and the chord-inside test of the
-cut search are compiled, and a search's fits share one stacked eigenproblem
-(:func:`_ellipse_fits`).
+cut search are compiled, and a search's fits share one stacked pass of the sums, one of the
+residuals and one eigenproblem (:func:`_ellipse_fits`).
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
 ``res.labels``, ``benchmarks/bench_objects.py``; worst seed / mean):
@@ -994,8 +994,6 @@ def _corner_parts(outline, depth=None, bent=None):
     is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth`` and
     ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
     """
-    import shapely
-
     if _uncuttable(signed_area(outline), False):
         return [outline]
     corners, kappa, normals = _concave_corners(outline, depth, bent=bent)
@@ -1032,8 +1030,8 @@ def _corner_parts(outline, depth=None, bent=None):
         options = [(fits[2 * k][1] + fits[2 * k + 1][1], first, second, (fits[2 * k], fits[2 * k + 1]))
                    for k, (first, second) in enumerate(cuts)]
         _, first, second, fits = min(options, key=lambda option: option[0])
-        sides = [(first, _explained(outline[first], fits[0], region)),
-                 (second, _explained(outline[second], fits[1], region))]
+        sides = [(first, _explained(outline[first], fits[0], outline)),
+                 (second, _explained(outline[second], fits[1], outline))]
         allowed = (0.0 if good else area) - EXPLAINED_GAIN * area
         # the area a side leaves unexplained only adds up: once one side (the larger first) leaves
         # more than the cut may, the cut is undone whatever the other side's parts
@@ -1053,8 +1051,7 @@ def _corner_parts(outline, depth=None, bent=None):
     cuts = admissible(whole)
     if not cuts:
         return [outline]
-    region = shapely.Polygon(outline)
-    parts = split(whole, _explained(outline, _ellipse_fit(outline), region), cuts)
+    parts = split(whole, _explained(outline, _ellipse_fit(outline), outline), cuts)
     return [outline[cycle] for cycle, _ in parts]
 
 
@@ -1224,14 +1221,17 @@ def _ellipse_fit(points):
 
 
 def _ellipse_fits(sides):
-    """:func:`_ellipse_fit` of each of several point sets: the sums over the points and the
-    residuals compiled (:func:`activecontour._kernels.ellipse_moments`,
-    :func:`activecontour._kernels.conic_residual`), the 3 x 3 solves and eigenproblems of all
-    the sets stacked in one call each."""
-    sides = [np.ascontiguousarray(points, dtype=np.float64) for points in sides]
+    """:func:`_ellipse_fit` of each of several point sets, stacked: the sums over the points and
+    the residuals of all the sets compiled in one call each (:func:`activecontour._kernels.
+    ellipse_moments`, :func:`activecontour._kernels.conic_residuals`), their 3 x 3 solves and
+    eigenproblems in one call each (the arc grouping fits thousands of small sets on a textured
+    image: per set, Python's overhead outweighed the sums)."""
+    sides = [np.asarray(points, dtype=np.float64).reshape(-1, 2) for points in sides]
+    starts = np.zeros(len(sides) + 1, dtype=np.intp)
+    np.cumsum([len(points) for points in sides], out=starts[1:])
+    stacked = np.ascontiguousarray(np.concatenate(sides)) if sides else np.zeros((0, 2))
     moments = np.empty((len(sides), 30))
-    for row, points in zip(moments, sides, strict=True):
-        _kernels.ellipse_moments(points, row)
+    _kernels.ellipse_moments(stacked, starts, moments)
     s1, s2, s3 = (moments[:, k:k + 9].reshape(-1, 3, 3) for k in (3, 12, 21))
     try:
         t = -np.linalg.solve(s3, np.swapaxes(s2, 1, 2))
@@ -1241,17 +1241,15 @@ def _ellipse_fits(sides):
     m = s1 + s2 @ t
     _, vectors = np.linalg.eig(np.stack([m[:, 2] / 2, -m[:, 1], m[:, 0] / 2], axis=1))
     vectors = np.real(vectors)
-    fits = []
-    for points, (mean0, mean1, scale), block, vector in zip(sides, moments[:, :3], t, vectors, strict=True):
-        elliptic = 4 * vector[0] * vector[2] - vector[1] ** 2 > 0
-        if not elliptic.any():
-            fits.append((None, np.inf))
-            continue
-        a, b, c = vector[:, np.argmax(elliptic)]
-        d, e, f = block @ [a, b, c]
-        residual = _kernels.conic_residual(points, mean0, mean1, scale, a, b, c, d, e, f)
-        fits.append(((a, b, c, d, e, f, np.array([mean0, mean1]), scale), residual))
-    return fits
+    # of each set's three eigenvectors (columns), the first elliptic one: 4 a c - b^2 > 0
+    elliptic = 4 * vectors[:, 0] * vectors[:, 2] - vectors[:, 1] ** 2 > 0
+    found = elliptic.any(axis=1)
+    abc = np.take_along_axis(vectors, np.argmax(elliptic, axis=1)[:, None, None], axis=2)[:, :, 0]
+    conics = np.column_stack([moments[:, :3], abc, (t @ abc[:, :, None])[:, :, 0]])
+    residuals = np.empty(len(sides))
+    _kernels.conic_residuals(stacked, starts, conics, residuals)
+    return [((*conic[3:], conic[:2].copy(), conic[2]), residual) if ok else (None, np.inf)
+            for ok, conic, residual in zip(found.tolist(), conics, residuals, strict=True)]
 
 
 def _ellipse_axes(conic):
@@ -1271,12 +1269,10 @@ def _ellipse_axes(conic):
     return mean + scale * centre, scale * np.sqrt(k / values), axes
 
 
-def _explained(part, fit, region):
-    """(area, whether the part is explained by its ellipse): ``ELLIPSE_RMS``, ``ELLIPSE_OUTSIDE``,
-    ``ELLIPSE_SOLIDITY``, an aspect of at most ``MAX_PART_ASPECT`` and an equal-area radius of at
-    least ``MIN_SPLIT_RADIUS``."""
-    import shapely
-
+def _explained(part, fit, outline):
+    """(area, whether the part is explained by its ellipse): ``ELLIPSE_RMS``, ``ELLIPSE_OUTSIDE``
+    (of the object, ``outline``), ``ELLIPSE_SOLIDITY``, an aspect of at most ``MAX_PART_ASPECT``
+    and an equal-area radius of at least ``MIN_SPLIT_RADIUS``."""
     area = signed_area(part)
     conic, residual = fit
     radius = np.sqrt(max(area, 0.0) / np.pi)
@@ -1289,10 +1285,7 @@ def _explained(part, fit, region):
     centre, semi_axes, axes = ellipse
     if semi_axes.max() > MAX_PART_ASPECT * semi_axes.min():
         return area, False
-    angle = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    shape = shapely.Polygon(centre + np.column_stack([semi_axes[0] * np.cos(angle),
-                                                      semi_axes[1] * np.sin(angle)]) @ axes.T)
-    if 1 - shapely.intersection(shape, region).area / shape.area > ELLIPSE_OUTSIDE:
+    if _outside(_ellipse_polygon(ellipse), outline) > ELLIPSE_OUTSIDE:
         return area, False
     return area, area >= ELLIPSE_SOLIDITY * hull_area(part)
 
@@ -1392,8 +1385,6 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     in half got an ellipse of 13.5 by 8.4 px, and the touching disk's part took three pixels of
     it at the ends of the contact, outside the lens the two share).
     """
-    import shapely
-
     outline = curves[0]
     area = signed_area(outline)
     if area < 2 * np.pi * MIN_SPLIT_RADIUS**2:
@@ -1408,18 +1399,18 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     arcs = _arcs(outline, corners)
     if not 2 <= len(arcs) <= ARC_MAX:
         return None
-    region = shapely.Polygon(outline)
-    groups = _grouped_arcs(outline, arcs, region)
+    groups = _grouped_arcs(outline, arcs)
     # of two ellipses that overlap too much, the one that fits its arcs worse is no object's
     fitted = sorted(((fit[1] / sum(arcs[k].size for k in group), ellipse) for group, fit, ellipse in groups
                      if ellipse is not None), key=lambda entry: entry[0])
     ellipses, shapes = [], []
     for _, ellipse in fitted:
         shape = _ellipse_polygon(ellipse)
-        if all(shapely.intersection(shape, other).area <= ARC_OVERLAP * min(shape.area, other.area)
-               for other in shapes):
+        area = abs(signed_area(shape))
+        if all(_kernels.convex_clip_area(shape, other) <= ARC_OVERLAP * min(area, other_area)
+               for other, other_area in shapes):
             ellipses.append(ellipse)
-            shapes.append(shape)
+            shapes.append((shape, area))
     if len(ellipses) < 2:
         return None
     low = np.floor(outline.min(axis=0)).astype(int) - 1
@@ -1467,7 +1458,7 @@ def _arcs(outline, corners):
     return arcs
 
 
-def _grouped_arcs(outline, arcs, region):
+def _grouped_arcs(outline, arcs):
     """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
     The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
     intersection, the dearest test) only when its cost makes it the pair to join, and a single
@@ -1506,7 +1497,7 @@ def _grouped_arcs(outline, arcs, region):
             key = (groups[i][0], groups[j][0])
             entry = joined[key]
             if entry[1] is None:
-                entry[1] = _arc_ellipse(points(key[0] + key[1]), entry[0], region)
+                entry[1] = _arc_ellipse(points(key[0] + key[1]), entry[0], outline)
                 entry[1] = False if entry[1] is None else entry[1]
             if entry[1] is not False:
                 best = (i, j, (key[0] + key[1], entry[0], entry[1]))
@@ -1515,16 +1506,14 @@ def _grouped_arcs(outline, arcs, region):
             break
         i, j, union = best
         groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
-    return [(group, fit, _arc_ellipse(points(group), fit, region) if len(group) == 1 else ellipse)
+    return [(group, fit, _arc_ellipse(points(group), fit, outline) if len(group) == 1 else ellipse)
             for group, fit, ellipse in groups]
 
 
-def _arc_ellipse(points, fit, region):
+def _arc_ellipse(points, fit, outline):
     """The ellipse (centre, semi-axes, axes) of an arc group's fit when it is an object's
-    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS`` and ``ARC_OUTSIDE`` of the object's
-    ``region``, a shapely polygon), else None."""
-    import shapely
-
+    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS`` and ``ARC_OUTSIDE`` of the object,
+    ``outline``), else None."""
     conic, residual = fit
     ellipse = None if conic is None else _ellipse_axes(conic)
     if ellipse is None:
@@ -1534,20 +1523,25 @@ def _arc_ellipse(points, fit, region):
     if (radius < MIN_SPLIT_RADIUS or semi_axes.max() > MAX_PART_ASPECT * semi_axes.min()
             or np.sqrt(residual / len(points)) > ARC_RMS[0] + ARC_RMS[1] * radius):
         return None
-    shape = _ellipse_polygon(ellipse)
-    if 1 - shapely.intersection(shape, region).area / shape.area > ARC_OUTSIDE:
+    if _outside(_ellipse_polygon(ellipse), outline) > ARC_OUTSIDE:
         return None
     return ellipse
 
 
 def _ellipse_polygon(ellipse, count=48):
-    """An ellipse (centre, semi-axes, axes as columns) as a shapely polygon of ``count`` vertices."""
-    import shapely
-
+    """An ellipse (centre, semi-axes, axes as columns) as a polygon of ``count`` vertices (count, 2)."""
     centre, semi_axes, axes = ellipse
     angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
-    return shapely.Polygon(centre + np.column_stack([semi_axes[0] * np.cos(angle),
-                                                     semi_axes[1] * np.sin(angle)]) @ axes.T)
+    return np.ascontiguousarray(centre + np.column_stack([semi_axes[0] * np.cos(angle),
+                                                          semi_axes[1] * np.sin(angle)]) @ axes.T)
+
+
+def _outside(shape, outline):
+    """The fraction of a convex polygon ``shape`` (an :func:`_ellipse_polygon`) that lies outside
+    the simple polygon ``outline`` (:func:`activecontour._kernels.convex_clip_area`: the outline
+    clipped by the shape's edges, compiled; GEOS's general intersection cost ten times more)."""
+    return 1 - _kernels.convex_clip_area(np.ascontiguousarray(outline, dtype=np.float64), shape) / abs(
+        signed_area(shape))
 
 
 def _normalised_radius(ellipse, points):
