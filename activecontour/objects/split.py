@@ -1221,11 +1221,24 @@ def _ellipse_fit(points):
 
 
 def _ellipse_fits(sides):
-    """:func:`_ellipse_fit` of each of several point sets, stacked: the sums over the points and
-    the residuals of all the sets compiled in one call each (:func:`activecontour._kernels.
-    ellipse_moments`, :func:`activecontour._kernels.conic_residuals`), their 3 x 3 solves and
-    eigenproblems in one call each (the arc grouping fits thousands of small sets on a textured
-    image: per set, Python's overhead outweighed the sums)."""
+    """:func:`_ellipse_fit` of each of several point sets (:func:`_stacked_ellipse_fits`)."""
+    return _as_fits(*_stacked_ellipse_fits(sides))
+
+
+def _as_fits(conics, found, residuals):
+    """The fits of :func:`_stacked_ellipse_fits`' arrays, as :func:`_ellipse_fit` gives them."""
+    return [((*conic[3:], conic[:2].copy(), conic[2]), residual) if ok else (None, np.inf)
+            for ok, conic, residual in zip(found.tolist(), conics, residuals, strict=True)]
+
+
+def _stacked_ellipse_fits(sides):
+    """:func:`_ellipse_fit` of each of several point sets, stacked: (conics, found, residuals),
+    row s of ``conics`` set s's (mean0, mean1, scale, a, b, c, d, e, f) where ``found[s]`` (an
+    elliptic conic exists), with its residual.  The sums over the points and the residuals of all
+    the sets are compiled in one call each (:func:`activecontour._kernels.ellipse_moments`,
+    :func:`activecontour._kernels.conic_residuals`), their 3 x 3 solves and eigenproblems one
+    call each (the arc grouping fits thousands of small sets on a textured image: per set,
+    Python's overhead outweighed the sums)."""
     sides = [np.asarray(points, dtype=np.float64).reshape(-1, 2) for points in sides]
     starts = np.zeros(len(sides) + 1, dtype=np.intp)
     np.cumsum([len(points) for points in sides], out=starts[1:])
@@ -1236,20 +1249,22 @@ def _ellipse_fits(sides):
     try:
         t = -np.linalg.solve(s3, np.swapaxes(s2, 1, 2))
     except np.linalg.LinAlgError:  # one of them is singular: each on its own
-        return ([fit for points in sides for fit in _ellipse_fits([points])] if len(sides) > 1
-                else [(None, np.inf)])
+        if len(sides) == 1:
+            return np.full((1, 9), np.nan), np.zeros(1, dtype=bool), np.full(1, np.inf)
+        each = [_stacked_ellipse_fits([points]) for points in sides]
+        return tuple(np.concatenate(arrays) for arrays in zip(*each, strict=True))
     m = s1 + s2 @ t
     _, vectors = np.linalg.eig(np.stack([m[:, 2] / 2, -m[:, 1], m[:, 0] / 2], axis=1))
     vectors = np.real(vectors)
     # of each set's three eigenvectors (columns), the first elliptic one: 4 a c - b^2 > 0
     elliptic = 4 * vectors[:, 0] * vectors[:, 2] - vectors[:, 1] ** 2 > 0
     found = elliptic.any(axis=1)
-    abc = np.take_along_axis(vectors, np.argmax(elliptic, axis=1)[:, None, None], axis=2)[:, :, 0]
+    abc = vectors[np.arange(len(sides)), :, np.argmax(elliptic, axis=1)]
     conics = np.column_stack([moments[:, :3], abc, (t @ abc[:, :, None])[:, :, 0]])
     residuals = np.empty(len(sides))
     _kernels.conic_residuals(stacked, starts, conics, residuals)
-    return [((*conic[3:], conic[:2].copy(), conic[2]), residual) if ok else (None, np.inf)
-            for ok, conic, residual in zip(found.tolist(), conics, residuals, strict=True)]
+    residuals[~found] = np.inf
+    return conics, found, residuals
 
 
 def _ellipse_axes(conic):
@@ -1462,19 +1477,28 @@ def _grouped_arcs(outline, arcs):
     """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
     The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
     intersection, the dearest test) only when its cost makes it the pair to join, and a single
-    arc's only when it is left alone (the joining reads the fits)."""
+    arc's only when it is left alone (the joining reads the fits).  A fit whose conic fails
+    :func:`_arc_ellipse`'s shape tests by a clear margin (:func:`_clearly_not_arc_ellipses`, all
+    the new fits at once) has no ellipse from the start: an option the joining would have tried
+    and passed over, or a single arc's None."""
     def points(group):
         return outline[np.concatenate([arcs[i] for i in group])]
 
+    def fitted(groups):
+        """The fits of groups of arcs, each with None for its ellipse, or False where it has none."""
+        sets = [points(group) for group in groups]
+        conics, found, residuals = _stacked_ellipse_fits(sets)
+        rejected = _clearly_not_arc_ellipses(conics, found, residuals, [len(points) for points in sets])
+        return [[fit, False if no else None]
+                for fit, no in zip(_as_fits(conics, found, residuals), rejected.tolist(), strict=True)]
+
     singles = [(i,) for i in range(len(arcs))]
-    groups = [(group, fit, None) for group, fit in zip(singles, _ellipse_fits([points(g) for g in singles]),
-                                                       strict=True)]
+    groups = [(group, *entry) for group, entry in zip(singles, fitted(singles), strict=True)]
     joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
     while len(groups) > 1:
         pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
         new = [(groups[i][0], groups[j][0]) for i, j in pairs if (groups[i][0], groups[j][0]) not in joined]
-        for key, fit in zip(new, _ellipse_fits([points(a + b) for a, b in new]), strict=True):
-            joined[key] = [fit, None]
+        joined.update(zip(new, fitted([a + b for a, b in new]), strict=True))
         options = []
         for i, j in pairs:
             fit, ellipse = joined[(groups[i][0], groups[j][0])]
@@ -1506,8 +1530,8 @@ def _grouped_arcs(outline, arcs):
             break
         i, j, union = best
         groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
-    return [(group, fit, _arc_ellipse(points(group), fit, outline) if len(group) == 1 else ellipse)
-            for group, fit, ellipse in groups]
+    return [(group, fit, (None if ellipse is False else _arc_ellipse(points(group), fit, outline))
+             if len(group) == 1 else ellipse) for group, fit, ellipse in groups]
 
 
 def _arc_ellipse(points, fit, outline):
@@ -1526,6 +1550,44 @@ def _arc_ellipse(points, fit, outline):
     if _outside(_ellipse_polygon(ellipse), outline) > ARC_OUTSIDE:
         return None
     return ellipse
+
+
+#: :func:`_clearly_not_arc_ellipses` rejects a conic only when it fails a test of
+#: :func:`_arc_ellipse` by this relative margin: far beyond the rounding by which its closed forms
+#: differ from :func:`_ellipse_axes`' solve and eigenproblem.
+CLEAR_MARGIN = 1e-6
+
+
+def _clearly_not_arc_ellipses(conics, found, residuals, counts):
+    """Which fits of :func:`_stacked_ellipse_fits` (of ``counts`` points each) :func:`_arc_ellipse`
+    rejects for their shape alone, all at once: an aspect above ``MAX_PART_ASPECT``, a radius
+    below ``MIN_SPLIT_RADIUS`` or an rms Sampson distance above ``ARC_RMS``, each by
+    ``CLEAR_MARGIN``.
+
+    The conic ``a x^2 + b xy + c y^2 + d x + e y + f`` with ``q = [[a, b/2], [b/2, c]]``
+    (``det q > 0``: the fit is elliptic) has its centre at ``z = -(2q)^-1 (d, e)``, ``k = z^T q z
+    - f`` and, with the eigenvalues ``l`` of q, semi-axes ``scale sqrt(k / l)``: the aspect is
+    ``sqrt(l_max / l_min)`` and the radius ``sqrt(semi-axes product) = scale sqrt(k) / det(q)^(1/4)``
+    in closed form.  Only a conic whose k is no rounding residue and of the eigenvalues' sign
+    (a real ellipse) is judged by its radius; anything near a threshold is left to
+    :func:`_arc_ellipse`, so no decision changes (False: ask it)."""
+    scale, a, b, c, d, e, f = conics[:, 2:].T
+    det = a * c - b * b / 4
+    half_sum, half_gap = (a + c) / 2, np.hypot((a - c) / 2, b / 2)
+    small, large = np.abs(half_sum) - half_gap, np.abs(half_sum) + half_gap  # |eigenvalues|
+    with np.errstate(divide="ignore", invalid="ignore"):
+        too_long = (det > 0) & (large > MAX_PART_ASPECT**2 * (1 + CLEAR_MARGIN) * small)
+        z0 = -(2 * c * d - b * e) / (4 * det)
+        z1 = -(2 * a * e - b * d) / (4 * det)
+        quadratic = a * z0 * z0 + b * z0 * z1 + c * z1 * z1
+        k = quadratic - f
+        real = (det > 0) & (k * half_sum > 0) & (np.abs(k) > CLEAR_MARGIN * (np.abs(quadratic) + np.abs(f)))
+        radius = scale * np.sqrt(np.abs(k)) / det ** 0.25
+        rms = np.sqrt(residuals / np.asarray(counts, dtype=np.float64))
+        too_small = real & (radius < MIN_SPLIT_RADIUS * (1 - CLEAR_MARGIN))
+        bound = (ARC_RMS[0] + ARC_RMS[1] * radius * (1 + CLEAR_MARGIN)) * (1 + CLEAR_MARGIN)
+        too_rough = real & (rms > bound)
+    return found & (too_long | too_small | too_rough)
 
 
 def _ellipse_polygon(ellipse, count=48):

@@ -487,3 +487,42 @@ def test_convex_clip_area_is_geos_intersection_area(seed):
     expected = shapely.intersection(shapely.Polygon(shape), shapely.Polygon(outline)).area
     got = _kernels.convex_clip_area(np.ascontiguousarray(outline), shape)
     assert got == pytest.approx(expected, rel=1e-12)
+
+
+def _circle_points(centre, semi_axes, count=40, turn=0.0):
+    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    local = np.column_stack([semi_axes[0] * np.cos(angle), semi_axes[1] * np.sin(angle)])
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    return np.asarray(centre) + local @ rotation.T
+
+
+def test_the_closed_form_ellipse_gate_rejects_what_arc_ellipse_rejects_by_shape():
+    # exact ellipses: their fits are the ellipses themselves, so the truth is known
+    object_outline = _circle_points((100.0, 100.0), (80.0, 80.0), count=400)  # holds them all
+    cases = {  # (semi-axes): what _arc_ellipse must say
+        (10.0, 10.0): True, (12.0, 4.0): True,  # radius sqrt(48) > 3, aspect 3 < 4
+        (2.0, 2.0): False,  # radius 2 < MIN_SPLIT_RADIUS
+        (30.0, 5.0): False,  # aspect 6 > MAX_PART_ASPECT
+    }
+    sides = [_circle_points((100.0, 90.0), axes, turn=0.3) for axes in cases]
+    conics, found, residuals = split._stacked_ellipse_fits(sides)
+    rejected = split._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
+    for side, fit, no, (axes, expected) in zip(sides, split._as_fits(conics, found, residuals), rejected,
+                                               cases.items(), strict=True):
+        assert (split._arc_ellipse(side, fit, object_outline) is not None) == expected, axes
+        assert bool(no) == (not expected), axes
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_closed_form_ellipse_gate_never_rejects_an_ellipse_arc_ellipse_keeps(seed):
+    outline = random_outline(seed)
+    rng = np.random.default_rng(seed)
+    sides = []
+    for _ in range(30):  # stretches of the outline, as the arc grouping fits them
+        a = rng.integers(0, len(outline) - 8)
+        sides.append(outline[a:rng.integers(a + 8, len(outline) + 1)])
+    conics, found, residuals = split._stacked_ellipse_fits(sides)
+    rejected = split._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
+    for side, fit, no in zip(sides, split._as_fits(conics, found, residuals), rejected, strict=True):
+        if no:
+            assert split._arc_ellipse(side, fit, outline) is None
