@@ -15,7 +15,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   transform up to a few pixels, for the split's tests against a radius), :func:`distance_peaks`
   (an object's distance transform and its pieces of peaks: the first test for necks),
   :func:`fill_holes` (an object's window without holes),
-  :func:`ellipse_moments`, :func:`conic_residual`, :func:`segment_inside`, :func:`cut_ratios` (the corner stage's
+  :func:`ellipse_moments`, :func:`conic_residuals`, :func:`convex_clip_area`, :func:`segment_inside`, :func:`cut_ratios` (the corner stage's
   ellipse fits and cut search);
 * :func:`convex_hull` -- :mod:`activecontour.geometry.hull` (a polygon's convex hull);
 * :func:`segment_integrals`, :func:`segment_loads`, :func:`h1_band`, :func:`band_cholesky`, :func:`band_solve`,
@@ -2495,65 +2495,148 @@ def near_distance(const unsigned char[:, ::1] mask, long long cap, long long[:, 
     free(along)
 
 
-def ellipse_moments(const double[:, ::1] points, double[::1] out):
+def ellipse_moments(const double[:, ::1] points, const Py_ssize_t[::1] starts, double[:, ::1] out):
     """The sums of the direct least-squares ellipse fit (Fitzgibbon, Pilu and Fisher; Halir and
-    Flusser's blocks) of points (P, 2), in their normalised frame: ``out[0:2]`` their mean,
-    ``out[2]`` their rms distance to it (1 when 0), and with (x, y) the points less the mean over
-    that scale, q = (x^2, xy, y^2) and l = (x, y, 1): ``out[3:12]`` the 3 x 3 sums of
-    ``q q^T``, ``out[12:21]`` of ``q l^T``, ``out[21:30]`` of ``l l^T`` (row-major)."""
-    cdef Py_ssize_t p, count = points.shape[0], i, j
-    cdef double mean0 = 0.0, mean1 = 0.0, scale = 0.0, x, y
+    Flusser's blocks) of each point set ``points[starts[s]:starts[s + 1]]`` (stacked (P, 2)), in
+    its normalised frame: ``out[s, 0:2]`` its mean, ``out[s, 2]`` its rms distance to it (1 when
+    0), and with (x, y) the points less the mean over that scale, q = (x^2, xy, y^2) and
+    l = (x, y, 1): ``out[s, 3:12]`` the 3 x 3 sums of ``q q^T``, ``out[s, 12:21]`` of ``q l^T``,
+    ``out[s, 21:30]`` of ``l l^T`` (row-major).  All sets in one call: the split's arc grouping
+    fits hundreds of small sets at a time."""
+    cdef Py_ssize_t s, p, first, last, count, i, j
+    cdef double mean0, mean1, scale, x, y
     cdef double q[3]
     cdef double l[3]
-    for i in range(3, 30):
-        out[i] = 0.0
-    if count == 0:
-        return
-    for p in range(count):
-        mean0 += points[p, 0]
-        mean1 += points[p, 1]
-    mean0 /= count
-    mean1 /= count
-    for p in range(count):
-        x = points[p, 0] - mean0
-        y = points[p, 1] - mean1
-        scale += x * x + y * y
-    scale = sqrt(scale / count)
-    if scale == 0.0:
-        scale = 1.0
-    out[0], out[1], out[2] = mean0, mean1, scale
-    l[2] = 1.0
-    for p in range(count):
-        x = (points[p, 0] - mean0) / scale
-        y = (points[p, 1] - mean1) / scale
-        q[0], q[1], q[2] = x * x, x * y, y * y
-        l[0], l[1] = x, y
-        for i in range(3):
-            for j in range(3):
-                out[3 + 3 * i + j] += q[i] * q[j]
-                out[12 + 3 * i + j] += q[i] * l[j]
-                out[21 + 3 * i + j] += l[i] * l[j]
+    with nogil:
+        for s in range(starts.shape[0] - 1):
+            first, last = starts[s], starts[s + 1]
+            count = last - first
+            for i in range(3, 30):
+                out[s, i] = 0.0
+            if count == 0:
+                continue
+            mean0, mean1, scale = 0.0, 0.0, 0.0
+            for p in range(first, last):
+                mean0 += points[p, 0]
+                mean1 += points[p, 1]
+            mean0 /= count
+            mean1 /= count
+            for p in range(first, last):
+                x = points[p, 0] - mean0
+                y = points[p, 1] - mean1
+                scale += x * x + y * y
+            scale = sqrt(scale / count)
+            if scale == 0.0:
+                scale = 1.0
+            out[s, 0], out[s, 1], out[s, 2] = mean0, mean1, scale
+            l[2] = 1.0
+            for p in range(first, last):
+                x = (points[p, 0] - mean0) / scale
+                y = (points[p, 1] - mean1) / scale
+                q[0], q[1], q[2] = x * x, x * y, y * y
+                l[0], l[1] = x, y
+                for i in range(3):
+                    for j in range(3):
+                        out[s, 3 + 3 * i + j] += q[i] * q[j]
+                        out[s, 12 + 3 * i + j] += q[i] * l[j]
+                        out[s, 21 + 3 * i + j] += l[i] * l[j]
 
 
-def conic_residual(const double[:, ::1] points, double mean0, double mean1, double scale,
-                   double a, double b, double c, double d, double e, double f):
-    """The sum of squared Sampson distances (in the points' units) of points (P, 2) to the conic
-    ``a x^2 + b xy + c y^2 + d x + e y + f = 0`` of :func:`ellipse_moments`' normalised frame:
-    ``(scale value / |gradient|)^2`` (the gradient's norm at least 1e-12)."""
-    cdef Py_ssize_t p
-    cdef double total = 0.0, x, y, value, gx, gy, norm
-    for p in range(points.shape[0]):
-        x = (points[p, 0] - mean0) / scale
-        y = (points[p, 1] - mean1) / scale
-        value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
-        gx = 2 * a * x + b * y + d
-        gy = b * x + 2 * c * y + e
-        norm = sqrt(gx * gx + gy * gy)
-        if norm < 1e-12:
-            norm = 1e-12
-        value = scale * value / norm
-        total += value * value
-    return total
+def conic_residuals(const double[:, ::1] points, const Py_ssize_t[::1] starts, const double[:, ::1] conics,
+                    double[::1] out):
+    """For each point set ``points[starts[s]:starts[s + 1]]`` (as :func:`ellipse_moments`), the
+    sum of squared Sampson distances (in the points' units) to the conic ``conics[s]`` = (mean0,
+    mean1, scale, a, b, c, d, e, f), ``a x^2 + b xy + c y^2 + d x + e y + f = 0`` in the set's
+    normalised frame: ``(scale value / |gradient|)^2`` (the gradient's norm at least 1e-12)."""
+    cdef Py_ssize_t s, p
+    cdef double total, x, y, value, gx, gy, norm, mean0, mean1, scale, a, b, c, d, e, f
+    with nogil:
+        for s in range(starts.shape[0] - 1):
+            mean0, mean1, scale = conics[s, 0], conics[s, 1], conics[s, 2]
+            a, b, c, d, e, f = conics[s, 3], conics[s, 4], conics[s, 5], conics[s, 6], conics[s, 7], conics[s, 8]
+            total = 0.0
+            for p in range(starts[s], starts[s + 1]):
+                x = (points[p, 0] - mean0) / scale
+                y = (points[p, 1] - mean1) / scale
+                value = a * x * x + b * x * y + c * y * y + d * x + e * y + f
+                gx = 2 * a * x + b * y + d
+                gy = b * x + 2 * c * y + e
+                norm = sqrt(gx * gx + gy * gy)
+                if norm < 1e-12:
+                    norm = 1e-12
+                value = scale * value / norm
+                total += value * value
+            out[s] = total
+
+
+def convex_clip_area(const double[:, ::1] polygon, const double[:, ::1] convex):
+    """The area of the intersection of a simple polygon (K, 2), either orientation, with a convex
+    polygon (L, 2), either orientation: the polygon clipped by each edge's half-plane in turn
+    (Sutherland and Hodgman), then the shoelace of what is left.  A concave polygon clipped so
+    may come out as several pieces joined along the clipping lines; those joins enclose nothing,
+    so the area is still the intersection's (each clip keeps the winding number of every point
+    inside its half-plane, and the points outside have none)."""
+    cdef Py_ssize_t count = polygon.shape[0], sides = convex.shape[0], capacity, size, i, k, n_out
+    cdef double orientation = 0.0, area = 0.0, a0, a1, b0, b1, p0, p1, q0, q1, sp, sq, t
+    cdef double *current
+    cdef double *clipped
+    cdef double *swap
+    if count < 3 or sides < 3:
+        return 0.0
+    for i in range(sides):
+        k = (i + 1) % sides
+        orientation += convex[i, 0] * convex[k, 1] - convex[k, 0] * convex[i, 1]
+    orientation = 1.0 if orientation > 0 else -1.0
+    capacity = 2 * count + 2 * sides + 8
+    current = <double *> malloc(2 * capacity * sizeof(double))
+    clipped = <double *> malloc(2 * capacity * sizeof(double))
+    if current == NULL or clipped == NULL:
+        free(current)
+        free(clipped)
+        raise MemoryError()
+    with nogil:
+        for i in range(count):
+            current[2 * i], current[2 * i + 1] = polygon[i, 0], polygon[i, 1]
+        size = count
+        for k in range(sides):
+            if size == 0:
+                break
+            if 2 * size + 2 > capacity:  # (each vertex gives two at most)
+                capacity = 2 * size + 2
+                swap = <double *> realloc(clipped, 2 * capacity * sizeof(double))
+                if swap == NULL:
+                    break
+                clipped = swap
+                swap = <double *> realloc(current, 2 * capacity * sizeof(double))
+                if swap == NULL:
+                    break
+                current = swap
+            a0, a1 = convex[k, 0], convex[k, 1]
+            b0, b1 = convex[(k + 1) % sides, 0], convex[(k + 1) % sides, 1]
+            n_out = 0
+            p0, p1 = current[2 * (size - 1)], current[2 * (size - 1) + 1]
+            sp = orientation * _side(a0, a1, b0, b1, p0, p1)
+            for i in range(size):
+                q0, q1 = current[2 * i], current[2 * i + 1]
+                sq = orientation * _side(a0, a1, b0, b1, q0, q1)
+                if (sp >= 0) != (sq >= 0):  # the edge p -> q crosses the clipping line
+                    t = sp / (sp - sq)
+                    clipped[2 * n_out], clipped[2 * n_out + 1] = p0 + t * (q0 - p0), p1 + t * (q1 - p1)
+                    n_out += 1
+                if sq >= 0:
+                    clipped[2 * n_out], clipped[2 * n_out + 1] = q0, q1
+                    n_out += 1
+                p0, p1, sp = q0, q1, sq
+            swap = current
+            current = clipped
+            clipped = swap
+            size = n_out
+        for i in range(size):
+            k = (i + 1) % size
+            area += current[2 * i] * current[2 * k + 1] - current[2 * k] * current[2 * i + 1]
+    free(current)
+    free(clipped)
+    return fabs(0.5 * area)
 
 
 cdef inline double _side(double u0, double u1, double v0, double v1, double w0, double w1) noexcept nogil:

@@ -62,8 +62,11 @@ assigned to cores when the cores' areas already make a piece too small
 transform at the pixel centres only (:func:`activecontour._kernels.sampled_distance`); a
 distance compared with a radius of a few pixels is the squared transform up to that radius
 (:func:`_near_distance`); the ellipse fits' sums and residuals and the chord-inside test of the
-cut search are compiled, and a search's fits share one stacked eigenproblem
-(:func:`_ellipse_fits`).
+cut search are compiled, and a search's fits share one stacked pass of the sums, one of the
+residuals and one eigenproblem (:func:`_stacked_ellipse_fits`); how much of an ellipse lies
+outside the object is one compiled clip of the outline by the ellipse's polygon
+(:func:`_outside`), and the arc grouping judges all its new fits' shapes at once in closed form
+(:func:`_clearly_not_arc_ellipses`), making an ellipse only of a fit that may pass.
 
 Measured on the families of :mod:`activecontour.synthetic` (20 seeds each, F1 at IoU 0.5 of
 ``res.labels``, ``benchmarks/bench_objects.py``; worst seed / mean):
@@ -1007,8 +1010,6 @@ def _corner_parts(outline, depth=None, bent=None):
     is undone when its parts do not explain the part (``EXPLAINED_GAIN``).  ``depth`` and
     ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
     """
-    import shapely
-
     if _uncuttable(signed_area(outline), False):
         return [outline]
     corners, kappa, normals = _concave_corners(outline, depth, bent=bent)
@@ -1045,8 +1046,8 @@ def _corner_parts(outline, depth=None, bent=None):
         options = [(fits[2 * k][1] + fits[2 * k + 1][1], first, second, (fits[2 * k], fits[2 * k + 1]))
                    for k, (first, second) in enumerate(cuts)]
         _, first, second, fits = min(options, key=lambda option: option[0])
-        sides = [(first, _explained(outline[first], fits[0], region)),
-                 (second, _explained(outline[second], fits[1], region))]
+        sides = [(first, _explained(outline[first], fits[0], outline)),
+                 (second, _explained(outline[second], fits[1], outline))]
         allowed = (0.0 if good else area) - EXPLAINED_GAIN * area
         # the area a side leaves unexplained only adds up: once one side (the larger first) leaves
         # more than the cut may, the cut is undone whatever the other side's parts
@@ -1066,8 +1067,7 @@ def _corner_parts(outline, depth=None, bent=None):
     cuts = admissible(whole)
     if not cuts:
         return [outline]
-    region = shapely.Polygon(outline)
-    parts = split(whole, _explained(outline, _ellipse_fit(outline), region), cuts)
+    parts = split(whole, _explained(outline, _ellipse_fit(outline), outline), cuts)
     return [outline[cycle] for cycle, _ in parts]
 
 
@@ -1237,34 +1237,50 @@ def _ellipse_fit(points):
 
 
 def _ellipse_fits(sides):
-    """:func:`_ellipse_fit` of each of several point sets: the sums over the points and the
-    residuals compiled (:func:`activecontour._kernels.ellipse_moments`,
-    :func:`activecontour._kernels.conic_residual`), the 3 x 3 solves and eigenproblems of all
-    the sets stacked in one call each."""
-    sides = [np.ascontiguousarray(points, dtype=np.float64) for points in sides]
+    """:func:`_ellipse_fit` of each of several point sets (:func:`_stacked_ellipse_fits`)."""
+    return _as_fits(*_stacked_ellipse_fits(sides))
+
+
+def _as_fits(conics, found, residuals):
+    """The fits of :func:`_stacked_ellipse_fits`' arrays, as :func:`_ellipse_fit` gives them."""
+    return [((*conic[3:], conic[:2].copy(), conic[2]), residual) if ok else (None, np.inf)
+            for ok, conic, residual in zip(found.tolist(), conics, residuals, strict=True)]
+
+
+def _stacked_ellipse_fits(sides):
+    """:func:`_ellipse_fit` of each of several point sets, stacked: (conics, found, residuals),
+    row s of ``conics`` set s's (mean0, mean1, scale, a, b, c, d, e, f) where ``found[s]`` (an
+    elliptic conic exists), with its residual.  The sums over the points and the residuals of all
+    the sets are compiled in one call each (:func:`activecontour._kernels.ellipse_moments`,
+    :func:`activecontour._kernels.conic_residuals`), their 3 x 3 solves and eigenproblems one
+    call each (the arc grouping fits thousands of small sets on a textured image: per set,
+    Python's overhead outweighed the sums)."""
+    sides = [np.asarray(points, dtype=np.float64).reshape(-1, 2) for points in sides]
+    starts = np.zeros(len(sides) + 1, dtype=np.intp)
+    np.cumsum([len(points) for points in sides], out=starts[1:])
+    stacked = np.ascontiguousarray(np.concatenate(sides)) if sides else np.zeros((0, 2))
     moments = np.empty((len(sides), 30))
-    for row, points in zip(moments, sides, strict=True):
-        _kernels.ellipse_moments(points, row)
+    _kernels.ellipse_moments(stacked, starts, moments)
     s1, s2, s3 = (moments[:, k:k + 9].reshape(-1, 3, 3) for k in (3, 12, 21))
     try:
         t = -np.linalg.solve(s3, np.swapaxes(s2, 1, 2))
     except np.linalg.LinAlgError:  # one of them is singular: each on its own
-        return ([fit for points in sides for fit in _ellipse_fits([points])] if len(sides) > 1
-                else [(None, np.inf)])
+        if len(sides) == 1:
+            return np.full((1, 9), np.nan), np.zeros(1, dtype=bool), np.full(1, np.inf)
+        each = [_stacked_ellipse_fits([points]) for points in sides]
+        return tuple(np.concatenate(arrays) for arrays in zip(*each, strict=True))
     m = s1 + s2 @ t
     _, vectors = np.linalg.eig(np.stack([m[:, 2] / 2, -m[:, 1], m[:, 0] / 2], axis=1))
     vectors = np.real(vectors)
-    fits = []
-    for points, (mean0, mean1, scale), block, vector in zip(sides, moments[:, :3], t, vectors, strict=True):
-        elliptic = 4 * vector[0] * vector[2] - vector[1] ** 2 > 0
-        if not elliptic.any():
-            fits.append((None, np.inf))
-            continue
-        a, b, c = vector[:, np.argmax(elliptic)]
-        d, e, f = block @ [a, b, c]
-        residual = _kernels.conic_residual(points, mean0, mean1, scale, a, b, c, d, e, f)
-        fits.append(((a, b, c, d, e, f, np.array([mean0, mean1]), scale), residual))
-    return fits
+    # of each set's three eigenvectors (columns), the first elliptic one: 4 a c - b^2 > 0
+    elliptic = 4 * vectors[:, 0] * vectors[:, 2] - vectors[:, 1] ** 2 > 0
+    found = elliptic.any(axis=1)
+    abc = vectors[np.arange(len(sides)), :, np.argmax(elliptic, axis=1)]
+    conics = np.column_stack([moments[:, :3], abc, (t @ abc[:, :, None])[:, :, 0]])
+    residuals = np.empty(len(sides))
+    _kernels.conic_residuals(stacked, starts, conics, residuals)
+    residuals[~found] = np.inf
+    return conics, found, residuals
 
 
 def _ellipse_axes(conic):
@@ -1284,12 +1300,10 @@ def _ellipse_axes(conic):
     return mean + scale * centre, scale * np.sqrt(k / values), axes
 
 
-def _explained(part, fit, region):
-    """(area, whether the part is explained by its ellipse): ``ELLIPSE_RMS``, ``ELLIPSE_OUTSIDE``,
-    ``ELLIPSE_SOLIDITY``, an aspect of at most ``MAX_PART_ASPECT`` and an equal-area radius of at
-    least ``MIN_SPLIT_RADIUS``."""
-    import shapely
-
+def _explained(part, fit, outline):
+    """(area, whether the part is explained by its ellipse): ``ELLIPSE_RMS``, ``ELLIPSE_OUTSIDE``
+    (of the object, ``outline``), ``ELLIPSE_SOLIDITY``, an aspect of at most ``MAX_PART_ASPECT``
+    and an equal-area radius of at least ``MIN_SPLIT_RADIUS``."""
     area = signed_area(part)
     conic, residual = fit
     radius = np.sqrt(max(area, 0.0) / np.pi)
@@ -1302,10 +1316,7 @@ def _explained(part, fit, region):
     centre, semi_axes, axes = ellipse
     if semi_axes.max() > MAX_PART_ASPECT * semi_axes.min():
         return area, False
-    angle = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    shape = shapely.Polygon(centre + np.column_stack([semi_axes[0] * np.cos(angle),
-                                                      semi_axes[1] * np.sin(angle)]) @ axes.T)
-    if 1 - shapely.intersection(shape, region).area / shape.area > ELLIPSE_OUTSIDE:
+    if _outside(_ellipse_polygon(ellipse), outline) > ELLIPSE_OUTSIDE:
         return area, False
     return area, area >= ELLIPSE_SOLIDITY * hull_area(part)
 
@@ -1423,8 +1434,6 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     in half got an ellipse of 13.5 by 8.4 px, and the touching disk's part took three pixels of
     it at the ends of the contact, outside the lens the two share).
     """
-    import shapely
-
     outline = curves[0]
     area = signed_area(outline)
     if area < 2 * np.pi * MIN_SPLIT_RADIUS**2:
@@ -1439,18 +1448,18 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     arcs = _arcs(outline, corners)
     if not 2 <= len(arcs) <= ARC_MAX:
         return None
-    region = shapely.Polygon(outline)
-    groups = _grouped_arcs(outline, arcs, region)
+    groups = _grouped_arcs(outline, arcs)
     # of two ellipses that overlap too much, the one that fits its arcs worse is no object's
     fitted = sorted(((fit[1] / sum(arcs[k].size for k in group), ellipse) for group, fit, ellipse in groups
                      if ellipse is not None), key=lambda entry: entry[0])
     ellipses, shapes = [], []
     for _, ellipse in fitted:
         shape = _ellipse_polygon(ellipse)
-        if all(shapely.intersection(shape, other).area <= ARC_OVERLAP * min(shape.area, other.area)
-               for other in shapes):
+        area = abs(signed_area(shape))
+        if all(_kernels.convex_clip_area(shape, other) <= ARC_OVERLAP * min(area, other_area)
+               for other, other_area in shapes):
             ellipses.append(ellipse)
-            shapes.append(shape)
+            shapes.append((shape, area))
     if len(ellipses) < 2:
         return None
     low = np.floor(outline.min(axis=0)).astype(int) - 1
@@ -1525,23 +1534,32 @@ def _arcs(outline, corners):
     return arcs
 
 
-def _grouped_arcs(outline, arcs, region):
+def _grouped_arcs(outline, arcs):
     """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
     The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
     intersection, the dearest test) only when its cost makes it the pair to join, and a single
-    arc's only when it is left alone (the joining reads the fits)."""
+    arc's only when it is left alone (the joining reads the fits).  A fit whose conic fails
+    :func:`_arc_ellipse`'s shape tests by a clear margin (:func:`_clearly_not_arc_ellipses`, all
+    the new fits at once) has no ellipse from the start: an option the joining would have tried
+    and passed over, or a single arc's None."""
     def points(group):
         return outline[np.concatenate([arcs[i] for i in group])]
 
+    def fitted(groups):
+        """The fits of groups of arcs, each with None for its ellipse, or False where it has none."""
+        sets = [points(group) for group in groups]
+        conics, found, residuals = _stacked_ellipse_fits(sets)
+        rejected = _clearly_not_arc_ellipses(conics, found, residuals, [len(points) for points in sets])
+        return [[fit, False if no else None]
+                for fit, no in zip(_as_fits(conics, found, residuals), rejected.tolist(), strict=True)]
+
     singles = [(i,) for i in range(len(arcs))]
-    groups = [(group, fit, None) for group, fit in zip(singles, _ellipse_fits([points(g) for g in singles]),
-                                                       strict=True)]
+    groups = [(group, *entry) for group, entry in zip(singles, fitted(singles), strict=True)]
     joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
     while len(groups) > 1:
         pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
         new = [(groups[i][0], groups[j][0]) for i, j in pairs if (groups[i][0], groups[j][0]) not in joined]
-        for key, fit in zip(new, _ellipse_fits([points(a + b) for a, b in new]), strict=True):
-            joined[key] = [fit, None]
+        joined.update(zip(new, fitted([a + b for a, b in new]), strict=True))
         options = []
         for i, j in pairs:
             fit, ellipse = joined[(groups[i][0], groups[j][0])]
@@ -1564,7 +1582,7 @@ def _grouped_arcs(outline, arcs, region):
             key = (groups[i][0], groups[j][0])
             entry = joined[key]
             if entry[1] is None:
-                entry[1] = _arc_ellipse(points(key[0] + key[1]), entry[0], region)
+                entry[1] = _arc_ellipse(points(key[0] + key[1]), entry[0], outline)
                 entry[1] = False if entry[1] is None else entry[1]
             if entry[1] is not False:
                 best = (i, j, (key[0] + key[1], entry[0], entry[1]))
@@ -1573,16 +1591,14 @@ def _grouped_arcs(outline, arcs, region):
             break
         i, j, union = best
         groups = [group for k, group in enumerate(groups) if k not in (i, j)] + [union]
-    return [(group, fit, _arc_ellipse(points(group), fit, region) if len(group) == 1 else ellipse)
-            for group, fit, ellipse in groups]
+    return [(group, fit, (None if ellipse is False else _arc_ellipse(points(group), fit, outline))
+             if len(group) == 1 else ellipse) for group, fit, ellipse in groups]
 
 
-def _arc_ellipse(points, fit, region):
+def _arc_ellipse(points, fit, outline):
     """The ellipse (centre, semi-axes, axes) of an arc group's fit when it is an object's
-    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS`` and ``ARC_OUTSIDE`` of the object's
-    ``region``, a shapely polygon), else None."""
-    import shapely
-
+    (``ARC_RMS``, ``MAX_PART_ASPECT``, ``MIN_SPLIT_RADIUS`` and ``ARC_OUTSIDE`` of the object,
+    ``outline``), else None."""
     conic, residual = fit
     ellipse = None if conic is None else _ellipse_axes(conic)
     if ellipse is None:
@@ -1592,20 +1608,63 @@ def _arc_ellipse(points, fit, region):
     if (radius < MIN_SPLIT_RADIUS or semi_axes.max() > MAX_PART_ASPECT * semi_axes.min()
             or np.sqrt(residual / len(points)) > ARC_RMS[0] + ARC_RMS[1] * radius):
         return None
-    shape = _ellipse_polygon(ellipse)
-    if 1 - shapely.intersection(shape, region).area / shape.area > ARC_OUTSIDE:
+    if _outside(_ellipse_polygon(ellipse), outline) > ARC_OUTSIDE:
         return None
     return ellipse
 
 
-def _ellipse_polygon(ellipse, count=48):
-    """An ellipse (centre, semi-axes, axes as columns) as a shapely polygon of ``count`` vertices."""
-    import shapely
+#: :func:`_clearly_not_arc_ellipses` rejects a conic only when it fails a test of
+#: :func:`_arc_ellipse` by this relative margin: far beyond the rounding by which its closed forms
+#: differ from :func:`_ellipse_axes`' solve and eigenproblem.
+CLEAR_MARGIN = 1e-6
 
+
+def _clearly_not_arc_ellipses(conics, found, residuals, counts):
+    """Which fits of :func:`_stacked_ellipse_fits` (of ``counts`` points each) :func:`_arc_ellipse`
+    rejects for their shape alone, all at once: an aspect above ``MAX_PART_ASPECT``, a radius
+    below ``MIN_SPLIT_RADIUS`` or an rms Sampson distance above ``ARC_RMS``, each by
+    ``CLEAR_MARGIN``.
+
+    The conic ``a x^2 + b xy + c y^2 + d x + e y + f`` with ``q = [[a, b/2], [b/2, c]]``
+    (``det q > 0``: the fit is elliptic) has its centre at ``z = -(2q)^-1 (d, e)``, ``k = z^T q z
+    - f`` and, with the eigenvalues ``l`` of q, semi-axes ``scale sqrt(k / l)``: the aspect is
+    ``sqrt(l_max / l_min)`` and the radius ``sqrt(semi-axes product) = scale sqrt(k) / det(q)^(1/4)``
+    in closed form.  Only a conic whose k is no rounding residue and of the eigenvalues' sign
+    (a real ellipse) is judged by its radius; anything near a threshold is left to
+    :func:`_arc_ellipse`, so no decision changes (False: ask it)."""
+    scale, a, b, c, d, e, f = conics[:, 2:].T
+    det = a * c - b * b / 4
+    half_sum, half_gap = (a + c) / 2, np.hypot((a - c) / 2, b / 2)
+    small, large = np.abs(half_sum) - half_gap, np.abs(half_sum) + half_gap  # |eigenvalues|
+    with np.errstate(divide="ignore", invalid="ignore"):
+        too_long = (det > 0) & (large > MAX_PART_ASPECT**2 * (1 + CLEAR_MARGIN) * small)
+        z0 = -(2 * c * d - b * e) / (4 * det)
+        z1 = -(2 * a * e - b * d) / (4 * det)
+        quadratic = a * z0 * z0 + b * z0 * z1 + c * z1 * z1
+        k = quadratic - f
+        real = (det > 0) & (k * half_sum > 0) & (np.abs(k) > CLEAR_MARGIN * (np.abs(quadratic) + np.abs(f)))
+        radius = scale * np.sqrt(np.abs(k)) / det ** 0.25
+        rms = np.sqrt(residuals / np.asarray(counts, dtype=np.float64))
+        too_small = real & (radius < MIN_SPLIT_RADIUS * (1 - CLEAR_MARGIN))
+        bound = (ARC_RMS[0] + ARC_RMS[1] * radius * (1 + CLEAR_MARGIN)) * (1 + CLEAR_MARGIN)
+        too_rough = real & (rms > bound)
+    return found & (too_long | too_small | too_rough)
+
+
+def _ellipse_polygon(ellipse, count=48):
+    """An ellipse (centre, semi-axes, axes as columns) as a polygon of ``count`` vertices (count, 2)."""
     centre, semi_axes, axes = ellipse
     angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
-    return shapely.Polygon(centre + np.column_stack([semi_axes[0] * np.cos(angle),
-                                                     semi_axes[1] * np.sin(angle)]) @ axes.T)
+    return np.ascontiguousarray(centre + np.column_stack([semi_axes[0] * np.cos(angle),
+                                                          semi_axes[1] * np.sin(angle)]) @ axes.T)
+
+
+def _outside(shape, outline):
+    """The fraction of a convex polygon ``shape`` (an :func:`_ellipse_polygon`) that lies outside
+    the simple polygon ``outline`` (:func:`activecontour._kernels.convex_clip_area`: the outline
+    clipped by the shape's edges, compiled; GEOS's general intersection cost ten times more)."""
+    return 1 - _kernels.convex_clip_area(np.ascontiguousarray(outline, dtype=np.float64), shape) / abs(
+        signed_area(shape))
 
 
 def _normalised_radius(ellipse, points):

@@ -10,6 +10,7 @@ import scipy.ndimage
 import shapely
 
 import activecontour.objects.split as split
+from activecontour import _kernels
 from activecontour.geometry.curve import orient, signed_area
 from activecontour.geometry.raster import rasterize
 
@@ -458,3 +459,70 @@ def test_a_split_by_contrast_needs_two_pixels_min_radius_inside():
     bar[3:7, 2:58] = True
     assert not split._may_split_by_contrast(bar, split.MIN_SPLIT_RADIUS)
     assert not split._may_split_by_contrast(np.pad(np.ones((7, 7), dtype=bool), 1), 3.0)  # 49 < 2 pi 9
+
+
+def test_convex_clip_area_is_the_area_of_the_intersection():
+    # a U of three unit-wide bars (area 7 in a 3 x 3 box: its slot 1 x 2 open at the top) clipped by
+    # the box's lower half, a convex window, in either orientation: 3 x 1.5 less the slot's 1 x 0.5
+    u_shape = np.array([[0, 0], [3, 0], [3, 3], [2, 3], [2, 1], [1, 1], [1, 3], [0, 3]], dtype=float)
+    window = np.array([[-1, -1], [4, -1], [4, 1.5], [-1, 1.5]], dtype=float)
+    for polygon in (u_shape, u_shape[::-1].copy()):
+        for convex in (window, window[::-1].copy()):
+            assert _kernels.convex_clip_area(polygon, convex) == pytest.approx(3 * 1.5 - 0.5, rel=1e-14)
+    # a window across both arms only: two pieces, the slot between them not counted
+    across = np.array([[2.0, -1], [2.5, -1], [2.5, 4], [2.0, 4]])
+    assert _kernels.convex_clip_area(u_shape, np.array([[0.5, 2], [2.5, 2], [2.5, 2.5], [0.5, 2.5]])) == \
+        pytest.approx(2 * 0.5 * 0.5, rel=1e-14)
+    assert _kernels.convex_clip_area(u_shape, across) == pytest.approx(0.5 * 3, rel=1e-14)
+    # disjoint, and the window holding all of it
+    assert _kernels.convex_clip_area(u_shape, window + 10) == 0.0
+    assert _kernels.convex_clip_area(u_shape, 10 * window) == pytest.approx(7.0, rel=1e-14)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_convex_clip_area_is_geos_intersection_area(seed):
+    outline = random_outline(seed)
+    ellipse = (outline.mean(axis=0) + [2.0, -1.5], np.array([9.0, 5.0]), np.array([[0.6, -0.8], [0.8, 0.6]]))
+    shape = split._ellipse_polygon(ellipse)
+    expected = shapely.intersection(shapely.Polygon(shape), shapely.Polygon(outline)).area
+    got = _kernels.convex_clip_area(np.ascontiguousarray(outline), shape)
+    assert got == pytest.approx(expected, rel=1e-12)
+
+
+def _circle_points(centre, semi_axes, count=40, turn=0.0):
+    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    local = np.column_stack([semi_axes[0] * np.cos(angle), semi_axes[1] * np.sin(angle)])
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    return np.asarray(centre) + local @ rotation.T
+
+
+def test_the_closed_form_ellipse_gate_rejects_what_arc_ellipse_rejects_by_shape():
+    # exact ellipses: their fits are the ellipses themselves, so the truth is known
+    object_outline = _circle_points((100.0, 100.0), (80.0, 80.0), count=400)  # holds them all
+    cases = {  # (semi-axes): what _arc_ellipse must say
+        (10.0, 10.0): True, (12.0, 4.0): True,  # radius sqrt(48) > 3, aspect 3 < 4
+        (2.0, 2.0): False,  # radius 2 < MIN_SPLIT_RADIUS
+        (30.0, 5.0): False,  # aspect 6 > MAX_PART_ASPECT
+    }
+    sides = [_circle_points((100.0, 90.0), axes, turn=0.3) for axes in cases]
+    conics, found, residuals = split._stacked_ellipse_fits(sides)
+    rejected = split._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
+    for side, fit, no, (axes, expected) in zip(sides, split._as_fits(conics, found, residuals), rejected,
+                                               cases.items(), strict=True):
+        assert (split._arc_ellipse(side, fit, object_outline) is not None) == expected, axes
+        assert bool(no) == (not expected), axes
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_closed_form_ellipse_gate_never_rejects_an_ellipse_arc_ellipse_keeps(seed):
+    outline = random_outline(seed)
+    rng = np.random.default_rng(seed)
+    sides = []
+    for _ in range(30):  # stretches of the outline, as the arc grouping fits them
+        a = rng.integers(0, len(outline) - 8)
+        sides.append(outline[a:rng.integers(a + 8, len(outline) + 1)])
+    conics, found, residuals = split._stacked_ellipse_fits(sides)
+    rejected = split._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
+    for side, fit, no in zip(sides, split._as_fits(conics, found, residuals), rejected, strict=True):
+        if no:
+            assert split._arc_ellipse(side, fit, outline) is None
