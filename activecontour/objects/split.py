@@ -25,7 +25,9 @@ whole clump:
    inscribed-circle centre per part) whose parts are merged back while the neck between two is
    nearly as wide as the thinner part; a neck must be a waist (a concavity of the outline at both
    ends).  Disks and blobs that overlap by up to a third of their diameter meet at a neck of
-   ``sqrt(5)/3 = 0.745`` of their radius.
+   ``sqrt(5)/3 = 0.745`` of their radius.  A shallow neck (above ``TUBE_NECK``) between two
+   parts that hold more than ``TUBE_AREA`` times the area of their inscribed disks is a dent of
+   a rod or stroke, and is kept whole.
 2. **Concave corners** (:func:`_corner_parts`, the sub-pixel polygon): two convex objects that
    overlap meet at two corners of the outline, concave stretches where the curvature kappa of the
    book's 1-D geometry (section 6.5: ``kappa nu = -Laplace_Sigma id``, (3.45), (4.30);
@@ -121,7 +123,13 @@ maximum (a small disk pressed a third of its diameter into a larger one): no nec
 singles the split cuts (10 of 120, 12 of 240) are cut by the necks (7 of them) and the corners (7,
 one after a neck): bent rods but one star (seed 39). The rods' necks are noise of the outline (a rod
 24 px wide narrowed by 1-2 px at two dents); a ``NECK_RATIO`` of 0.8 keeps them whole (3 of 120, 6
-of 240 cut, all by the corners) but costs the clumps more (disks worst 0.765 -> 0.50).
+of 240 cut, all by the corners) but costs the clumps more (disks worst 0.765 -> 0.50).  Measured
+against the area instead (``TUBE_AREA``: two parts of a rod hold 2-4 times the area of their
+inscribed disks, two deeply overlapping blobs less than it), the necks keep all rods but one
+whole (6 of 120, 6 of 240 singles cut, the objects of the touching families and of the DSB image
+unchanged); the rest are the corner stage's, at the bend of a rod (a one-sided cut from the
+inner corner across to the convex outer side: the same geometry as two rods overlapping end to
+end, which the rays across a rounded contact must cut) and a star's arms.
 """
 
 from __future__ import annotations
@@ -151,6 +159,16 @@ MIN_SPLIT_RADIUS = 3.0
 #: converged contour wiggles by a fraction of a pixel, which on a ring or a stroke of constant
 #: width makes necks of a few per cent.
 MIN_NECK_DEPTH = 1.0
+#: A shallow neck (at least this fraction of the thinner part's inscribed radius) ...
+TUBE_NECK = 0.85
+#: ... between two parts that together hold at least this many times the area of their two
+#: largest inscribed disks is a dent of a stroke or rod (a tube of about constant width), which
+#: the neck stage keeps whole: two blobs that overlap so deeply that their neck is this shallow
+#: hold less than the area of their two disks (measured: at most 1.74 of it on the touching
+#: families, seeds 0-59; the bent rods' pieces cut at noise dents of 1-2 px: 2.0-4.0, but for
+#: one rod of short pieces with rounded ends, 1.35-1.9, still cut).  A neck
+#: below ``TUBE_NECK`` is a contact whatever the parts' area (objects of aspect 3 meet there).
+TUBE_AREA = 2.0
 
 
 def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_radius=MIN_SPLIT_RADIUS):
@@ -736,7 +754,8 @@ class _PartGraph:
     def merge_necks(self, neck_ratio):
         """Merge neighbouring parts, the widest neck relative to the thinner side first, while
         the neck is at least ``neck_ratio`` of the thinner part's peak or within
-        ``MIN_NECK_DEPTH`` of it (a side too small to be an object merges whatever its neck);
+        ``MIN_NECK_DEPTH`` of it (a side too small to be an object merges whatever its neck)
+        or, above ``TUBE_NECK`` of it, the two parts are a stretch of a tube (:meth:`is_tube`);
         the narrow necks left that are a notch on one side only (no waist) go too."""
         self.queues = ([], [])  # all pairs; the pairs not yet found to be waists
         for i, neighbours in self.adjacent.items():
@@ -746,12 +765,21 @@ class _PartGraph:
         while (best := self._best(self.queues[0])) is not None:
             (i, j), merit = best
             thinner = min(self.peak[i], self.peak[j])
-            if merit < neck_ratio and self.adjacent[i][j].neck < thinner - MIN_NECK_DEPTH:
+            if (merit < neck_ratio and self.adjacent[i][j].neck < thinner - MIN_NECK_DEPTH
+                    and not (merit >= TUBE_NECK and self.is_tube(i, j))):
                 best = self._best(self.queues[1], one_sided=True)
                 if best is None:
                     break
             self.merge(*best[0])
         self.queues = None
+
+    def is_tube(self, i, j):
+        """Whether parts i and j together hold at least ``TUBE_AREA`` times the area of their
+        two largest inscribed disks: a stretch of a stroke or a rod, not two blobs."""
+        if self.shapes is None:
+            self.shapes = _PartShapes(self.parts, self.members)
+        area = self.shapes.sums[i][0] + self.shapes.sums[j][0]
+        return bool(area >= TUBE_AREA * np.pi * (self.peak[i] ** 2 + self.peak[j] ** 2))
 
     def merge_non_blobs(self):
         """A part that is no blob (a body with limbs, a bent stroke, an arc) means the necks were
@@ -759,7 +787,8 @@ class _PartGraph:
         blob or has no neighbour (pixels touching only at a corner are no neighbours)."""
         if not any(self.adjacent.values()):  # no part has a neighbour to take back: no shapes needed
             return
-        self.shapes = _PartShapes(self.parts, self.members)
+        if self.shapes is None:  # (made by :meth:`is_tube` when a shallow neck asked)
+            self.shapes = _PartShapes(self.parts, self.members)
         queue = []
         for root in self.members:
             self._queue_shape(queue, root)

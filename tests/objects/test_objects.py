@@ -284,6 +284,33 @@ def test_a_single_object_is_never_split(name, backend):
     assert res.labels.max() == 1  # ... and one object
 
 
+def _dented_rod(at, half_width=10.0, length=90.0, depth=1.2, spacing=0.25):
+    """The outline of a rod (a stadium: half-width 10, straight part 90 px) with a dent of
+    ``depth`` px (a Gaussian of 2 px) on both sides at ``at`` px from its middle: the noise of a
+    converged contour on a rod of constant width, a neck of (10 - 1.2) / 10 = 0.88 of its
+    inscribed radius between two pieces of the rod."""
+    r0, c0 = 30.0, 70.0
+    xs = np.arange(-length / 2, length / 2, spacing)
+    dent = depth * np.exp(-0.5 * ((xs - at) / 2.0) ** 2)
+    ends = np.arange(-np.pi / 2, np.pi / 2, spacing / half_width)
+    top = np.column_stack([r0 - half_width + dent, c0 + xs])
+    right = np.column_stack([r0 + half_width * np.sin(ends), c0 + length / 2 + half_width * np.cos(ends)])
+    bottom = np.column_stack([r0 + half_width - dent, c0 + xs])[::-1]
+    left = np.column_stack([r0 - half_width * np.sin(ends), c0 - length / 2 - half_width * np.cos(ends)])
+    return orient(np.vstack([top, right, bottom, left]))
+
+
+@pytest.mark.parametrize("at", [0.0, 15.0])
+def test_a_rod_with_shallow_dents_is_one_object(at):
+    # a neck above TUBE_NECK between two stretches of a tube (together more than TUBE_AREA times
+    # their inscribed disks) is a dent, not a contact: the rod is one object (the neck stage cut
+    # it in two before TUBE_NECK; issue 23's bent rods of the singles family)
+    from activecontour.objects.split import split_touching
+
+    outline = _dented_rod(at)
+    assert len(split_touching([[outline]], label_image([[outline]], (60, 140)))) == 1
+
+
 def _bright_and_dim_halves():
     """A disk of radius 20 cut by a chord through its centre, the left half twice as bright as
     the right one (a bright nucleus touching a dim one): the outline is a disk, no waist."""
