@@ -18,6 +18,7 @@ import app
 from activecontour import io, synthetic
 from app import cli
 from app.cli.progress import ImageProgress
+from tests.helpers import sigint_as_in_a_terminal
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_images"
 SIZE = (48, 64)
@@ -491,7 +492,7 @@ def test_ctrl_c_during_a_compiled_kernel_ends_the_run_within_a_second(small, tmp
     process = subprocess.Popen(
         [sys.executable, "-c", _SLOW_SEGMENT, "segment", str(path), "-o", str(out)],
         cwd=Path(__file__).resolve().parents[2], stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        preexec_fn=sigint_as_in_a_terminal,
     )
     try:
         assert process.stderr.readline() == "segmenting\n"

@@ -14,6 +14,7 @@ import pytest
 from activecontour import io, synthetic
 from app import cli
 from tests.app.test_cli import assert_one_line_error, run, summary_fields
+from tests.helpers import sigint_as_in_a_terminal
 
 SIZE = (48, 64)
 ROOT = Path(__file__).resolve().parents[2]
@@ -159,6 +160,7 @@ def test_ctrl_c_stops_a_parallel_batch_without_tracebacks(folder, tmp_path):
         [sys.executable, "-m", "app", "segment", str(path), "-o", str(tmp_path / "out"), "--jobs", "2",
          "--max-iter", "20000", "--tol", "0", "--option", "max_step=1e-4"],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        preexec_fn=sigint_as_in_a_terminal,
     )
     try:
         deadline = time.monotonic() + 60

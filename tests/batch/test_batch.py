@@ -16,6 +16,7 @@ import pytest
 
 import activecontour as ac
 from activecontour import batch, synthetic
+from tests.helpers import sigint_as_in_a_terminal
 
 SIZE = (48, 56)
 
@@ -261,7 +262,8 @@ def test_ctrl_c_while_spawned_workers_start_stops_them_quietly(tmp_path):
     root = Path(__file__).resolve().parents[2]
     process = subprocess.Popen([sys.executable, str(script)], cwd=root,
                                env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+                               stderr=subprocess.PIPE, text=True, start_new_session=True,
+                               preexec_fn=sigint_as_in_a_terminal)
     try:
         assert process.stdout.readline() == "started\n"  # imports done (slow on a loaded machine)
         time.sleep(0.5)  # the parent has started the pool; the workers are still importing
@@ -302,7 +304,8 @@ def _start_sleeping_batch(tmp_path):
     root = Path(__file__).resolve().parents[2]
     process = subprocess.Popen([sys.executable, str(script), str(pids)], cwd=root,
                                env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+                               stderr=subprocess.PIPE, text=True, start_new_session=True,
+                               preexec_fn=sigint_as_in_a_terminal)
     assert process.stdout.readline() == "started\n"
     deadline = time.monotonic() + 30
     while len(list(pids.iterdir())) < 2 and time.monotonic() < deadline:
