@@ -39,10 +39,12 @@ Canonical forms (what is hashed, and why):
   OpenBLAS picks its kernels by the processor, and numpy and OpenCV dispatch some loops to AVX-512
   where it exists; each gives results that differ in the last bits (a dot product summed in another
   order, ``exp`` by another polynomial). Stored on one machine, 76 of the 103 cases hashed
-  differently on an AMD EPYC with AVX-512 (OpenBLAS's Zen kernels), the library unchanged; with
-  OpenBLAS's SkylakeX kernels forced there, the cheap cell case hashed as stored again. So the
+  differently on an AMD EPYC with AVX-512 (whose environment sets ``OPENBLAS_CORETYPE=Haswell``),
+  the library unchanged; with OpenBLAS's SkylakeX kernels forced there, the cheap cell case hashed
+  as stored again. So the
   corpus runs with OpenBLAS's Haswell kernels and numpy and OpenCV kept to AVX2: any machine with
-  AVX2 runs the same instructions. A caller's own setting of these variables is kept.
+  AVX2 runs the same instructions. These three are set whatever the environment says (a machine may
+  set its own ``OPENBLAS_CORETYPE``, as this one does); the thread counts only where unset.
 
 usage:
     python3 benchmarks/golden.py --write         # compute every case and store benchmarks/golden.json
@@ -59,14 +61,16 @@ from __future__ import annotations
 
 import os
 
-#: Set before numpy is imported (see the docstring): one BLAS thread, and the same kernels on every
-#: x86-64 machine with AVX2.
-PINNED = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-          "OPENBLAS_CORETYPE": "Haswell",
+#: Set before numpy is imported (see the docstring): one BLAS thread where unset, and the same
+#: kernels on every x86-64 machine with AVX2 always.
+THREADS = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+PINNED = {"OPENBLAS_CORETYPE": "Haswell",
           "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR",
           "OPENCV_CPU_DISABLE": "AVX512-SKX,AVX512-CLX,AVX512-CNL,AVX512-ICL,AVX512-COMMON,AVX_VNNI"}
-for _name, _value in PINNED.items():
-    os.environ.setdefault(_name, _value)
+if __name__ == "__main__":  # the script and its -j workers (spawned: they inherit the environment);
+    for _name, _value in THREADS.items():  # an importer (the tests) keeps its own environment, or
+        os.environ.setdefault(_name, _value)  # its children would run other kernels than it does
+    os.environ.update(PINNED)
 
 import argparse  # noqa: E402
 import fnmatch  # noqa: E402
