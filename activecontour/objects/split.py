@@ -1484,11 +1484,11 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     ellipses, shapes = [], []
     for _, ellipse in fitted:
         shape = _ellipse_polygon(ellipse)
-        area = abs(signed_area(shape))
-        if all(_kernels.convex_clip_area(shape, other) <= ARC_OVERLAP * min(area, other_area)
+        shape_area = abs(signed_area(shape))
+        if all(_kernels.convex_clip_area(shape, other) <= ARC_OVERLAP * min(shape_area, other_area)
                for other, other_area in shapes):
             ellipses.append(ellipse)
-            shapes.append((shape, area))
+            shapes.append((shape, shape_area))
     if len(ellipses) < 2:
         return None
     low = np.floor(outline.min(axis=0)).astype(int) - 1
@@ -1542,7 +1542,8 @@ def _uncovered_parts(parts, uncovered):
         return False
     lookup = np.zeros(count + 1, dtype=parts.dtype)
     lookup[large] = parts.max() + np.arange(1, large.size + 1)
-    parts[uncovered] = np.where(lookup[pieces[uncovered]] > 0, lookup[pieces[uncovered]], parts[uncovered])
+    new = lookup[pieces[uncovered]]
+    parts[uncovered] = np.where(new > 0, new, parts[uncovered])
     return True
 
 
@@ -1706,7 +1707,7 @@ def _normalised_radius(ellipse, points):
 def _meet_at_corners(parts, inside, corners, count):
     """Whether the borders between the pixel parts reach the object's edge (``inside``: the
     pixels within its outer boundary) within ``ARC_END_REACH`` of a corner (window coordinates) only,
-    no pixel has four parts within that reach and at most ``ARC_TRIPLE_POINTS`` places have
+    no pixel has four parts within ``ARC_REACH`` and at most ``ARC_TRIPLE_POINTS`` places have
     three."""
     import scipy.ndimage
 
