@@ -63,7 +63,6 @@ _START_SMOOTHING = 2.0  # ... and from the default start or a result, on the bou
 _CURVE_STEP = 0.25  # a trial step moves a curve by at most this fraction of its radius (RMS)
 _SMOOTHING_FACTOR = 4.0
 _STAGE_TOL = 10.0  # a coarse stage ends at 10 tol: the finer metric then makes faster progress
-_TANGENTIAL = 0.1  # weight of the velocity's tangential part in the finest metric (see _Flow.velocity)
 _MIN_EDGE = 1e-9
 _RELATIVE_SMOOTHING = 0.5
 _NUCLEATION_RADIUS = 4.0
@@ -130,8 +129,7 @@ def segment_polygon(model, init, params, *, max_num_iter, tol, callback, options
         # the default start, a result and the global move lie on the objects' boundaries already
         on_boundaries = init is None or from_result or jumped
         smoothing = max(min_smoothing, _START_SMOOTHING if on_boundaries else _SMOOTHING)
-    flow = _Flow(model, params, velocity, smoothing, min_smoothing, max_step, min_area, model.bounds,
-                 accelerate)
+    flow = _Flow(model, params, velocity, smoothing, max_step, min_area, model.bounds, accelerate)
     movement = _Movement()
     status, last_remesh, rounds = 1, -_REMESH_COOLDOWN, 0
     for k in range(n_iter, max_num_iter):
@@ -207,11 +205,10 @@ def _global_move(model, params, geometry, energy, spacing):
 class _Flow:
     """One time step (6.30)-(6.31) with backtracking and topology repair; remembers the last dt."""
 
-    def __init__(self, model, params, velocity, smoothing, min_smoothing, max_step, min_area, bounds,
-                 accelerate):
+    def __init__(self, model, params, velocity, smoothing, max_step, min_area, bounds, accelerate):
         self.model, self.params = model, params
         self.h1 = velocity == "h1"
-        self.smoothing, self.min_smoothing = smoothing, min_smoothing
+        self.smoothing = smoothing
         self.max_step = max_step
         self.min_area = min_area
         self.bounds = bounds
@@ -219,32 +216,12 @@ class _Flow:
         self.dt = np.inf
         self.memory = _Memory(accelerate)
         # of the last geometry seen (the arrays are never changed in place): identity, values
-        self._metric = self._lengths = self._areas = self._tangents = None
+        self._metric = self._lengths = self._areas = None
 
     def velocity(self, geometry, load):
-        """Solve b(V, Y) = -f (6.40) for all curves at once (block-cyclic, O(K)).
-
-        At the finest smoothing length of the H^1 form, b weighs the tangential part of V by
-        ``_TANGENTIAL`` (:func:`fem.frame_solve`): a tangential move only re-spaces the vertices on
-        the curve, and the energy's second variation along it is of order (h kappa)^2 of the
-        normal one, and indefinite (measured on a converged frame of bench_sequence: normal
-        block 0.013 .. 1.0, tangential -4e-4 .. 2e-2).  Weighed as much as a normal move, it is
-        the slow tail after the mask has settled (the vertices creep along the curve, J falls by
-        about 1e-6 relative per iteration); the quasi-Newton memory then spends itself on it.
-        """
+        """Solve b(V, Y) = -f (6.40) for all curves at once (block-cyclic, O(K))."""
         diagonal, off = self.metric(geometry)
-        if self.h1 and self.smoothing <= self.min_smoothing:
-            return -fem.frame_solve(diagonal, off, load, self.tangents(geometry), _TANGENTIAL, geometry[2])
         return -fem.cyclic_solve(diagonal, off, load, geometry[2])
-
-    def tangents(self, geometry):
-        """The unit tangent at every vertex of these curves (computed once per geometry)."""
-        points, next_index, _ = geometry
-        if self._tangents is None or self._tangents[0] is not points:
-            previous = np.empty_like(next_index)
-            previous[next_index] = np.arange(len(next_index))
-            self._tangents = (points, fem.vertex_tangents(points, next_index, previous))
-        return self._tangents[1]
 
     def metric(self, geometry):
         """The cyclic tridiagonal matrix of b (6.39) or (6.25) on these curves, as (diagonal, off):

@@ -10,10 +10,6 @@ cyclic tridiagonal, stored as a pair ``(diagonal, off)`` with ``off[i] = A[i, (i
 ``b(V, Y) = int V.Y + int grad_Sigma V : grad_Sigma Y`` of (6.39) is ``M + K``; the L^2 form (6.25) is
 ``M``.  :func:`cyclic_solve` solves either in O(K) by Sherman-Morrison on the Thomas algorithm,
 several polygons in one call: no dense inverse, no general sparse LU.
-
-:func:`frame_solve` solves the form that weighs a velocity's normal and tangential parts apart,
-``b(V, Y) = a(V.nu, Y.nu) + beta a(V.tau, Y.tau)`` with ``a`` either of the above on scalar fields
-and (nu, tau) the vertices' frames (:func:`vertex_tangents`), with the same O(K) solve.
 """
 
 from __future__ import annotations
@@ -26,12 +22,10 @@ __all__ = [
     "cyclic_apply",
     "cyclic_matrix",
     "cyclic_solve",
-    "frame_solve",
     "mass_diagonals",
     "mass_matrix",
     "stiffness_diagonals",
     "stiffness_matrix",
-    "vertex_tangents",
 ]
 
 
@@ -113,54 +107,3 @@ def cyclic_solve(diagonal, off, rhs, offsets=None):
     x = np.empty_like(b)
     _kernels.cyclic_thomas(diagonal, off, b, offsets, x)
     return x[:, 0] if squeeze else x
-
-
-def vertex_tangents(points, next_index, previous):
-    """Unit tangent at every vertex of stacked polygons: the bisector of its two edges' directions.
-
-    ``next_index[i]`` and ``previous[i]`` are the vertices after and before i (edge i joins i and
-    ``next_index[i]``).  Where the two directions cancel (a spike) or both edges have zero length,
-    any unit vector makes a frame: (1, 0).
-    """
-    d = np.take(points, next_index, axis=0) - points
-    h = np.hypot(d[:, 0], d[:, 1])
-    unit = np.divide(d, h[:, None], out=np.zeros_like(d), where=h[:, None] > 0)
-    tangents = unit + np.take(unit, previous, axis=0)
-    norm = np.hypot(tangents[:, 0], tangents[:, 1])
-    degenerate = norm < 1e-8
-    tangents[degenerate] = (1.0, 0.0)
-    norm[degenerate] = 1.0
-    return tangents / norm[:, None]
-
-
-def frame_solve(diagonal, off, rhs, tangents, beta, offsets=None):
-    """Solve ``b(V, Y) = rhs . Y`` for all Y, where the form weighs normal and tangential parts apart:
-
-        b(V, Y) = a(V.nu, Y.nu) + beta a(V.tau, Y.tau),
-
-    ``a`` the scalar cyclic tridiagonal form ``(diagonal, off)`` (M + l^2 K of (6.39), or M of
-    (6.25)), (tau, nu) the vertices' unit tangents and normals ``nu = (tau_c, -tau_r)``.  In
-    matrix terms ``B = N A N^T + beta T A T^T``, with N, T the (2K, K) blocks of the vertices'
-    orthonormal frames: symmetric positive definite for A SPD and beta > 0, so the velocity
-    ``V = -B^{-1} f`` keeps ``f . V = -f B^{-1} f < 0`` (6.27).  Solved as
-    ``V = N A^{-1} (N^T rhs) + T A^{-1} (T^T rhs) / beta``: one cyclic solve with two right-hand
-    sides, O(K).
-
-    Parameters
-    ----------
-    diagonal, off : ndarray of shape (K,)
-        The scalar form a, as for :func:`cyclic_solve`.
-    rhs : ndarray of shape (K, 2)
-    tangents : ndarray of shape (K, 2)
-        Unit tangents (:func:`vertex_tangents`).
-    beta : float
-        Weight of the tangential part, > 0.
-    offsets : ndarray of int, optional
-        Block boundaries, as for :func:`cyclic_solve`.
-    """
-    tangents = np.asarray(tangents, dtype=np.float64)
-    rhs = np.asarray(rhs, dtype=np.float64)
-    normals = np.column_stack([tangents[:, 1], -tangents[:, 0]])
-    parts = np.column_stack([np.einsum("ij,ij->i", rhs, normals), np.einsum("ij,ij->i", rhs, tangents)])
-    x = cyclic_solve(diagonal, off, parts, offsets)
-    return x[:, :1] * normals + (x[:, 1:] / beta) * tangents
