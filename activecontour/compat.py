@@ -7,9 +7,12 @@ types, computed by this package's polygon flow of (6.38) (section 6.5 of *The Sh
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from activecontour._segment import segment
+from activecontour._segment import solve_problem
+from activecontour.problem import prepare
 from activecontour.settings import Settings
 
 __all__ = ["chan_vese"]
@@ -161,9 +164,13 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
         domain = rectangle((-0.5, -0.5), (image.shape[0] - 0.5, image.shape[1] - 0.5))
         energies = [_energy(image, [domain] if init.inside else [], arguments)]
     else:
+        # segment's run without the objects' pass (no object ids are returned)
+        problem = prepare(image, Settings(**arguments))
         if isinstance(init_level_set, str) and init_level_set == "checkerboard":
-            init = _checkerboard_start(image, mu, arguments)
-        result = segment(image, init, **arguments)
+            init = _checkerboard_start(problem.normalised, mu, arguments)
+            if "options" in arguments:
+                problem = dataclasses.replace(problem, settings=Settings(**arguments))
+        result = solve_problem(problem, init, objects=False)
         segmentation, energies = result.mask, result.energies
     if not extended_output:
         return segmentation
@@ -203,21 +210,19 @@ def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_leve
     return _initial_region(init_level_set, shape), keywords
 
 
-def _checkerboard_start(image, mu, keywords):
-    """scikit-image's ``"checkerboard"`` here: the default start's threshold set, of the image
-    blurred by whichever of ``CHECKERBOARD_BLURS`` gives it the lowest (6.38)
-    (:func:`activecontour.initial.threshold_starts`), flowed from as the default start is (resampled
-    at the polygon's spacing, a 2 px first smoothing, no global move: it is one already).
-    ``keywords`` gain those options."""
+def _checkerboard_start(values, mu, keywords):
+    """scikit-image's ``"checkerboard"`` here: the default start's threshold set, of the normalised
+    image ``values`` (M, N, C) blurred by whichever of ``CHECKERBOARD_BLURS`` gives it the lowest
+    (6.38) (:func:`activecontour.initial.threshold_starts`), flowed from as the default start is
+    (resampled at the polygon's spacing, a 2 px first smoothing, no global move: it is one
+    already).  ``keywords`` gain those options."""
     from activecontour.backends.options import PolygonOptions
     from activecontour.backends.polygon import _START_SMOOTHING
     from activecontour.geometry.curve import resample
-    from activecontour.imaging.normalize import normalize_image
     from activecontour.initial import threshold_starts
 
     if not _is_number(mu) or mu < 0:
-        return None  # segment names the parameter
-    values = normalize_image(image, normalize=keywords["normalize"])
+        return None  # "auto": segment's default start
     spacing = PolygonOptions().spacing
     curves = [resample(c, spacing) for c in threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]]
     if curves:
