@@ -17,10 +17,6 @@ from activecontour.settings import Settings
 
 __all__ = ["chan_vese"]
 
-#: Our ``tol`` (pixels per iteration) per unit of scikit-image's: its default (1e-3, the default of
-#: :func:`chan_vese` below) becomes the default of :func:`activecontour.segment`
-TOL_SCALE = Settings().tol / 1e-3
-
 #: ``init_level_set`` presets of scikit-image, and what each becomes here (see :func:`chan_vese`)
 INIT_LEVEL_SETS = ("checkerboard", "disk", "small disk")
 #: Blur widths (px) among which the ``"checkerboard"`` start picks the one whose threshold set has
@@ -59,14 +55,16 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
         Weights of the fit terms of the True and the False region: ``lambda_in`` and
         ``lambda_out``.  Must be > 0.
     tol : float, optional
-        Convergence tolerance (>= 0).  scikit-image stops when the RMS change of phi per iteration
-        falls below ``tol``; here the run stops when the contour's mean normal displacement per
-        iteration, in pixels, falls below ``tol * TOL_SCALE``: for a signed-distance phi the two
-        are the same quantity (phi changes at each pixel by the displacement of the nearest part
-        of the contour), and ``TOL_SCALE`` (0.5) maps scikit-image's default 1e-3 onto this
-        package's default 5e-4.  scikit-image's phi is not a distance (it grows without
-        reinitialisation), so its test usually stops it after about 50 iterations, well before
-        its contour has settled; this one stops when the contour has.
+        Convergence tolerance (>= 0), passed unchanged as ``tol``.  scikit-image stops when the
+        RMS change of phi per iteration falls below ``tol``; here the run stops when the
+        contour's mean normal displacement per iteration, in pixels, falls below ``tol``: for a
+        signed-distance phi the two are the same quantity (phi changes at each pixel by the
+        displacement of the nearest part of the contour), so the number means the same (a
+        stricter mapping, onto :func:`activecontour.segment`'s default 5e-4, ran chelsea 156
+        iterations instead of 99 and text 181 instead of 86 for (6.38) lower by at most 0.09 %).
+        scikit-image's phi is not a distance (it grows without reinitialisation), so its test
+        usually stops it after about 50 iterations, well before its contour has settled; this
+        one stops when the contour has.
     max_num_iter : int, optional
         Iteration limit, passed unchanged (one iteration is one accepted step of the flow).
     dt : float, optional
@@ -206,7 +204,7 @@ def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_leve
     # separate=False: no object ids are returned, so touching objects need not be split (on
     # camera() that split costs 6x the segmentation); the mask and the energy do not depend on it
     keywords = dict(backend="polygon", mu=mu, lambda_in=lambda1, lambda_out=lambda2,
-                    max_num_iter=max_num_iter, tol=tol * TOL_SCALE, normalize="range", separate=False)
+                    max_num_iter=max_num_iter, tol=tol, normalize="range", separate=False)
     return _initial_region(init_level_set, shape), keywords
 
 

@@ -73,7 +73,7 @@ def test_energy_not_above_scikit_images_on_a_small_image(noisy_disk):
 
 
 def test_arguments_map_onto_segment(noisy_disk):
-    """mu, lambda1/2 pass unchanged, tol scaled so that the defaults correspond, and
+    """mu, lambda1/2 and tol pass unchanged (the same iterations, the same energies), and
     init_level_set="checkerboard" is the default start's threshold set: with one blur width it is
     the default start, and the same result as segment's."""
     image, _ = noisy_disk
@@ -83,8 +83,9 @@ def test_arguments_map_onto_segment(noisy_disk):
         seg, _, energies = chan_vese(image, mu=0.1, lambda1=1.0, lambda2=2.0, extended_output=True)
     finally:
         compat.CHECKERBOARD_BLURS = blurs
-    result = ac.segment(image, None, mu=0.1, lambda_in=1.0, lambda_out=2.0, tol=5e-4)
+    result = ac.segment(image, None, mu=0.1, lambda_in=1.0, lambda_out=2.0, tol=1e-3)
     np.testing.assert_array_equal(seg, result.mask)
+    np.testing.assert_allclose(energies, result.energies, rtol=1e-12)  # the same iterations
     assert energies[-1] == pytest.approx(
         ac.chan_vese_energy(image, result.contours, mu=0.1, lambda_out=2.0), rel=1e-12)
 
@@ -260,7 +261,7 @@ def test_the_objects_pass_is_left_out(noisy_disk, monkeypatch):
     image, _ = noisy_disk
     rr, cc = np.mgrid[:64, :64]
     level_set = 10.0 - np.hypot(rr - 30, cc - 34)
-    kwargs = dict(mu=0.1, max_num_iter=50)
+    kwargs = dict(mu=0.1, max_num_iter=50, tol=1e-3)
     expected = ac.segment(image, mask_to_curves(level_set > 0), separate=False, **kwargs)
 
     def refuse(*args, **kwargs):
