@@ -269,13 +269,32 @@ def _signed_distance(mask):
     """Signed distance (pixels) from each pixel centre to the mask's boundary, positive inside.
 
     The boundary runs half-way between inside and outside pixel centres, so the distance is the
-    Euclidean distance to the nearest pixel of the other class minus 1/2.  A mask without a
-    boundary (empty or full) is -1 or +1 everywhere.
+    Euclidean distance to the nearest pixel of the other class minus 1/2 (:func:`_distance`).  A
+    mask without a boundary (empty or full) is -1 or +1 everywhere.
     """
-    import scipy.ndimage
-
     if not mask.any() or mask.all():
         return np.where(mask, 1.0, -1.0)
-    inside = scipy.ndimage.distance_transform_edt(mask)
-    outside = scipy.ndimage.distance_transform_edt(~mask)
-    return np.where(mask, inside - 0.5, 0.5 - outside)
+    return np.where(mask, _distance(mask) - 0.5, 0.5 - _distance(~mask))
+
+
+#: Below this distance (px) the float32 Euclidean distance of OpenCV gives the exact one back: its
+#: square is within 1024^2 * 2^-23 = 0.125 of the integer it rounds (:func:`_distance`)
+_EXACT_FLOAT32 = 1024.0
+
+
+def _distance(mask):
+    """``scipy.ndimage.distance_transform_edt(mask)``: from each True pixel to the nearest False
+    one, exactly, in about half its time.  OpenCV's exact transform (``DIST_MASK_PRECISE``) is
+    float32; the squared distance is an integer, so rounding its square gives the float64
+    distance ``sqrt(integer)`` scipy returns, while distances stay below ``_EXACT_FLOAT32``
+    (scipy's own transform beyond)."""
+    import cv2
+
+    distance = cv2.distanceTransform(np.ascontiguousarray(mask).view(np.uint8), cv2.DIST_L2,
+                                     cv2.DIST_MASK_PRECISE)
+    if distance.max() >= _EXACT_FLOAT32:
+        import scipy.ndimage
+
+        return scipy.ndimage.distance_transform_edt(mask)
+    squared = np.square(distance, dtype=np.float64)
+    return np.sqrt(np.rint(squared, out=squared), out=squared)
