@@ -249,7 +249,7 @@ def _object_class(smooth, values=None, mu=0.0, split=None):
 SCALE_AGREEMENT = 0.25
 
 
-def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None):
+def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=None):
     """(direction, threshold) of the default start: the exact scan's, unless a coarser view
     disagrees.
 
@@ -260,9 +260,10 @@ def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None):
     is gone.  When the two scans select shares of the pixels that differ by more than
     ``SCALE_AGREEMENT``, the coarse split is kept: its share of the pixels, taken on the finer
     image (a quantile along the coarse split's direction), so corners stay sharp.  Objects, small
-    ones too, are split alike at both scales.
+    ones too, are split alike at both scales.  ``split``: :func:`threshold_split` of ``smooth``
+    when the caller has it already (it is not scanned again).
     """
-    direction, threshold, _ = threshold_split(smooth, values, mu)
+    direction, threshold, _ = threshold_split(smooth, values, mu) if split is None else split
     m, n = values.shape[:2]
     if min(m, n) < 32 or not np.isfinite(threshold):
         return direction, threshold
@@ -364,15 +365,15 @@ def threshold_mask(values, mu=0.0, inside="auto", *, blurs=None):
     ``blurs``: as :func:`threshold_starts`'.
     """
     blurs = (DEFAULT_INIT_BLUR,) if blurs is None else tuple(blurs)
-    blur, smooth = blurs[0], _blurred(values, blurs[0])
+    blur, smooth, split = blurs[0], _blurred(values, blurs[0]), None
     if len(blurs) > 1:
-        cost = threshold_split(smooth, values, mu)[2]
+        split = threshold_split(smooth, values, mu)
         for other in blurs[1:]:
             candidate = _blurred(values, other)
-            other_cost = threshold_split(candidate, values, mu)[2]
-            if other_cost < cost:
-                blur, smooth, cost = other, candidate, other_cost
-    split = _split_that_holds_at_twice_the_scale(values, smooth, mu, blur)
+            other_split = threshold_split(candidate, values, mu)
+            if other_split[2] < split[2]:
+                blur, smooth, split = other, candidate, other_split
+    split = _split_that_holds_at_twice_the_scale(values, smooth, mu, blur, split)
     mask, contrast = _object_class(smooth, values, mu, split)
     if inside != "auto" and contrast > 0:
         brighter = np.mean(values[mask]) > np.mean(values[~mask])

@@ -73,7 +73,7 @@ def test_energy_not_above_scikit_images_on_a_small_image(noisy_disk):
 
 
 def test_arguments_map_onto_segment(noisy_disk):
-    """mu, lambda1/2 pass unchanged, tol scaled so that the defaults correspond, and
+    """mu, lambda1/2 and tol pass unchanged (the same iterations, the same energies), and
     init_level_set="checkerboard" is the default start's threshold set: with one blur width it is
     the default start, and the same result as segment's."""
     image, _ = noisy_disk
@@ -83,8 +83,9 @@ def test_arguments_map_onto_segment(noisy_disk):
         seg, _, energies = chan_vese(image, mu=0.1, lambda1=1.0, lambda2=2.0, extended_output=True)
     finally:
         compat.CHECKERBOARD_BLURS = blurs
-    result = ac.segment(image, None, mu=0.1, lambda_in=1.0, lambda_out=2.0, tol=5e-4)
+    result = ac.segment(image, None, mu=0.1, lambda_in=1.0, lambda_out=2.0, tol=1e-3)
     np.testing.assert_array_equal(seg, result.mask)
+    np.testing.assert_allclose(energies, result.energies, rtol=1e-12)  # the same iterations
     assert energies[-1] == pytest.approx(
         ac.chan_vese_energy(image, result.contours, mu=0.1, lambda_out=2.0), rel=1e-12)
 
@@ -98,7 +99,7 @@ def test_checkerboard_takes_the_blur_whose_threshold_set_is_lowest():
     values = image[..., None] - image.min()
     values /= values.max()
     costs = [threshold_split(_blurred(values, b), values, 0.25)[2] for b in compat.CHECKERBOARD_BLURS]
-    start = compat._checkerboard_start(image, 0.25, {"normalize": "range"})
+    start = compat._checkerboard_start(values, 0.25, {})
     chosen = compat.CHECKERBOARD_BLURS[int(np.argmin(costs))]
     assert costs[0] > min(costs)  # the test means something: 1 px is not the best here
     expected = [resample(c, 1.0) for c in threshold_starts(values, 0.25, blurs=(chosen,))[0]]  # spacing
@@ -250,3 +251,54 @@ def test_skimage_blank_image_keeps_its_start():
     np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=0.0, init_level_set=level_set), level_set > 0)
     level_set = np.random.default_rng(0).random((10, 10)) - 0.5
     np.testing.assert_array_equal(chan_vese(image, mu=0.0, tol=0.0, init_level_set=level_set), level_set > 0)
+
+
+def test_the_objects_pass_is_left_out(noisy_disk, monkeypatch):
+    """No object ids are returned, so the drop-in runs segment's flow without the objects' pass
+    (find_objects), and its segmentation and energies are segment's."""
+    import activecontour._segment
+
+    image, _ = noisy_disk
+    rr, cc = np.mgrid[:64, :64]
+    level_set = 10.0 - np.hypot(rr - 30, cc - 34)
+    kwargs = dict(mu=0.1, max_num_iter=50, tol=1e-3)
+    expected = ac.segment(image, mask_to_curves(level_set > 0), separate=False, **kwargs)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the drop-in ran the objects' pass")
+
+    monkeypatch.setattr(activecontour._segment, "find_objects", refuse)
+    seg, _, energies = chan_vese(image, init_level_set=level_set, extended_output=True, **kwargs)
+    np.testing.assert_array_equal(seg, expected.mask)
+    assert energies[-1] == pytest.approx(expected.energy, rel=1e-12)
+
+
+def test_solve_problem_without_objects_is_the_same_partition(noisy_disk):
+    from activecontour._segment import solve_problem
+    from activecontour.problem import prepare
+    from activecontour.settings import Settings
+
+    image, _ = noisy_disk
+    problem = prepare(image, Settings(mu=0.1, max_num_iter=30))
+    full = solve_problem(problem)
+    bare = solve_problem(problem, objects=False)
+    assert full.labels is not None and bare.labels is None and bare.objects is None
+    np.testing.assert_array_equal(bare.mask, full.mask)
+    np.testing.assert_array_equal(bare.classes, full.classes)
+    assert bare.energy == full.energy
+
+
+def test_distance_is_scipys_exactly():
+    """The signed distance's transform gives scipy's exact Euclidean distances, bit for bit, on
+    blobs of every size and on a distance beyond float32's exact range (1500 px)."""
+    import scipy.ndimage
+
+    rng = np.random.default_rng(2)
+    for shape, width in (((40, 70), 1.0), ((300, 200), 3.0), ((257, 513), 12.0)):
+        smooth = scipy.ndimage.gaussian_filter(rng.random(shape), width)
+        blobs = smooth > np.median(smooth)
+        for mask in (blobs, ~blobs):
+            np.testing.assert_array_equal(compat._distance(mask), scipy.ndimage.distance_transform_edt(mask))
+    far = np.ones((1, 1500), dtype=bool)
+    far[0, 0] = False
+    np.testing.assert_array_equal(compat._distance(far), np.arange(1500.0)[np.newaxis])

@@ -95,3 +95,27 @@ def test_a_fine_texture_inside_an_object_does_not_split_the_default_start():
     start = ac.segment(image, max_num_iter=0)
     assert synthetic.dice(start.mask, truth) >= 0.95
     assert synthetic.dice(ac.segment(image).mask, truth) >= 0.99
+
+
+def test_threshold_mask_scans_each_blur_once(monkeypatch):
+    """Of several blur widths, each smoothed image is scanned once (its cost and its split are
+    the same scan), plus once the 2 x 2 block means of the image (the split must hold at twice
+    the scale): blurs + 1 scans, not the chosen blur's twice."""
+    import activecontour.initial as initial
+
+    image, _ = synthetic.disk_image(64, (30.0, 34.0), 14.0, inside=0.75, outside=0.25)
+    values = synthetic.add_noise(image, 0.1, seed=1)[..., None]
+    values = (values - values.min()) / (values.max() - values.min())
+    calls = []
+    scan = initial.threshold_split
+
+    def counted(*args, **kwargs):
+        calls.append(args[0].shape)
+        return scan(*args, **kwargs)
+
+    monkeypatch.setattr(initial, "threshold_split", counted)
+    blurs = (1.0, 2.0, 4.0)
+    mask, contrast = initial.threshold_mask(values, 0.05, blurs=blurs)
+    assert contrast > 0 and mask[30, 34] and not mask[0, 0]
+    assert len(calls) == len(blurs) + 1
+    assert calls.count((32, 32, 1)) == 1  # the block means' scan

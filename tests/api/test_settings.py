@@ -153,12 +153,6 @@ def test_the_command_line_defaults_are_the_settings():
         assert getattr(args, name) == getattr(defaults, name), name
 
 
-def test_compat_maps_scikit_images_tol_onto_the_settings_default():
-    from activecontour.compat import TOL_SCALE
-
-    assert inspect.signature(ac.compat.chan_vese).parameters["tol"].default * TOL_SCALE == Settings().tol
-
-
 def test_backend_option_specs_are_the_dataclass_defaults():
     for solver in SOLVERS.values():
         defaults = solver.options()
