@@ -750,6 +750,28 @@ class Network:
         return _kernels.segments_meet(np.ascontiguousarray(nodes, dtype=np.float64), start, end, True, 1,
                                       np.empty((0, 2), dtype=np.intp), _NO_WHERE) == 0
 
+    def simple_after(self, parent, nodes):
+        """:meth:`simple` for this network made from ``parent`` by a local change at ``nodes``
+        (:meth:`reconnected`, :meth:`collapsed`), where ``parent`` is simple: two segments that
+        are both the parent's (the same ends in the same order, each once) do not meet there, so
+        only the pairs with one of the others are tested, among the segments whose boxes meet
+        those others' box (:meth:`meet_among`).  The same answer as :meth:`simple`, at the cost
+        of the change's neighbourhood."""
+        count = len(nodes)
+        chosen = np.flatnonzero(self.interface)
+        keys = self.start[chosen] * count + self.end[chosen]
+        theirs = parent.start[parent.interface] * count + parent.end[parent.interface]
+        _, index, repeats = np.unique(keys, return_inverse=True, return_counts=True)
+        changed = chosen[~np.isin(keys, theirs) | (repeats[index] > 1)]
+        if changed.size == 0:
+            return True
+        a, b = nodes.take(self.start[chosen], axis=0), nodes.take(self.end[chosen], axis=0)
+        low, high = np.minimum(a, b), np.maximum(a, b)
+        box_low = np.minimum(nodes[self.start[changed]], nodes[self.end[changed]]).min(axis=0)
+        box_high = np.maximum(nodes[self.start[changed]], nodes[self.end[changed]]).max(axis=0)
+        near = chosen[np.all((low <= box_high) & (high >= box_low), axis=1)]
+        return not self.meet_among(nodes, near)
+
     def steps(self, nodes, velocity):
         """The admissibility of the steps ``nodes + dt velocity`` of one iteration, for any dt
         (:class:`_Steps`)."""
@@ -983,7 +1005,8 @@ class _Flow:
         for changed in (lambda: network.reconnected(pairs, nodes),
                         lambda: network.collapsed(np.flatnonzero(near & (lengths < _TINY)), nodes)):
             candidate = changed()
-            if candidate is not None and candidate[0].simple(candidate[1]) and self.replace(*candidate, ends):
+            if (candidate is not None and candidate[0].simple_after(network, nodes)
+                    and self.replace(*candidate, ends)):
                 return True
         return self.drop_islands(ends)
 

@@ -455,6 +455,33 @@ def test_reconnecting_across_a_neck_cuts_it():
     assert after.length == pytest.approx(before.length, rel=1e-12)
 
 
+def test_simplicity_after_a_local_change_tests_the_changed_segments():
+    # the bridge of the test above: its two sides at the middle column, a -> b on top, p -> q a
+    # pixel below, rejoined as the unit square's two diagonals (they cross), as its two rungs (no
+    # crossing), or with the bottom side laid on the top one (they coincide)
+    classes = np.zeros((9, 13), dtype=np.int32)
+    classes[3:6, 1:4] = classes[3:6, 9:12] = 1
+    classes[4, 4:9] = 1
+    network = Network.of_classes(classes)
+    nodes = network.nodes
+    middle = 0.5 * (nodes[network.start] + nodes[network.end])
+    top, bottom = (np.flatnonzero(network.interface & (middle[:, 1] == 6.5) & (middle[:, 0] == row))[0]
+                   for row in (3.5, 4.5))
+    (a, b), (p, q) = (sorted([network.start[e], network.end[e]], key=lambda k: nodes[k, 1])
+                      for e in (top, bottom))
+    assert network.simple(nodes)
+
+    def changed(top_ends, bottom_ends):
+        start, end = network.start.copy(), network.end.copy()
+        (start[top], end[top]), (start[bottom], end[bottom]) = top_ends, bottom_ends
+        return Network(nodes, start, end, network.inner, network.outer, network.shape)
+
+    diagonals, rungs, laid = changed((a, q), (p, b)), changed((a, p), (q, b)), changed((a, b), (a, b))
+    for child, simple in ((diagonals, False), (rungs, True), (laid, False), (network, True)):
+        assert child.simple(nodes) == simple
+        assert child.simple_after(network, nodes) == simple
+
+
 def test_collapsing_a_vanishing_segment_keeps_the_partition():
     classes = np.zeros((10, 12), dtype=np.int32)
     classes[2:8, 3:9] = 1
