@@ -482,6 +482,35 @@ def test_simplicity_after_a_local_change_tests_the_changed_segments():
         assert child.simple_after(network, nodes) == simple
 
 
+def test_a_network_changed_locally_shares_the_integrals_of_its_unchanged_segments():
+    # the bridge cut by reconnecting its sides (above): the two rejoined segments are new, every
+    # other segment of the moving boundary is the parent's, and the evaluation that takes the
+    # parent's integrals for those is the fresh one, bit for bit
+    classes = np.zeros((9, 13), dtype=np.int32)
+    classes[3:6, 1:4] = classes[3:6, 9:12] = 1
+    classes[4, 4:9] = 1
+    model, params = _setup(np.random.default_rng(6).random(classes.shape), 0.3)
+    network = Network.of_classes(classes)
+    nodes = network.nodes
+    middle = 0.5 * (nodes[network.start] + nodes[network.end])
+    pair = np.array([[np.flatnonzero(network.interface & (middle[:, 1] == 6.5) & (middle[:, 0] == row))[0]
+                      for row in (3.5, 4.5)]])
+    cut, _ = network.reconnected(pair, nodes)
+    parent = evaluate_partition(model, network.moving_boundary(nodes), params, 2, parts=True)
+    rows = cut.shared_rows(network)
+    boundary = cut.moving_boundary(nodes)
+    assert np.count_nonzero(rows < 0) == 2 and len(rows) == len(boundary.start)
+    kept = rows >= 0
+    parent_boundary = network.moving_boundary(nodes)
+    np.testing.assert_array_equal(parent_boundary.start[rows[kept]], boundary.start[kept])
+    np.testing.assert_array_equal(parent_boundary.end[rows[kept]], boundary.end[kept])
+    fresh = evaluate_partition(model, boundary, params, 2, parts=True)
+    shared = evaluate_partition(model, boundary, params, 2, parts=True, known=(rows, parent))
+    assert shared.energy == fresh.energy
+    np.testing.assert_array_equal(shared.parts, fresh.parts)
+    assert cut.shared_rows(cut) is None and network.shared_rows(cut) is None  # not made from it
+
+
 def test_collapsing_a_vanishing_segment_keeps_the_partition():
     classes = np.zeros((10, 12), dtype=np.int32)
     classes[2:8, 3:9] = 1
