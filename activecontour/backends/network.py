@@ -191,14 +191,24 @@ class Network:
         was made from ``parent`` by a local change (:meth:`inheriting`) and the segment is the same
         there (the same ends in the same order), else -1; None when this network was not made
         from ``parent``.  At the same nodes, such a segment's integrals are the parent's."""
-        if self._origin is None or self._origin[0]() is not parent:
+        kept = self._moving_segments()[5]
+        origin = self._origin_of(parent, kept)
+        if origin is None:
             return None
-        kept, parent_kept = self._moving_segments()[5], parent._moving_segments()[5]
+        parent_kept = parent._moving_segments()[5]
         rows = np.full(len(parent.start), -1, dtype=np.intp)
         rows[parent_kept] = np.arange(len(parent_kept))
-        origin = self._origin[1][kept]
-        same = (parent.start[origin] == self.start[kept]) & (parent.end[origin] == self.end[kept])
-        return np.where(same, rows[origin], -1)
+        return np.where(origin >= 0, rows[np.maximum(origin, 0)], -1)
+
+    def _origin_of(self, parent, segments):
+        """The index in ``parent`` of each of ``segments`` where it is the same segment there (the
+        same ends in the same order), else -1; None when this network was not made from
+        ``parent`` (:meth:`inheriting`)."""
+        if self._origin is None or self._origin[0]() is not parent:
+            return None
+        origin = self._origin[1][segments]
+        same = (parent.start[origin] == self.start[segments]) & (parent.end[origin] == self.end[segments])
+        return np.where(same, origin, -1)
 
     def relabelled(self, mapping):
         """The same network with region k renamed ``mapping[k]``."""
@@ -776,17 +786,16 @@ class Network:
 
     def simple_after(self, parent, nodes):
         """:meth:`simple` for this network made from ``parent`` by a local change at ``nodes``
-        (:meth:`reconnected`, :meth:`collapsed`), where ``parent`` is simple: two segments that
-        are both the parent's (the same ends in the same order, each once) do not meet there, so
-        only the pairs with one of the others are tested, among the segments whose boxes meet
-        those others' box (:meth:`meet_among`).  The same answer as :meth:`simple`, at the cost
-        of the change's neighbourhood."""
-        count = len(nodes)
+        (:meth:`reconnected`, :meth:`collapsed`: :meth:`inheriting`), where ``parent`` is simple:
+        two interface segments that are both the parent's interface segments (the same ends in the
+        same order) do not meet there, so only the pairs with one of the others are tested, among
+        the segments whose boxes meet those others' box (:meth:`meet_among`).  The same answer as
+        :meth:`simple`, at the cost of the change's neighbourhood."""
         chosen = np.flatnonzero(self.interface)
-        keys = self.start[chosen] * count + self.end[chosen]
-        theirs = parent.start[parent.interface] * count + parent.end[parent.interface]
-        _, index, repeats = np.unique(keys, return_inverse=True, return_counts=True)
-        changed = chosen[~np.isin(keys, theirs) | (repeats[index] > 1)]
+        origin = self._origin_of(parent, chosen)
+        if origin is None:
+            return self.simple(nodes)
+        changed = chosen[(origin < 0) | ~parent.interface[origin]]
         if changed.size == 0:
             return True
         a, b = nodes.take(self.start[chosen], axis=0), nodes.take(self.end[chosen], axis=0)

@@ -474,12 +474,20 @@ def test_simplicity_after_a_local_change_tests_the_changed_segments():
     def changed(top_ends, bottom_ends):
         start, end = network.start.copy(), network.end.copy()
         (start[top], end[top]), (start[bottom], end[bottom]) = top_ends, bottom_ends
-        return Network(nodes, start, end, network.inner, network.outer, network.shape)
+        child = Network(nodes, start, end, network.inner, network.outer, network.shape)
+        return child.inheriting(network, np.arange(len(start)))
 
     diagonals, rungs, laid = changed((a, q), (p, b)), changed((a, p), (q, b)), changed((a, b), (a, b))
-    for child, simple in ((diagonals, False), (rungs, True), (laid, False), (network, True)):
+    same = Network(nodes, network.start, network.end, network.inner, network.outer, network.shape)
+    for child, simple in ((diagonals, False), (rungs, True), (laid, False),
+                          (same.inheriting(network, np.arange(len(network.start))), True)):
         assert child.simple(nodes) == simple
         assert child.simple_after(network, nodes) == simple
+    # only the changed segments' neighbourhood is tested: a crossing elsewhere, which the parent
+    # would have had, is not seen
+    crossed = nodes.copy()
+    crossed[np.flatnonzero(np.all(nodes == [4.0, 0.5], axis=1))] = [4.5, 4.5]  # onto the bridge's side
+    assert not rungs.simple(crossed) and rungs.simple_after(network, crossed)
 
 
 def test_a_network_changed_locally_shares_the_integrals_of_its_unchanged_segments():
