@@ -1216,7 +1216,8 @@ cdef inline void _compensated(double *total, double *carry, double term) noexcep
 def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, const Py_ssize_t[::1] inner,
                       const Py_ssize_t[::1] outer, const double[:, :, ::1] values,
                       const double[:, :, :, ::1] table, Py_ssize_t anchor, double[:, ::1] moments,
-                      double[:, :, ::1] parts):
+                      double[:, :, ::1] parts, double[:, ::1] sums, const Py_ssize_t[::1] known,
+                      const double[:, ::1] known_sums, const double[:, :, ::1] known_parts):
     """The exact edge integrals of a partition's boundary segments (the N-region network of
     :mod:`activecontour.backends.network`), in one pass: what :func:`edge_integrals` gives for one
     closed curve, kept apart per region and per segment.
@@ -1232,10 +1233,17 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
         parts[e, 0 or 1, C + ch] = int_0^1 phi I_ch^2 ds,
 
     from which a quadratic form's load (6.41) on the segment's ends is the form's combination
-    times the segment's normal ``nu |e| = (dv, -du)``.  The pieces between grid lines and their
-    quadrature are those of :func:`edge_integrals`; a cell's data is read once for consecutive
-    pieces in it (along a segment, and from one segment to the next along a chain).  The sums over
-    the segments are compensated (Neumaier): Green's integrals add terms of the size of the
+    times the segment's normal ``nu |e| = (dv, -du)``.  With ``sums`` of shape (S, 2C) (a (0, 0)
+    array for none), ``sums[e]`` receives segment e's closed-integral terms (of G_1, then G_2, per
+    channel).  Given ``known`` (S,) (a (0,) array for none), a segment with ``known[e] = r >= 0``
+    is not integrated: it is the same segment (the same ends, in the same order, at the same
+    points) as row r of an earlier call's ``sums`` and ``parts``, passed as ``known_sums`` and
+    ``known_parts``, which it takes; its terms then enter the sums exactly as computed afresh (a
+    network changed locally costs its changed segments and one pass of additions).
+
+    The pieces between grid lines and their quadrature are those of :func:`edge_integrals`; a
+    cell's data is read once for consecutive pieces in it (along a segment, and from one segment
+    to the next along a chain).  The sums over the segments are compensated (Neumaier): Green's integrals add terms of the size of the
     row-antiderivatives that cancel around a closed curve, and the compensation keeps the result
     independent of the segments' order to about one rounding.
 
@@ -1244,7 +1252,8 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     """
     cdef Py_ssize_t channels = values.shape[2], rows = values.shape[0], cols = values.shape[1]
     cdef Py_ssize_t e, ch, g, a, j, i, o, count = starts.shape[0], last_a = -1, last_j = -1
-    cdef bint with_parts = parts.shape[0] > 0
+    cdef bint with_parts = parts.shape[0] > 0, with_sums = sums.shape[0] > 0, with_known = known.shape[0] > 0
+    cdef Py_ssize_t r
     cdef double nodes[3]
     cdef double weights[3]
     cdef double u0, v0, du, dv, k_u, k_v, t_prev, t_u, t_v, t_next, span, t_mid, area, length = 0.0
@@ -1258,6 +1267,11 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
     if moments.shape[1] != 1 + 2 * channels or (with_parts and (
             parts.shape[0] != count or parts.shape[1] != 2 or parts.shape[2] != 2 * channels)):
         raise ValueError("moments must be (K, 1 + 2C) and parts (S, 2, 2C) or empty")
+    if (with_sums and (sums.shape[0] != count or sums.shape[1] != 2 * channels)) or (with_known and (
+            known.shape[0] != count or known_sums.shape[1] != 2 * channels
+            or (with_parts and (known_parts.shape[1] != 2 or known_parts.shape[2] != 2 * channels)))):
+        raise ValueError("sums must be (S, 2C) or empty; known (S,) or empty, with known_sums (S', 2C) "
+                         "and known_parts (S', 2, 2C)")
     acc = <double *> malloc((2 * channels + 1) * sizeof(double))
     part = <double *> malloc(4 * channels * sizeof(double))  # a segment's parts, in registers' reach
     cells = <Cell *> malloc(channels * sizeof(Cell))
@@ -1274,56 +1288,67 @@ def segment_integrals(const double[:, ::1] starts, const double[:, ::1] ends, co
         for e in range(count):
             u0, v0 = starts[e, 0] + 1.0, starts[e, 1] + 1.0
             du, dv = ends[e, 0] + 1.0 - u0, ends[e, 1] + 1.0 - v0
-            for ch in range(2 * channels):
-                acc[ch] = 0.0
-            for ch in range(4 * channels):
-                part[ch] = 0.0
-            # next grid lines in the direction of travel
-            k_u = _floor(u0) + 1.0 if du > 0 else -_floor(-u0) - 1.0
-            k_v = _floor(v0) + 1.0 if dv > 0 else -_floor(-v0) - 1.0
-            t_prev = 0.0
-            while True:
-                t_u = (k_u - u0) / du if du != 0.0 else 2.0
-                t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
-                t_next = min(t_u, t_v, 1.0)
-                span = t_next - t_prev
-                if span > 0.0:
-                    t_mid = t_prev + 0.5 * span
-                    # the cell of the piece's middle (clamped to the padded image: >= 0, so a
-                    # truncation is its floor)
-                    a = <Py_ssize_t> min(max(u0 + t_mid * du, 0.0), <double> rows)
-                    j = <Py_ssize_t> min(max(v0 + t_mid * dv, 0.0), <double> cols)
-                    if a != last_a or j != last_j:
-                        _cells(values, table, anchor, a, j, cells)
-                        last_a, last_j = a, j
+            r = known[e] if with_known else -1
+            if r >= 0:
+                for ch in range(2 * channels):
+                    acc[ch] = known_sums[r, ch]
+                if with_parts:
+                    for ch in range(2 * channels):
+                        parts[e, 0, ch], parts[e, 1, ch] = known_parts[r, 0, ch], known_parts[r, 1, ch]
+            else:
+                for ch in range(2 * channels):
+                    acc[ch] = 0.0
+                for ch in range(4 * channels):
+                    part[ch] = 0.0
+                # next grid lines in the direction of travel
+                k_u = _floor(u0) + 1.0 if du > 0 else -_floor(-u0) - 1.0
+                k_v = _floor(v0) + 1.0 if dv > 0 else -_floor(-v0) - 1.0
+                t_prev = 0.0
+                while True:
+                    t_u = (k_u - u0) / du if du != 0.0 else 2.0
+                    t_v = (k_v - v0) / dv if dv != 0.0 else 2.0
+                    t_next = min(t_u, t_v, 1.0)
+                    span = t_next - t_prev
+                    if span > 0.0:
+                        t_mid = t_prev + 0.5 * span
+                        # the cell of the piece's middle (clamped to the padded image: >= 0, so a
+                        # truncation is its floor)
+                        a = <Py_ssize_t> min(max(u0 + t_mid * du, 0.0), <double> rows)
+                        j = <Py_ssize_t> min(max(v0 + t_mid * dv, 0.0), <double> cols)
+                        if a != last_a or j != last_j:
+                            _cells(values, table, anchor, a, j, cells)
+                            last_a, last_j = a, j
+                        for ch in range(channels):
+                            cell = &cells[ch]
+                            for g in range(3):
+                                t_edge = t_prev + span * nodes[g]
+                                t = u0 + t_edge * du - a
+                                w = v0 + t_edge * dv - j
+                                g1, g2 = _green(cell, t, w)
+                                weight = span * weights[g]
+                                acc[ch] += weight * dv * g1
+                                acc[channels + ch] += weight * dv * g2
+                                if with_parts:
+                                    intensity = (1.0 - w) * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
+                                    # part: [start's I, start's I^2, end's I, end's I^2] per channel
+                                    part[4 * ch] += weight * (1.0 - t_edge) * intensity
+                                    part[4 * ch + 2] += weight * t_edge * intensity
+                                    part[4 * ch + 1] += weight * (1.0 - t_edge) * intensity * intensity
+                                    part[4 * ch + 3] += weight * t_edge * intensity * intensity
+                    if t_next >= 1.0:
+                        break
+                    if t_u <= t_next:
+                        k_u += 1.0 if du > 0 else -1.0
+                    if t_v <= t_next:
+                        k_v += 1.0 if dv > 0 else -1.0
+                    t_prev = t_next
+                if with_parts:
                     for ch in range(channels):
-                        cell = &cells[ch]
-                        for g in range(3):
-                            t_edge = t_prev + span * nodes[g]
-                            t = u0 + t_edge * du - a
-                            w = v0 + t_edge * dv - j
-                            g1, g2 = _green(cell, t, w)
-                            weight = span * weights[g]
-                            acc[ch] += weight * dv * g1
-                            acc[channels + ch] += weight * dv * g2
-                            if with_parts:
-                                intensity = (1.0 - w) * (cell.p0 + t * cell.dp) + w * (cell.q0 + t * cell.dq)
-                                # part: [start's I, start's I^2, end's I, end's I^2] per channel
-                                part[4 * ch] += weight * (1.0 - t_edge) * intensity
-                                part[4 * ch + 2] += weight * t_edge * intensity
-                                part[4 * ch + 1] += weight * (1.0 - t_edge) * intensity * intensity
-                                part[4 * ch + 3] += weight * t_edge * intensity * intensity
-                if t_next >= 1.0:
-                    break
-                if t_u <= t_next:
-                    k_u += 1.0 if du > 0 else -1.0
-                if t_v <= t_next:
-                    k_v += 1.0 if dv > 0 else -1.0
-                t_prev = t_next
-            if with_parts:
-                for ch in range(channels):
-                    parts[e, 0, ch], parts[e, 0, channels + ch] = part[4 * ch], part[4 * ch + 1]
-                    parts[e, 1, ch], parts[e, 1, channels + ch] = part[4 * ch + 2], part[4 * ch + 3]
+                        parts[e, 0, ch], parts[e, 0, channels + ch] = part[4 * ch], part[4 * ch + 1]
+                        parts[e, 1, ch], parts[e, 1, channels + ch] = part[4 * ch + 2], part[4 * ch + 3]
+            if with_sums:
+                for ch in range(2 * channels):
+                    sums[e, ch] = acc[ch]
             i, o = inner[e], outer[e]
             acc[2 * channels] = 0.5 * (starts[e, 0] * ends[e, 1] - ends[e, 0] * starts[e, 1])  # the area
             for ch in range(2 * channels + 1):

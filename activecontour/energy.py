@@ -150,6 +150,7 @@ class PartitionEvaluation:
     parts: np.ndarray | None = None
     first: np.ndarray | None = None
     second: np.ndarray | None = None
+    sums: np.ndarray | None = None
 
 
 def partition_moments(model, boundary, n_classes, *, parts=False):
@@ -175,28 +176,40 @@ def partition_moments(model, boundary, n_classes, *, parts=False):
     parts : ndarray (S, 2, 2C)
         With ``parts`` only.
     """
-    *moments, _, along = _segment_integrals(model, boundary, n_classes, parts)
+    *moments, _, along, _ = _segment_integrals(model, boundary, n_classes, parts)
     return (*moments, along) if parts else tuple(moments)
 
 
-def _segment_integrals(model, boundary, n_classes, parts):
-    """``(areas, first, second, counted length, parts or None)`` of a partition's boundary in one
-    pass (:func:`activecontour._kernels.segment_integrals`), the background's moments the domain's
-    totals less the others' (as the two-region outside)."""
+#: No segment known (:func:`_segment_integrals`).
+_UNKNOWN = (np.empty(0, dtype=np.intp), np.empty((0, 0)), np.empty((0, 2, 0)))
+
+
+def _segment_integrals(model, boundary, n_classes, parts, known=None):
+    """``(areas, first, second, counted length, parts or None, sums or None)`` of a partition's
+    boundary in one pass (:func:`activecontour._kernels.segment_integrals`), the background's
+    moments the domain's totals less the others' (as the two-region outside); ``known`` as for
+    :func:`evaluate_partition`."""
     channels = model.n_channels
     if boundary.inner.size and max(boundary.inner.max(), boundary.outer.max()) >= n_classes:
         raise ValueError(f"a boundary between more than {n_classes} regions")
     starts, ends = np.ascontiguousarray(boundary.start), np.ascontiguousarray(boundary.end)
     moments = np.zeros((n_classes, 1 + 2 * channels))
     along = np.empty((len(starts) if parts else 0, 2, 2 * channels))
+    sums = np.empty((len(starts) if parts else 0, 2 * channels))
+    if known is None:
+        index, known_sums, known_parts = _UNKNOWN
+    else:
+        index, earlier = known
+        index, known_sums, known_parts = _indices(index), earlier.sums, earlier.parts
     length = _kernels.segment_integrals(starts, ends, _indices(boundary.inner), _indices(boundary.outer),
-                                        model.values, model.table, model.anchor, moments, along)
+                                        model.values, model.table, model.anchor, moments, along, sums,
+                                        index, known_sums, known_parts)
     areas, first, second = moments[:, 0], moments[:, 1:1 + channels], moments[:, 1 + channels:]
     total_area, total_first, total_second = model.totals
     areas[0] = total_area - areas[1:].sum()
     first[0] = total_first - first[1:].sum(axis=0)
     second[0] = total_second - second[1:].sum(axis=0)
-    return areas, first, second, length, (along if parts else None)
+    return areas, first, second, length, (along if parts else None), (sums if parts else None)
 
 
 def _indices(labels):
@@ -213,7 +226,7 @@ def soup_moments(model, starts, ends):
     return area, first, second
 
 
-def evaluate_partition(model, boundary, params, n_classes, constants=None, *, parts=False):
+def evaluate_partition(model, boundary, params, n_classes, constants=None, *, parts=False, known=None):
     """The N-region functional of a partition (:meth:`ChanVeseParameters.class_forms`).
 
     ``J = mu L + sum_k int_{Omega_k} g_k`` with L the length of the interfaces between regions,
@@ -222,11 +235,15 @@ def evaluate_partition(model, boundary, params, n_classes, constants=None, *, pa
     close along the image border there.  ``constants`` (K, C), by default the region means (6.42);
     an empty region's term is 0 whatever its constant, which is then the image mean.  With
     ``parts`` the evaluation keeps the segments' integrals of :func:`partition_moments` as
-    ``parts``, for :func:`partition_load` at the same boundary.
+    ``parts``, for :func:`partition_load` at the same boundary, and their closed-integral terms as
+    ``sums``.  ``known``: ``(index, earlier)``, an evaluation with ``parts`` of a boundary that
+    shares segments with this one (the same ends in the same order), ``index[e]`` the row there
+    of segment e (-1: none): those segments' integrals are taken from it, not computed again, and
+    the result is the same as computed afresh, bit for bit.
     """
-    areas, first, second, length, along = _segment_integrals(model, boundary, n_classes, parts)
+    areas, first, second, length, along, sums = _segment_integrals(model, boundary, n_classes, parts, known)
     evaluation = energy_of_moments(model, params, areas, first, second, length, constants)
-    evaluation.parts = along
+    evaluation.parts, evaluation.sums = along, sums
     return evaluation
 
 

@@ -455,6 +455,70 @@ def test_reconnecting_across_a_neck_cuts_it():
     assert after.length == pytest.approx(before.length, rel=1e-12)
 
 
+def test_simplicity_after_a_local_change_tests_the_changed_segments():
+    # the bridge of the test above: its two sides at the middle column, a -> b on top, p -> q a
+    # pixel below, rejoined as the unit square's two diagonals (they cross), as its two rungs (no
+    # crossing), or with the bottom side laid on the top one (they coincide)
+    classes = np.zeros((9, 13), dtype=np.int32)
+    classes[3:6, 1:4] = classes[3:6, 9:12] = 1
+    classes[4, 4:9] = 1
+    network = Network.of_classes(classes)
+    nodes = network.nodes
+    middle = 0.5 * (nodes[network.start] + nodes[network.end])
+    top, bottom = (np.flatnonzero(network.interface & (middle[:, 1] == 6.5) & (middle[:, 0] == row))[0]
+                   for row in (3.5, 4.5))
+    (a, b), (p, q) = (sorted([network.start[e], network.end[e]], key=lambda k: nodes[k, 1])
+                      for e in (top, bottom))
+    assert network.simple(nodes)
+
+    def changed(top_ends, bottom_ends):
+        start, end = network.start.copy(), network.end.copy()
+        (start[top], end[top]), (start[bottom], end[bottom]) = top_ends, bottom_ends
+        child = Network(nodes, start, end, network.inner, network.outer, network.shape)
+        return child.inheriting(network, np.arange(len(start)))
+
+    diagonals, rungs, laid = changed((a, q), (p, b)), changed((a, p), (q, b)), changed((a, b), (a, b))
+    same = Network(nodes, network.start, network.end, network.inner, network.outer, network.shape)
+    for child, simple in ((diagonals, False), (rungs, True), (laid, False),
+                          (same.inheriting(network, np.arange(len(network.start))), True)):
+        assert child.simple(nodes) == simple
+        assert child.simple_after(network, nodes) == simple
+    # only the changed segments' neighbourhood is tested: a crossing elsewhere, which the parent
+    # would have had, is not seen
+    crossed = nodes.copy()
+    crossed[np.flatnonzero(np.all(nodes == [4.0, 0.5], axis=1))] = [4.5, 4.5]  # onto the bridge's side
+    assert not rungs.simple(crossed) and rungs.simple_after(network, crossed)
+
+
+def test_a_network_changed_locally_shares_the_integrals_of_its_unchanged_segments():
+    # the bridge cut by reconnecting its sides (above): the two rejoined segments are new, every
+    # other segment of the moving boundary is the parent's, and the evaluation that takes the
+    # parent's integrals for those is the fresh one, bit for bit
+    classes = np.zeros((9, 13), dtype=np.int32)
+    classes[3:6, 1:4] = classes[3:6, 9:12] = 1
+    classes[4, 4:9] = 1
+    model, params = _setup(np.random.default_rng(6).random(classes.shape), 0.3)
+    network = Network.of_classes(classes)
+    nodes = network.nodes
+    middle = 0.5 * (nodes[network.start] + nodes[network.end])
+    pair = np.array([[np.flatnonzero(network.interface & (middle[:, 1] == 6.5) & (middle[:, 0] == row))[0]
+                      for row in (3.5, 4.5)]])
+    cut, _ = network.reconnected(pair, nodes)
+    parent = evaluate_partition(model, network.moving_boundary(nodes), params, 2, parts=True)
+    rows = cut.shared_rows(network)
+    boundary = cut.moving_boundary(nodes)
+    assert np.count_nonzero(rows < 0) == 2 and len(rows) == len(boundary.start)
+    kept = rows >= 0
+    parent_boundary = network.moving_boundary(nodes)
+    np.testing.assert_array_equal(parent_boundary.start[rows[kept]], boundary.start[kept])
+    np.testing.assert_array_equal(parent_boundary.end[rows[kept]], boundary.end[kept])
+    fresh = evaluate_partition(model, boundary, params, 2, parts=True)
+    shared = evaluate_partition(model, boundary, params, 2, parts=True, known=(rows, parent))
+    assert shared.energy == fresh.energy
+    np.testing.assert_array_equal(shared.parts, fresh.parts)
+    assert cut.shared_rows(cut) is None and network.shared_rows(cut) is None  # not made from it
+
+
 def test_collapsing_a_vanishing_segment_keeps_the_partition():
     classes = np.zeros((10, 12), dtype=np.int32)
     classes[2:8, 3:9] = 1

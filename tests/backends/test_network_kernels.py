@@ -217,3 +217,41 @@ def test_h1_band_is_the_stiffness_matrix_in_band_form():
                 assert band[j, width + i - j] == pytest.approx(dense[i, j], rel=1e-12, abs=1e-12)
         assert np.all(np.abs(dense[np.abs(np.subtract.outer(np.arange(order.size), np.arange(order.size)))
                                    > width]) == 0)
+
+
+@pytest.mark.parametrize("channels", [1, 3])
+def test_segment_integrals_take_the_known_segments_from_an_earlier_call(channels):
+    from activecontour.energy import evaluate_partition
+    from activecontour.geometry.partition import Boundary, Sides
+    from activecontour.imaging.tables import ImageModel
+    from activecontour.models import ChanVeseParameters
+
+    rng = np.random.default_rng(12)
+    model, params = ImageModel(rng.random((21, 21, channels))), ChanVeseParameters(0.3)
+    starts, ends, inner, outer = _segments(rng, 40, 3)
+    boundary = Boundary(starts, ends, inner, outer, Sides(inner, outer))
+    earlier = evaluate_partition(model, boundary, params, 3, parts=True)
+    # the same boundary, its segments reversed in order, one of them moved: the others are known
+    order = np.arange(40)[::-1]
+    moved_starts, moved_ends = starts[order].copy(), ends[order].copy()
+    moved_ends[5] += 0.3
+    later = Boundary(moved_starts, moved_ends, inner[order], outer[order], Sides(inner[order], outer[order]))
+    rows = order.copy()
+    rows[5] = -1
+    fresh = evaluate_partition(model, later, params, 3, parts=True)
+    known = evaluate_partition(model, later, params, 3, parts=True, known=(rows, earlier))
+    assert known.energy == fresh.energy and known.length == fresh.length
+    for name in ("areas", "first", "second", "parts", "sums"):
+        np.testing.assert_array_equal(getattr(known, name), getattr(fresh, name))
+    # what is known is taken, not integrated: a known segment's terms changed by d change its
+    # inner region's integrals by d and its outer region's by -d
+    altered = evaluate_partition(model, boundary, params, 3, parts=True)
+    e = next(k for k in range(40) if rows[k] >= 0 and inner[order][k] > 0 and outer[order][k] > 0
+             and inner[order][k] != outer[order][k])
+    altered.sums[rows[e]] += 1.0
+    shifted = evaluate_partition(model, later, params, 3, parts=True, known=(rows, altered))
+    change = np.zeros((3, channels))
+    change[inner[order][e]] += 1.0
+    change[outer[order][e]] -= 1.0
+    np.testing.assert_allclose(shifted.first - fresh.first, change, atol=1e-9)
+    np.testing.assert_allclose(shifted.second - fresh.second, change, atol=1e-9)
