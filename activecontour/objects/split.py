@@ -993,7 +993,8 @@ def _cut(curves, parts, low):
 
 # ---- stage 2: concave corners paired into cut lines ---------------------------------------------
 
-#: The curvature is smoothed along the outline by a Gaussian of this width (pixels) ...
+#: The curvature is smoothed along the outline by a Gaussian of this width (pixels at the
+#: outline's mean vertex spacing: :func:`_bent`) ...
 CORNER_SMOOTHING = 1.5
 #: ... and a concave stretch (smoothed kappa < 0) is a corner when it turns by at least this many
 #: degrees in all and lies at least ``MIN_WAIST_DEPTH`` inside the convex hull.  Two disks that
@@ -1120,8 +1121,18 @@ def _uncuttable(area, good):
 
 
 def _bent(outline):
-    """A polygon's curvature averaged along the arc, its smoothed outward unit normals and the
-    arc length each vertex stands for (:func:`_concave_corners`)."""
+    """A polygon's smoothed curvature, its smoothed outward unit normals and the arc length each
+    vertex stands for (:func:`_concave_corners`).
+
+    The smoothing is a Gaussian over the vertices' numbers (cyclic) of ``CORNER_SMOOTHING``
+    pixels at the mean vertex spacing, ``CORNER_SMOOTHING / mean(h)`` vertices: each vertex's
+    turning ``kappa ds`` and its ``ds`` are smoothed, and their ratio is the curvature, an
+    average weighted by arc length (a vertex on short edges turns little).  Where the spacing is
+    uneven (the polygon flow's vertices: 0.4-1.7 px on the families' outlines) the window is
+    narrower in pixels where vertices crowd.  It is not a Gaussian of arc length: one on an even
+    0.5 px grid along the outline (tried, with the thresholds of this module as they are) found
+    more concave corners, cutting 21 of 240 singles (seeds 20-59) instead of 6, and took the
+    worst disk scene from 0.68 to 0.49 and the DSB image from 0.79 to 0.77."""
     h = edge_lengths(outline)
     ds = 0.5 * (h + np.roll(h, 1))  # the arc length each vertex stands for
     width = CORNER_SMOOTHING / h.mean()
@@ -1138,7 +1149,7 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN, bent=None):
     outward unit normals.
 
     The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
-    curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
+    curvature`), smoothed along the outline (:func:`_bent`, ``CORNER_SMOOTHING``).  A
     maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
     ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_parts`) and it dips
     ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``: :func:`_hull_depth`, measured here
