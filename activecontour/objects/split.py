@@ -287,7 +287,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
             parts = _contrast_parts(window.astype(np.int32) if parts is None else parts,
                                     np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
         pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
-        if (necks is not None and not contrast and len(pieces) == 1
+        if (necks is not None and not contrast and len(pieces) == 1 and not _around_a_hole(curves, necks, low)
                 and (ellipses := _as_ellipses(_cut(curves, necks, low), curves[0])) is not None):
             result.extend(ellipses)
             continue
@@ -1409,11 +1409,13 @@ def _as_ellipses(pieces, outline):
     (touching ellipses seed 13: a chain of six, one object).  A clump is told from a body with
     limbs by its outline: every stretch of it is an ellipse's, which a star's arms, a horse's
     legs and head or a bent rod's halves are not (the singles family, seeds 0-59: none kept)."""
+    # (the cheaper tests first, each over all pieces: most objects that are no clump fail one)
+    if any(len(piece) > 1 for piece in pieces):  # a piece with a hole is no ellipse
+        return None
+    ellipses = [_cut_ellipse(piece[0], outline) for piece in pieces]
     found = []
-    for piece in pieces:
-        if len(piece) > 1:  # (a piece with a hole is no ellipse)
-            return None
-        if _cut_ellipse(piece[0], outline):
+    for piece, ellipse in zip(pieces, ellipses, strict=True):
+        if ellipse:
             found.append(piece)
         elif (cuts := _ellipse_cuts(piece[0], outline, CUT_DEPTH)) is not None:
             found.extend([cut] for cut in cuts)
@@ -1422,16 +1424,46 @@ def _as_ellipses(pieces, outline):
     return found
 
 
+#: :func:`_around_a_hole`: a part whose pixels reach this far (pixels) around a hole on every side
+#: holds it once cut out, whatever the straightening of its borders (``SPLIT_LINE_TOLERANCE``).
+_HOLE_MARGIN = 2
+
+
+def _around_a_hole(curves, parts, low):
+    """Whether one of the pixel parts (window coordinates, ``low`` its corner) surrounds a hole of
+    the object: every pixel within ``_HOLE_MARGIN`` of the hole's pixels is in that part, so its
+    piece of :func:`_cut` has the hole, and :func:`_as_ellipses` declines it.  Shown on the
+    pixels, without cutting the polygon (on the singles family, half of the objects that reach
+    :func:`_as_ellipses` have such a piece: rings, horses)."""
+    import scipy.ndimage
+
+    for hole in curves[1:]:
+        pixels = rasterize([hole - low], parts.shape)
+        if not pixels.any():
+            continue
+        near = scipy.ndimage.binary_dilation(pixels, iterations=_HOLE_MARGIN)
+        if len(np.unique(parts[near])) == 1 and parts[near][0] > 0:
+            return True
+    return False
+
+
+def _as_rows(points):
+    """Each point of an (P, 2) float array as one opaque value (its 16 bytes), for exact lookups."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    return points.view(np.dtype((np.void, 16))).ravel()
+
+
 def _cut_ellipse(part, outline):
     """Whether a piece cut off an object (a polygon whose vertices are the object's ``outline``'s
     vertices and those of straight cuts) is an object's ellipse: its vertices on the outline, but
-    those within ``CUT_TRIM`` of a cut's, fitted by one ellipse within ``ARC_RMS``, of aspect
+    those within ``CUT_TRIM`` of a vertex that is not the outline's (the ends and bends of a
+    neck's cut; a corner cut of :func:`_ellipse_cuts` joins two of the outline's vertices and
+    trims none), fitted by one ellipse within ``ARC_RMS``, of aspect
     at most ``MAX_PART_ASPECT``, at most ``ARC_OUTSIDE`` of it outside the object, and the piece
     ``CUT_SOLIDITY`` solid.  An ellipse of the arc stage (:func:`_arc_ellipse`), fitted to the
     piece's arcs."""
-    import shapely
-
-    on_outline = shapely.distance(shapely.points(part), shapely.LinearRing(outline)) < 1e-6
+    # (the cut keeps the outline's vertices to the bit, :func:`_cut`: one lookup of each vertex)
+    on_outline = np.isin(_as_rows(part), _as_rows(outline))
     if not on_outline.all():
         cut = part[~on_outline]
         apart = np.hypot(*(part[:, None, :] - cut[None]).transpose(2, 0, 1)).min(axis=1)
