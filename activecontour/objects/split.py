@@ -27,7 +27,10 @@ whole clump:
    ends).  Disks and blobs that overlap by up to a third of their diameter meet at a neck of
    ``sqrt(5)/3 = 0.745`` of their radius.  A shallow neck (above ``TUBE_NECK``) between two
    parts that hold more than ``TUBE_AREA`` times the area of their inscribed disks is a dent of
-   a rod or stroke, and is kept whole.
+   a rod or stroke, and is kept whole.  A part that is no blob (a body with limbs) takes its
+   neighbours back, unless every part is an ellipse of the object's outline or is cut at its
+   corners into such ellipses (:func:`_as_ellipses`): two elongated objects side by side have no
+   neck between them and make such a part in a chain of necks.
 2. **Concave corners** (:func:`_corner_parts`, the sub-pixel polygon): two convex objects that
    overlap meet at two corners of the outline, concave stretches where the curvature kappa of the
    book's 1-D geometry (section 6.5: ``kappa nu = -Laplace_Sigma id``, (3.45), (4.30);
@@ -89,6 +92,10 @@ leave uncovered objects of their own,
 borders ending 10 px from a corner (not 3;
 this module)
   on seeds 20-59                            0.65 / 0.94        0.68 / 0.94      12 of 240
+the same, and the necks' parts kept where    0.50 / 0.92        0.77 / 0.94      6 of 120
+they are ellipses of the outline, or cut
+into them (``_as_ellipses``)
+  on seeds 20-59                            0.65 / 0.95        0.68 / 0.94      6 of 240
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -98,38 +105,39 @@ image gallery pipeline, for reference)
 ==========================================  =================  ===============  ============
 
 (The first three rows on the segmentation of ``main`` at the merge 0e85b9a, the fourth on that of
-5d1d5b5, the fifth on that of 1ac25e4, the same scenes' objects for every split.) The corner stage
-is what wins on elongated objects side by side; the necks keep the singles whole. Until the fifth
-row, most errors were objects left merged in clumps that the arc stage declined (on seeds 0-59: 50
-pieces holding 135 disks, 48 holding 160 ellipses): of the pieces of two objects or more, 106 were
-declined by the border test alone, nearly all with as many arc ellipses as objects, explaining the
-outline and the pixels: a border ended 3-23 px from a corner (the fitted ellipses of a rounded
-contact cross away from the corner found, ``ARC_END_REACH``); 116 had their ellipses cover less than
-``ARC_COVER`` of them, an object pressed inside the clump owning no arc, or an arc too short for its
-ellipse (``ARC_OUTSIDE``, ``ARC_RMS``) leaving its object without one (:func:`_uncovered_parts`).
-The fifth row takes the worst seeds from 0.28, 0.65 (seeds 0-19) and 0.50, 0.49 (20-59) to 0.41,
-0.77 and 0.65, 0.68; the ellipses' mean is now 0.11 and 0.18 above the pipeline's. What is left: the
-worst seeds (ellipses 13, 14, 17: 0.41, 0.50, 0.64; disks 8, 6: 0.76, 0.79; seeds 20-59: ellipses
-48, 25: 0.65, 0.69; disks 38, 41: 0.68, 0.73; the pipeline 0.68, 0.78, 0.81, 0.97, 0.83, 0.92, 0.85,
-0.98, 0.92) hold pieces of 6-8 objects still left to the necks and corners: the border test
-(``ARC_END_REACH``: 14 px cuts two bent rods of the singles) or the size test declines them, or an
-uncovered piece holds two objects and is kept as one (a distance watershed of such pieces, or
-declining them, cost as much as it gained: ellipses 0.893 -> 0.897-0.902, disks worst 0.765 ->
-0.667). Tried and not kept before: ellipses added for the uncovered area (the moment ellipse of each
-large piece of it, split at its own distance peaks), with the border test at 3 px, gained nothing;
-the distance-transform watershed put in an object's place when all its parts are ellipse-like
-changed F1 by 0.005 at most. On a 3-disk piece of disks seed 48 the pixel distance has a single
-maximum (a small disk pressed a third of its diameter into a larger one): no neck to find. The
-singles the split cuts (10 of 120, 12 of 240) are cut by the necks (7 of them) and the corners (7,
-one after a neck): bent rods but one star (seed 39). The rods' necks are noise of the outline (a rod
-24 px wide narrowed by 1-2 px at two dents); a ``NECK_RATIO`` of 0.8 keeps them whole (3 of 120, 6
-of 240 cut, all by the corners) but costs the clumps more (disks worst 0.765 -> 0.50).  Measured
-against the area instead (``TUBE_AREA``: two parts of a rod hold 2-4 times the area of their
-inscribed disks, two deeply overlapping blobs less than it), the necks keep all rods but one
-whole (6 of 120, 6 of 240 singles cut, the objects of the touching families and of the DSB image
-unchanged); the rest are the corner stage's, at the bend of a rod (a one-sided cut from the
-inner corner across to the convex outer side: the same geometry as two rods overlapping end to
-end, which the rays across a rounded contact must cut) and a star's arms.
+5d1d5b5, the fifth on that of 1ac25e4, the sixth on that of 5fa11a5, the same scenes' objects for
+every split.) The corner stage is what wins on elongated objects side by side; the necks keep the
+singles whole. Until the fifth row, most errors were objects left merged in clumps that the arc
+stage declined (on seeds 0-59: 50 pieces holding 135 disks, 48 holding 160 ellipses): of the
+pieces of two objects or more, 106 were declined by the border test alone, nearly all with as many
+arc ellipses as objects, explaining the outline and the pixels: a border ended 3-23 px from a
+corner (the fitted ellipses of a rounded contact cross away from the corner found,
+``ARC_END_REACH``); 116 had their ellipses cover less than ``ARC_COVER`` of them, an object
+pressed inside the clump owning no arc, or an arc too short for its ellipse (``ARC_OUTSIDE``,
+``ARC_RMS``) leaving its object without one (:func:`_uncovered_parts`). The fifth row takes the
+worst seeds from 0.28, 0.65 (seeds 0-19) and 0.50, 0.49 (20-59) to 0.41, 0.77 and 0.65, 0.68; the
+ellipses' mean is now 0.11 and 0.18 above the pipeline's. What is left: the worst seeds (ellipses
+13, 14, 17: 0.41, 0.50, 0.64; disks 8, 6: 0.76, 0.79; seeds 20-59: ellipses 48, 25: 0.65, 0.69;
+disks 38, 41: 0.68, 0.73; the pipeline 0.68, 0.78, 0.81, 0.97, 0.83, 0.92, 0.85, 0.98, 0.92) hold
+pieces of 6-8 objects still left to the necks and corners: the border test (``ARC_END_REACH``: 14
+px cuts two bent rods of the singles) or the size test declines them, or an uncovered piece holds
+two objects and is kept as one (a distance watershed of such pieces, or declining them, cost as
+much as it gained: ellipses 0.893 -> 0.897-0.902, disks worst 0.765 -> 0.667). Tried and not kept
+before: ellipses added for the uncovered area (the moment ellipse of each large piece of it, split
+at its own distance peaks), with the border test at 3 px, gained nothing; the distance-transform
+watershed put in an object's place when all its parts are ellipse-like changed F1 by 0.005 at
+most. On a 3-disk piece of disks seed 48 the pixel distance has a single maximum (a small disk
+pressed a third of its diameter into a larger one): no neck to find. The singles the split cuts
+(10 of 120, 12 of 240) are cut by the necks (7 of them) and the corners (7, one after a neck):
+bent rods but one star (seed 39). The rods' necks are noise of the outline (a rod 24 px wide
+narrowed by 1-2 px at two dents); a ``NECK_RATIO`` of 0.8 keeps them whole (3 of 120, 6 of 240
+cut, all by the corners) but costs the clumps more (disks worst 0.765 -> 0.50). Measured against
+the area instead (``TUBE_AREA``: two parts of a rod hold 2-4 times the area of their inscribed
+disks, two deeply overlapping blobs less than it), the necks keep all rods but one whole (6 of
+120, 6 of 240 singles cut, the objects of the touching families and of the DSB image unchanged);
+the rest are the corner stage's, at the bend of a rod (a one-sided cut from the inner corner
+across to the convex outer side: the same geometry as two rods overlapping end to end, which the
+rays across a rounded contact must cut) and a star's arms.
 """
 
 from __future__ import annotations
@@ -186,7 +194,9 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     ends; a notch on one side of one object (a coin's dark slit) is not a contact of two.  Last,
     a part that is not blob-like (solidity below ``MIN_PART_SOLIDITY`` or aspect above
     ``MAX_PART_ASPECT``: a body with legs, a bent stroke) takes its neighbours back, until every
-    part is a blob or one is left.
+    part is a blob or one is left -- unless the parts before that are each an ellipse of the
+    object's outline or cut at their corners into such ellipses (:func:`_as_ellipses`: a clump
+    with two elongated objects side by side in it).
     A shape of one piece (a ring, a stroke, a limb on a body) has no neck much narrower than its
     thinner side, or has parts that are no blobs, so it is not split.
 
@@ -269,14 +279,18 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         window = np.pad(inside, 1)
         _kernels.fill_holes(window.view(np.uint8))
         contrast = contrast and _may_split_by_contrast(window, min_radius)
-        parts = None  # the window as one part
+        parts = necks = None  # the window as one part; the necks' parts a non-blob took back
         if concave and (concavity := _may_have_necks(window, curves[0] - low, min_radius)) is not None:
-            parts = _neck_parts(window, concavity, _boundary_distance(curves[:1], window, low),
-                                neck_ratio, min_radius)
+            parts, necks = _neck_stage(window, concavity, _boundary_distance(curves[:1], window, low),
+                                       neck_ratio, min_radius)
         if contrast:
             parts = _contrast_parts(window.astype(np.int32) if parts is None else parts,
                                     np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
         pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
+        if (necks is not None and not contrast and len(pieces) == 1 and not _around_a_hole(curves, necks, low)
+                and (ellipses := _as_ellipses(_cut(curves, necks, low), curves[0])) is not None):
+            result.extend(ellipses)
+            continue
         if concave:
             # (an object its necks did not cut: its hull depth and curvature are known)
             pieces = [cut for piece in pieces for cut in
@@ -410,7 +424,13 @@ def _boundary_distance(curves, region, low):
 def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
     """Label the pixels of a bool region by parts separated by narrow waists (0 outside), given
     its edge pixels' depth inside the outline's convex hull (:func:`_concavity`) and each pixel's
-    distance to the outline.
+    distance to the outline (:func:`_neck_stage`'s parts)."""
+    return _neck_stage(region, concavity, distance, neck_ratio, min_radius)[0]
+
+
+def _neck_stage(region, concavity, distance, neck_ratio, min_radius):
+    """:func:`_neck_parts`' labels, and the parts as they were before the parts that are no blob
+    took their neighbours back (None when that merged none).
 
     The watershed's parts are merged pair by pair (:meth:`_PartGraph.merge_necks`), then the
     parts that are no blob take their neighbours back (:meth:`_PartGraph.merge_non_blobs`).
@@ -424,18 +444,20 @@ def _neck_parts(region, concavity, distance, neck_ratio, min_radius):
 
     markers, count = scipy.ndimage.label(skimage.morphology.local_maxima(distance) & region)
     if count <= 1:
-        return region.astype(np.int32)
+        return region.astype(np.int32), None
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
     peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
     # at most one part as thick as an object: every neck has a thinner side too small to be one,
     # so every pair merges (:meth:`_PartGraph.merit`) and a region of one 4-connected piece,
     # which the watershed covers, is one part
     if np.count_nonzero(peak >= min_radius) <= 1 and scipy.ndimage.label(region)[1] == 1:
-        return region.astype(np.int32)
+        return region.astype(np.int32), None
     graph = _PartGraph(parts, distance, peak, concavity, min_radius)
     graph.merge_necks(neck_ratio)
+    necks = graph.labels() if len(graph.members) > 1 else None
     graph.merge_non_blobs()
-    return graph.labels()
+    merged = graph.labels()
+    return merged, (necks if necks is not None and necks.max() > merged.max() else None)
 
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
@@ -993,7 +1015,8 @@ def _cut(curves, parts, low):
 
 # ---- stage 2: concave corners paired into cut lines ---------------------------------------------
 
-#: The curvature is smoothed along the outline by a Gaussian of this width (pixels) ...
+#: The curvature is smoothed along the outline by a Gaussian of this width (pixels at the
+#: outline's mean vertex spacing: :func:`_bent`) ...
 CORNER_SMOOTHING = 1.5
 #: ... and a concave stretch (smoothed kappa < 0) is a corner when it turns by at least this many
 #: degrees in all and lies at least ``MIN_WAIST_DEPTH`` inside the convex hull.  Two disks that
@@ -1120,8 +1143,18 @@ def _uncuttable(area, good):
 
 
 def _bent(outline):
-    """A polygon's curvature averaged along the arc, its smoothed outward unit normals and the
-    arc length each vertex stands for (:func:`_concave_corners`)."""
+    """A polygon's smoothed curvature, its smoothed outward unit normals and the arc length each
+    vertex stands for (:func:`_concave_corners`).
+
+    The smoothing is a Gaussian over the vertices' numbers (cyclic) of ``CORNER_SMOOTHING``
+    pixels at the mean vertex spacing, ``CORNER_SMOOTHING / mean(h)`` vertices: each vertex's
+    turning ``kappa ds`` and its ``ds`` are smoothed, and their ratio is the curvature, an
+    average weighted by arc length (a vertex on short edges turns little).  Where the spacing is
+    uneven (the polygon flow's vertices: 0.4-1.7 px on the families' outlines) the window is
+    narrower in pixels where vertices crowd.  It is not a Gaussian of arc length: one on an even
+    0.5 px grid along the outline (tried, with the thresholds of this module as they are) found
+    more concave corners, cutting 21 of 240 singles (seeds 20-59) instead of 6, and took the
+    worst disk scene from 0.68 to 0.49 and the DSB image from 0.79 to 0.77."""
     h = edge_lengths(outline)
     ds = 0.5 * (h + np.roll(h, 1))  # the arc length each vertex stands for
     width = CORNER_SMOOTHING / h.mean()
@@ -1138,7 +1171,7 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN, bent=None):
     outward unit normals.
 
     The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
-    curvature`), averaged along the arc by a Gaussian of ``CORNER_SMOOTHING`` pixels.  A
+    curvature`), smoothed along the outline (:func:`_bent`, ``CORNER_SMOOTHING``).  A
     maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
     ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_parts`) and it dips
     ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``: :func:`_hull_depth`, measured here
@@ -1348,6 +1381,134 @@ def _explained(part, fit, outline):
     if _outside(_ellipse_polygon(ellipse), outline) > ELLIPSE_OUTSIDE:
         return area, False
     return area, area >= ELLIPSE_SOLIDITY * hull_area(part)
+
+
+# ---- stage 1, then 2: the necks' parts kept when they are ellipses ---------------------------------
+
+#: A piece cut off at a neck or a corner is an object's ellipse when the stretches of the object's
+#: outline it holds are fitted by one ellipse (``ARC_RMS``, ``ARC_OUTSIDE``, ``MAX_PART_ASPECT``),
+#: leaving out the vertices within this distance (pixels) of the cut: the rounded contact, which
+#: is neither object's outline (twice ``ARC_TRIM``, which trims an arc at each of its corners) ...
+CUT_TRIM = 3.0
+#: ... and the piece is this solid (area / convex hull area): an ellipse less its overlap with
+#: the other, cut along a chord, is less solid than an ellipse (``ELLIPSE_SOLIDITY``) ...
+CUT_SOLIDITY = 0.85
+#: ... or it is cut at its corners (:func:`_cuts`) into pieces that are such ellipses, recursively
+#: this deep (a piece of two objects, or of three).
+CUT_DEPTH = 2
+
+
+def _as_ellipses(pieces, outline):
+    """The pieces (lists of curves) of an object cut at its necks as objects: each piece an
+    ellipse of the object's outline (:func:`_cut_ellipse`) or cut at its corners into such
+    ellipses (:func:`_ellipse_cuts`); None when one is neither.
+
+    The neck stage keeps an object whole when one of its parts is no blob (a body with limbs,
+    :meth:`_PartGraph.merge_non_blobs`); two elongated objects side by side have no neck between
+    them and make such a part, and their neighbours in the clump were merged back with them
+    (touching ellipses seed 13: a chain of six, one object).  A clump is told from a body with
+    limbs by its outline: every stretch of it is an ellipse's, which a star's arms, a horse's
+    legs and head or a bent rod's halves are not (the singles family, seeds 0-59: none kept)."""
+    # (the cheaper tests first, each over all pieces: most objects that are no clump fail one)
+    if any(len(piece) > 1 for piece in pieces):  # a piece with a hole is no ellipse
+        return None
+    ellipses = [_cut_ellipse(piece[0], outline) for piece in pieces]
+    found = []
+    for piece, ellipse in zip(pieces, ellipses, strict=True):
+        if ellipse:
+            found.append(piece)
+        elif (cuts := _ellipse_cuts(piece[0], outline, CUT_DEPTH)) is not None:
+            found.extend([cut] for cut in cuts)
+        else:
+            return None
+    return found
+
+
+#: :func:`_around_a_hole`: a part whose pixels reach this far (pixels) around a hole on every side
+#: holds it once cut out, whatever the straightening of its borders (``SPLIT_LINE_TOLERANCE``).
+_HOLE_MARGIN = 2
+
+
+def _around_a_hole(curves, parts, low):
+    """Whether one of the pixel parts (window coordinates, ``low`` its corner) surrounds a hole of
+    the object: every pixel within ``_HOLE_MARGIN`` of the hole's pixels is in that part, so its
+    piece of :func:`_cut` has the hole, and :func:`_as_ellipses` declines it.  Shown on the
+    pixels, without cutting the polygon (on the singles family, half of the objects that reach
+    :func:`_as_ellipses` have such a piece: rings, horses)."""
+    import scipy.ndimage
+
+    for hole in curves[1:]:
+        pixels = rasterize([hole - low], parts.shape)
+        if not pixels.any():
+            continue
+        near = scipy.ndimage.binary_dilation(pixels, iterations=_HOLE_MARGIN)
+        if len(np.unique(parts[near])) == 1 and parts[near][0] > 0:
+            return True
+    return False
+
+
+def _as_rows(points):
+    """Each point of an (P, 2) float array as one opaque value (its 16 bytes), for exact lookups."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    return points.view(np.dtype((np.void, 16))).ravel()
+
+
+def _cut_ellipse(part, outline):
+    """Whether a piece cut off an object (a polygon whose vertices are the object's ``outline``'s
+    vertices and those of straight cuts) is an object's ellipse: its vertices on the outline, but
+    those within ``CUT_TRIM`` of a vertex that is not the outline's (the ends and bends of a
+    neck's cut; a corner cut of :func:`_ellipse_cuts` joins two of the outline's vertices and
+    trims none), fitted by one ellipse within ``ARC_RMS``, of aspect
+    at most ``MAX_PART_ASPECT``, at most ``ARC_OUTSIDE`` of it outside the object, and the piece
+    ``CUT_SOLIDITY`` solid.  An ellipse of the arc stage (:func:`_arc_ellipse`), fitted to the
+    piece's arcs."""
+    # (the cut keeps the outline's vertices to the bit, :func:`_cut`: one lookup of each vertex)
+    on_outline = np.isin(_as_rows(part), _as_rows(outline))
+    if not on_outline.all():
+        cut = part[~on_outline]
+        apart = np.hypot(*(part[:, None, :] - cut[None]).transpose(2, 0, 1)).min(axis=1)
+        on_outline &= apart > CUT_TRIM
+    area = signed_area(part)
+    if np.count_nonzero(on_outline) < 6 or area < np.pi * MIN_SPLIT_RADIUS**2:  # (5 parameters)
+        return False
+    points = part[on_outline]
+    return bool(_arc_ellipse(points, _ellipse_fit(points), outline) is not None
+                and area >= CUT_SOLIDITY * hull_area(part))
+
+
+def _ellipse_cuts(part, outline, depth):
+    """A piece cut off an object cut at its concave corners into pieces that are each an object's
+    ellipse (:func:`_cut_ellipse`; a side that is not cut again, down to ``depth`` cuts deep):
+    the polygons, or None.  The cuts tried are :func:`_corner_parts`' (the first ``CUT_OPTIONS``
+    admissible ones of :func:`_cuts`, narrowest first), and the first whose sides are ellipses
+    stands."""
+    if _uncuttable(signed_area(part), False):
+        return None
+    corners, kappa, normals = _concave_corners(part)
+    if len(corners) == 0:
+        return None
+    flat = _within(kappa <= 0, max(int(2 * CORNER_SMOOTHING / edge_lengths(part).mean()), 1))
+    is_corner = np.zeros(len(part), dtype=bool)
+    is_corner[corners] = True
+    tried = 0
+    for _, a, b in _cuts(part, np.arange(len(part)), is_corner, flat, normals):
+        sides = part[a:b + 1], np.concatenate([part[b:], part[:a + 1]])
+        if min(signed_area(side) for side in sides) < np.pi * MIN_SPLIT_RADIUS**2:
+            continue
+        found = []
+        for side in sides:
+            if _cut_ellipse(side, outline):
+                found.append(side)
+            elif depth > 1 and (cuts := _ellipse_cuts(side, outline, depth - 1)) is not None:
+                found.extend(cuts)
+            else:
+                break
+        else:
+            return found
+        tried += 1
+        if tried == CUT_OPTIONS:
+            break
+    return None
 
 
 # ---- stage 2, first: the outline's arcs grouped into ellipses -----------------------------------

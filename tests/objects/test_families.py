@@ -11,12 +11,14 @@ from activecontour.geometry.curve import orient
 from activecontour.objects.measure import label_image
 from activecontour.objects.metrics import match_instances
 from activecontour.objects.split import (
+    CUT_DEPTH,
     MIN_WAIST_DEPTH,
     _arc_parts,
     _block_spread,
     _concave_corners,
     _corner_parts,
     _ellipse_axes,
+    _ellipse_cuts,
     _ellipse_fit,
     _hull_depth,
     _meet_at_corners,
@@ -111,6 +113,15 @@ def test_a_clump_the_arcs_explain_only_in_part_is_split_by_them(family, seed, le
     assert match_instances(label_image(parts, truth.shape), truth)["f1"] >= least
 
 
+# (ellipses seed 13: a chain of six, two of them side by side with no neck between them, a part
+# that is no blob and took its neighbours back in the neck stage: the whole chain was one object,
+# :func:`activecontour.objects.split._as_ellipses`)
+def test_a_clump_whose_necks_leave_a_part_of_two_ellipses_is_split():
+    curves, inside, truth, image = _clump_of("ellipses", 13, 6)
+    parts = split_touching([curves], inside.astype(np.int32), image)
+    assert match_instances(label_image(parts, truth.shape), truth)["f1"] >= 0.9
+
+
 def test_uncovered_pieces_as_large_as_a_part_are_parts_of_their_own():
     # two ellipses' cells of 20 x 20 px; uncovered: a block of 10 x 12 px (0.3 of a cell, above
     # ARC_SIZE_RATIO) in the first, and a sliver of 2 x 5 px in the second
@@ -179,6 +190,25 @@ def test_two_ellipses_side_by_side_are_cut_along_their_common_chord():
     assert sum(areas) == pytest.approx(shapely.Polygon(outline).area, rel=1e-9)  # they tile it
 
 
+def test_two_ellipses_side_by_side_are_two_ellipses_of_the_outline():
+    # the pair of the test above, and the pair cut off a clump at a neck: the first ellipse's far
+    # end cut straight across (rows past 75, columns before the common chord at 50 + 2 b / 3),
+    # vertices no ellipse fits; each side is an ellipse less half the lens, less what was cut off
+    a, b = 30.0, 10.0
+    first, second = _ellipse((50.0, 50.0), a, b, 0.0), _ellipse((50.0, 50.0 + 4 * b / 3), a, b, 0.0)
+    outline = _union(first, second)
+    lens = shapely.Polygon(first).intersection(shapely.Polygon(second)).area
+    end = shapely.box(75.0, 0.0, 100.0, 50.0 + 2 * b / 3)
+    piece = orient(np.asarray(shapely.Polygon(outline).difference(end).exterior.coords)[:-1])
+    for part, cut_off in ((outline, 0.0), (piece, shapely.Polygon(outline).intersection(end).area)):
+        sides = _ellipse_cuts(part, outline, 1)
+        assert sides is not None and len(sides) == 2
+        areas = sorted(shapely.Polygon(side).area for side in sides)
+        assert sum(areas) == pytest.approx(shapely.Polygon(part).area, rel=1e-9)  # they tile it
+        assert areas[1] == pytest.approx(np.pi * a * b - lens / 2, rel=0.02)
+        assert areas[0] == pytest.approx(np.pi * a * b - lens / 2 - cut_off, rel=0.02)
+
+
 def _capsule_v(width, arm, bend):
     """A rod of ``width`` bent by ``bend`` radians in the middle (round ends and joint)."""
     points = [(0.0, 0.0), (arm, 0.0), (arm + arm * np.cos(bend), arm * np.sin(bend))]
@@ -205,6 +235,7 @@ SINGLE_SHAPES = [
 @pytest.mark.parametrize("outline", SINGLE_SHAPES)
 def test_a_single_shape_is_not_cut_at_its_corners(outline):
     assert len(_corner_parts(outline)) == 1
+    assert _ellipse_cuts(outline, outline, CUT_DEPTH) is None  # (nor into ellipses of its outline)
 
 
 def _resampled(outline, spacing=1.0):

@@ -526,3 +526,19 @@ def test_the_closed_form_ellipse_gate_never_rejects_an_ellipse_arc_ellipse_keeps
     for side, fit, no in zip(sides, split._as_fits(conics, found, residuals), rejected, strict=True):
         if no:
             assert split._arc_ellipse(side, fit, outline) is None
+
+
+def test_a_part_around_a_hole_is_seen_on_the_pixels_and_its_piece_has_the_hole():
+    # a 40 x 60 px block with a 6 x 6 px hole; two pixel parts, the left and the right half
+    outer = orient(np.array([[0.0, 0.0], [0.0, 60.0], [40.0, 60.0], [40.0, 0.0]]))
+    parts = np.zeros((44, 64), dtype=np.int32)  # window: the block's pixels, and a margin
+    parts[1:41, 1:31], parts[1:41, 31:61] = 1, 2
+    low = np.array([-1, -1])
+    # a hole well inside the left part, and one across the border between the parts
+    for corner, inside_one in (((15.0, 10.0), True), ((15.0, 27.0), False)):
+        hole = orient(np.array([[0.0, 0.0], [0.0, 6.0], [6.0, 6.0], [6.0, 0.0]]) + corner)[::-1]
+        curves = [outer, hole]
+        assert split._around_a_hole(curves, parts, low) == inside_one
+        # what the shortcut stands for: the piece of that part, cut out of the polygon, has the hole
+        pieces = split._cut(curves, parts, low)
+        assert any(len(piece) > 1 for piece in pieces) == inside_one
