@@ -176,3 +176,24 @@ def test_mask_init_and_result_init():
     first = ac.segment(image, start, max_num_iter=5)
     result = ac.segment(image, first)  # a result is a valid init
     assert synthetic.dice(result.mask, truth) >= 0.98
+
+
+def test_a_lobe_still_moving_holds_the_stop_while_the_mean_is_below_tol():
+    # a circle of radius 300 px (2000 vertices) whose curve is still but for 4 neighbouring vertices
+    # moving out by 0.2 px per iteration: the mean normal displacement (4 * 0.2 / 2000 = 4e-4 px per
+    # iteration) is below tol = 5e-4, yet a part of the curve is on its way: not a slow block
+    from activecontour.backends.polygon import _WINDOW, _Movement
+    from activecontour.geometry.curve import stack_curves
+
+    tol = 5e-4
+    points, next_index, offsets = stack_curves([ac.circle((400.0, 400.0), 300.0, n=2000)])
+    outward = points - np.array([400.0, 400.0])
+    outward /= np.hypot(outward[:, 0], outward[:, 1])[:, None]
+    moving = np.zeros(len(points), bool)
+    moving[100:104] = True
+    for speed, slow in ((0.2, 0), (0.0, 1)):  # the lobe moving; then nothing moving at all
+        movement = _Movement()
+        for k in range(_WINDOW + 1):
+            movement.add((points + k * speed * moving[:, None] * outward, next_index, offsets))
+        assert len(movement.blocks) == 1
+        assert movement.still(tol) == slow
