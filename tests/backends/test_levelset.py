@@ -184,6 +184,45 @@ def test_smoothed_step_that_flips_a_far_region_is_solved_on_the_whole_image():
     np.testing.assert_array_equal(stepped, whole)
 
 
+def test_a_step_into_a_recycled_array_copies_phi_only_where_that_array_may_differ():
+    # a rejected box step leaves its array equal to phi outside the box (and the front pixels one
+    # pixel beyond it): the next step into that array copies phi there only, not the image
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    stepped, box = problem.step(state, force, tau, True)
+    assert isinstance(box, tuple) and box[0].stop < 199 and box[1].stop < 199
+    problem.recycle(stepped)
+    stepped[199, 199] = 123.0  # beyond the box: where the array was noted to equal phi
+    again, _ = problem.step(state, force, 0.5 * tau, True)
+    assert again is stepped and again[199, 199] == 123.0  # not copied over
+    again[199, 199] = state.phi[199, 199]
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
+
+
+def test_steps_into_recycled_arrays_equal_steps_into_new_ones():
+    # the driver's sequence (smoothed and unsmoothed steps, rejected and accepted, the arrays
+    # handed back and taken again): every stepped array is the one a new problem makes, so the
+    # boxes noted as the only places where a recycled array and phi differ are right
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (58.0, 61.0))
+    steps = [(True, 1.0, True), (True, 2.0, False), (True, 1.0, True), (False, 0.02, False),
+             (False, 0.02, True), (False, 0.01, True), (True, 0.5, True), (True, 0.5, True)]
+    for smooth, scale, accept in steps:  # smoothed or not, tau's factor, accepted or not
+        fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+        expected, _ = fresh.step(state, force, scale * tau, smooth)
+        stepped, changed = problem.step(state, force, scale * tau, smooth)
+        np.testing.assert_array_equal(stepped, expected)
+        located = problem.locate(stepped, state, changed)
+        if accept:
+            trial = problem.finish(located, state)
+            assert trial.phi is stepped
+            problem.recycle(state.phi)
+            state = trial
+            current = problem.evaluate(state)
+            force, _ = problem.force(current.c_in, current.c_out)
+        else:
+            problem.recycle(stepped)
+
+
 def test_contours_are_oriented_and_measure_the_annulus():
     shape, center = (96, 96), (48.0, 47.5)
     outer = _circle_distance(shape, center, 40.0)
