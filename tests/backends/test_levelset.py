@@ -238,6 +238,25 @@ def test_contours_are_oriented_and_measure_the_annulus():
         assert not np.array_equal(contour[0], contour[-1])  # each vertex once
 
 
+@pytest.mark.parametrize("shape", [(1, 1), (1, 6), (5, 1), (9, 14)])
+def test_closed_padding_is_the_edge_padding_with_a_negative_frame(shape):
+    # built in one array: np.pad's "edge" mode, the frame -|phi|, and phi = 0 moved outside
+    from activecontour.backends.levelset.zeroset import _closed_padding
+
+    rng = np.random.default_rng(3)
+    phi = rng.normal(size=shape).astype(np.float32)
+    phi[rng.random(shape) < 0.3] = 0.0
+    padded = _closed_padding(phi)
+    edge = np.pad(phi.astype(np.float64), 1, mode="edge")
+    frame = np.ones(edge.shape, dtype=bool)
+    frame[1:-1, 1:-1] = False
+    expected = np.where(frame, -np.abs(edge), edge)
+    expected[expected == 0] = -1e-300
+    assert padded.dtype == np.float64
+    np.testing.assert_array_equal(padded, expected)
+    assert not np.signbit(padded[1:-1, 1:-1][phi > 0]).any() and (padded[frame] < 0).all()
+
+
 def test_contour_of_a_region_touching_the_border_closes_on_the_domain_edge():
     shape = (30, 40)
     rr = np.indices(shape, dtype=np.float64)[0]
