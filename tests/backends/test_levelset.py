@@ -89,6 +89,21 @@ def test_reinitialisation_keeps_the_zero_set_and_restores_the_distance():
     assert np.max(np.abs(again - phi)[near]) < 0.01
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_reinitialisation_over_its_input_is_the_reinitialisation_into_a_new_array(dtype):
+    # the start's array, which nothing else reads, takes the reinitialised phi: the same values
+    rng = np.random.default_rng(5)
+    phi = _circle_distance((60, 70), (31.2, 33.9), 17.3) + rng.normal(scale=0.3, size=(60, 70))
+    phi = phi.astype(dtype)
+    expected = _redistance(phi.copy(), 4.0, dtype=dtype)
+    state = _redistance(phi, 4.0, dtype=dtype, overwrite=True)
+    assert state.phi is phi
+    np.testing.assert_array_equal(state.phi, expected.phi)
+    np.testing.assert_array_equal(state.near_flat, expected.near_flat)
+    kept = phi.astype(np.float64)  # a dtype other than the result's is left alone
+    assert _redistance(kept, 4.0, dtype=np.float32, overwrite=True).phi is not kept
+
+
 @pytest.mark.parametrize("band", [np.inf, 3.0])
 def test_a_level_set_positive_everywhere_is_the_distance_to_the_domain_edge(band):
     # the zero set of a region that fills the image is the domain's edge, half a pixel beyond the

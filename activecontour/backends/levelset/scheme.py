@@ -100,10 +100,12 @@ class _Problem:
         _copy_outside(phi, out, whole if known is None else known, box)
         return out
 
-    def redistance(self, phi, keep_front=False):
+    def redistance(self, phi, keep_front=False, overwrite=False):
         """The reinitialised state of phi (float32); ``keep_front``: phi's zero set kept exactly (a
-        previous result's, see :func:`_redistance`)."""
-        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front)
+        previous result's); ``overwrite``: written into phi (a float32 start that nothing else
+        reads), see :func:`_redistance`."""
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front,
+                           overwrite=overwrite)
 
     def locate(self, stepped, previous, changed=None):
         """The zero set of ``stepped`` (a step from the state ``previous`` that ``changed`` phi
