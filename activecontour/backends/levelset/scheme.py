@@ -94,7 +94,7 @@ class _Problem:
         """An image-sized float32 array equal to ``phi`` outside ``box`` (two slices; None: all of
         it), undefined inside.  An array that a step or a finish left equal to ``phi`` outside a
         box (the step's box and the bands, :meth:`_agree`) is copied over that box only, not over
-        the image: at 4096^2 the copy of the image was a tenth of a smoothed step."""
+        the image (a disk at 4096^2: 10^7 pixels of phi beyond the step's box, per step)."""
         out, known = self.take(phi)
         whole = (slice(0, self.shape[0]), slice(0, self.shape[1]))
         _copy_outside(phi, out, whole if known is None else known, box)
