@@ -89,6 +89,21 @@ def test_reinitialisation_keeps_the_zero_set_and_restores_the_distance():
     assert np.max(np.abs(again - phi)[near]) < 0.01
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_reinitialisation_over_its_input_is_the_reinitialisation_into_a_new_array(dtype):
+    # the start's array, which nothing else reads, takes the reinitialised phi: the same values
+    rng = np.random.default_rng(5)
+    phi = _circle_distance((60, 70), (31.2, 33.9), 17.3) + rng.normal(scale=0.3, size=(60, 70))
+    phi = phi.astype(dtype)
+    expected = _redistance(phi.copy(), 4.0, dtype=dtype)
+    state = _redistance(phi, 4.0, dtype=dtype, overwrite=True)
+    assert state.phi is phi
+    np.testing.assert_array_equal(state.phi, expected.phi)
+    np.testing.assert_array_equal(state.near_flat, expected.near_flat)
+    kept = phi.astype(np.float64)  # a dtype other than the result's is left alone
+    assert _redistance(kept, 4.0, dtype=np.float32, overwrite=True).phi is not kept
+
+
 @pytest.mark.parametrize("band", [np.inf, 3.0])
 def test_a_level_set_positive_everywhere_is_the_distance_to_the_domain_edge(band):
     # the zero set of a region that fills the image is the domain's edge, half a pixel beyond the
@@ -184,6 +199,45 @@ def test_smoothed_step_that_flips_a_far_region_is_solved_on_the_whole_image():
     np.testing.assert_array_equal(stepped, whole)
 
 
+def test_a_step_into_a_recycled_array_copies_phi_only_where_that_array_may_differ():
+    # a rejected box step leaves its array equal to phi outside the box (and the front pixels one
+    # pixel beyond it): the next step into that array copies phi there only, not the image
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    stepped, box = problem.step(state, force, tau, True)
+    assert isinstance(box, tuple) and box[0].stop < 199 and box[1].stop < 199
+    problem.recycle(stepped)
+    stepped[199, 199] = 123.0  # beyond the box: where the array was noted to equal phi
+    again, _ = problem.step(state, force, 0.5 * tau, True)
+    assert again is stepped and again[199, 199] == 123.0  # not copied over
+    again[199, 199] = state.phi[199, 199]
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
+
+
+def test_steps_into_recycled_arrays_equal_steps_into_new_ones():
+    # the driver's sequence (smoothed and unsmoothed steps, rejected and accepted, the arrays
+    # handed back and taken again): every stepped array is the one a new problem makes, so the
+    # boxes noted as the only places where a recycled array and phi differ are right
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (58.0, 61.0))
+    steps = [(True, 1.0, True), (True, 2.0, False), (True, 1.0, True), (False, 0.02, False),
+             (False, 0.02, True), (False, 0.01, True), (True, 0.5, True), (True, 0.5, True)]
+    for smooth, scale, accept in steps:  # smoothed or not, tau's factor, accepted or not
+        fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+        expected, _ = fresh.step(state, force, scale * tau, smooth)
+        stepped, changed = problem.step(state, force, scale * tau, smooth)
+        np.testing.assert_array_equal(stepped, expected)
+        located = problem.locate(stepped, state, changed)
+        if accept:
+            trial = problem.finish(located, state)
+            assert trial.phi is stepped
+            problem.recycle(state.phi)
+            state = trial
+            current = problem.evaluate(state)
+            force, _ = problem.force(current.c_in, current.c_out)
+        else:
+            problem.recycle(stepped)
+
+
 def test_contours_are_oriented_and_measure_the_annulus():
     shape, center = (96, 96), (48.0, 47.5)
     outer = _circle_distance(shape, center, 40.0)
@@ -197,6 +251,25 @@ def test_contours_are_oriented_and_measure_the_annulus():
     assert areas[1] == pytest.approx(np.pi * 40.0**2, rel=0.01)
     for contour in contours:
         assert not np.array_equal(contour[0], contour[-1])  # each vertex once
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 6), (5, 1), (9, 14)])
+def test_closed_padding_is_the_edge_padding_with_a_negative_frame(shape):
+    # built in one array: np.pad's "edge" mode, the frame -|phi|, and phi = 0 moved outside
+    from activecontour.backends.levelset.zeroset import _closed_padding
+
+    rng = np.random.default_rng(3)
+    phi = rng.normal(size=shape).astype(np.float32)
+    phi[rng.random(shape) < 0.3] = 0.0
+    padded = _closed_padding(phi)
+    edge = np.pad(phi.astype(np.float64), 1, mode="edge")
+    frame = np.ones(edge.shape, dtype=bool)
+    frame[1:-1, 1:-1] = False
+    expected = np.where(frame, -np.abs(edge), edge)
+    expected[expected == 0] = -1e-300
+    assert padded.dtype == np.float64
+    np.testing.assert_array_equal(padded, expected)
+    assert not np.signbit(padded[1:-1, 1:-1][phi > 0]).any() and (padded[frame] < 0).all()
 
 
 def test_contour_of_a_region_touching_the_border_closes_on_the_domain_edge():

@@ -102,7 +102,9 @@ computed in one compiled pass) over the band's bounding box widened by ``band + 
 (S's kernel decays as ``exp(-r / sqrt(tau mu))``: near Gamma the box's Neumann sides change the
 step by < 1e-4 px), phi held beyond it, when the box is at most half the image and the step,
 solved on a 4x coarser grid, flips no block beyond it; else over the image; a step (b) works on
-the band only (explicit, or conjugate gradients), but for one copy of phi.  The reinitialisation
+the band only (explicit, or conjugate gradients).  A step is written into a recycled array, which
+equals phi already but for the box of the step or finish that last wrote it (noted per array):
+phi is copied over that box only, not over the image.  The reinitialisation
 reads the sides only where the step changed phi (its box, the image, or for a step (b) the band's
 pixels; the front is searched next to the previous one and the pixels that changed side) and,
 for an accepted step, is written into the stepped array itself: the previous phi copied back over

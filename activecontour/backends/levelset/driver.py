@@ -98,8 +98,9 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
                                 dtype=np.float32, mu=params.mu)
     # after the start: its temporaries (the default start's) are gone before the work arrays come
     problem = _Problem(model, params, settings)
-    state = problem.redistance(phi, keep_front=has_phi(init))  # a result restarts where it ended
-    del phi  # the start's array: the state holds its own
+    # a result restarts where it ended; the start's array (which nothing else reads) is written over
+    state = problem.redistance(phi, keep_front=has_phi(init), overwrite=True)
+    del phi
     current = problem.evaluate(state)
     energies, moves = [current.energy], []
     # step: pixels of travel at the typical force; ceiling: the largest step of this stage.  The

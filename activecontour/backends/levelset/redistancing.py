@@ -75,7 +75,7 @@ def signed_distance(phi, band=np.inf):
     return _redistance(np.asarray(phi, dtype=np.float64), band).phi
 
 
-def _redistance(phi, band, dtype=np.float64, scratch=None, keep_front=False):
+def _redistance(phi, band, dtype=np.float64, scratch=None, keep_front=False, overwrite=False):
     """:func:`signed_distance` as a :class:`_Redistanced` with phi of ``dtype``.
 
     ``keep_front``: the front pixels keep phi's own values and the band the distances from them,
@@ -85,14 +85,17 @@ def _redistance(phi, band, dtype=np.float64, scratch=None, keep_front=False):
     move; a second reinitialisation would move a curved front by O(h^2 kappa), up to a sixth of
     a pixel, which on a binary image changes (6.38) by percents.
 
-    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  A phi stepped
-    from a state is located (:func:`_locate`), scored and only then finished
+    ``scratch``: a :class:`_Scratch` of phi's shape to reuse (else one is made).  ``overwrite``:
+    phi (C-contiguous, of ``dtype``) is written over with the result once its zero set is located
+    rather than a new array made (a start that nothing else reads: an image-sized array less).
+    A phi stepped from a state is located (:func:`_locate`), scored and only then finished
     (:meth:`_Located.finish`) by the level set's driver.
     """
     located = _locate(phi, band, dtype, scratch)
     if isinstance(located, _Redistanced):
         return located
-    return located.finish(band, dtype, scratch, keep_front=keep_front)
+    overwrite = overwrite and not keep_front and phi.dtype == dtype and phi.flags.c_contiguous
+    return located.finish(band, dtype, scratch, keep_front=keep_front, overwrite=overwrite)
 
 
 class _Located:
@@ -113,7 +116,7 @@ class _Located:
                                  band, _MIN_DISTANCE, self.positive.reshape(-1).view(np.uint8),
                                  self.phi.reshape(-1))
 
-    def finish(self, band, dtype, scratch=None, previous=None, keep_front=False):
+    def finish(self, band, dtype, scratch=None, previous=None, keep_front=False, overwrite=False):
         """The :class:`_Redistanced` state: the band grown from the front (:func:`_redistance`).
 
         ``previous``: the state that phi was stepped from (as for :func:`_locate`); the state is
@@ -121,6 +124,8 @@ class _Located:
         previous state's again, and beyond the previous band and the switched pixels that is
         ``+-band`` on the same side, so those are reset and the band grown.  Where the step
         changed only the band's pixels nothing is copied: O(band) rather than a copy of the image.
+        ``overwrite`` (no ``previous``): phi is reset to ``+-band`` by side and the band written
+        into it (see :func:`_redistance`).
         """
         positive, front = self.positive, self.front
         rows, cols = np.divmod(front, positive.shape[1])
@@ -134,6 +139,8 @@ class _Located:
                 np.copyto(base[self.changed], previous.phi[self.changed])
             reset = np.concatenate([previous.near_flat, self.switched])
             base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
+        elif overwrite:  # the segments hold the zero set: phi itself is no longer read
+            base = _clipped(positive, band, dtype, out=self.phi)
         state = _propagate(positive, rows, cols, self.segments, self.nearest, band, sweeps,
                            dtype=dtype, scratch=scratch, base=base)
         state.cells, state.front = self.cells, front
@@ -227,11 +234,13 @@ def _domain_edge_distance(shape, band, dtype=np.float64):
                         np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp))
 
 
-def _clipped(positive, band, dtype=np.float64):
-    """``+band`` inside, ``-band`` outside (inf for an infinite band)."""
+def _clipped(positive, band, dtype=np.float64, out=None):
+    """``+band`` inside, ``-band`` outside (inf for an infinite band), into ``out`` if given."""
+    phi = np.empty(positive.shape, dtype=dtype) if out is None else out
     if not np.isfinite(band):
-        return np.where(positive, dtype(band), dtype(-band))
-    phi = positive.astype(dtype)  # 0 or 1, then scaled in place: far faster than np.where
+        np.copyto(phi, np.where(positive, dtype(band), dtype(-band)))
+        return phi
+    np.copyto(phi, positive)  # 0 or 1, then scaled in place: far faster than np.where
     phi *= dtype(2.0 * band)
     phi -= dtype(band)
     return phi

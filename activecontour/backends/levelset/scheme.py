@@ -59,23 +59,53 @@ class _Problem:
         self.sample_wall = self._wall(sample)
         self.wave_r, self.wave_c = _waves(m), _waves(n)
         self.scratch = _Scratch(self.shape)
-        self._spare = []  # image-sized float32 arrays to reuse (a new one faults in every page)
+        # image-sized float32 arrays to reuse (a new one faults in every page), each with the
+        # phi it equals outside a box, when that is known (see _copy_of)
+        self._spare = []
+        self._agreements = {}  # id(array): (array, phi, box): array equals phi outside box
+        self._box_buffer = None  # the smoothed step's box, reused while its size holds
         self._coarse = None  # the far field's test grid (_coarse_tables)
 
-    def take(self):
-        """An image-sized float32 array to write into (contents undefined)."""
-        return self._spare.pop() if self._spare else np.empty(self.shape, dtype=np.float32)
+    def take(self, like=None):
+        """An image-sized float32 array to write into, and the box outside which it equals the
+        array ``like`` already (None: not known; its contents are undefined)."""
+        if not self._spare:
+            return np.empty(self.shape, dtype=np.float32), None
+        array, agreement = self._spare.pop()
+        # its contents change: every agreement with it ends
+        self._spare = [(other, None if known is not None and known[0] is array else known)
+                       for other, known in self._spare]
+        self._agreements = {key: entry for key, entry in self._agreements.items() if entry[1] is not array}
+        return array, (agreement[1] if agreement is not None and agreement[0] is like else None)
 
     def recycle(self, array):
         """Hand back an image-sized float32 array that nothing refers to any more."""
+        entry = self._agreements.pop(id(array), None)
         if array is not None and array.shape == self.shape and array.dtype == np.float32 \
                 and len(self._spare) < 2:
-            self._spare.append(array)
+            self._spare.append((array, None if entry is None else entry[1:]))
 
-    def redistance(self, phi, keep_front=False):
+    def _agree(self, array, phi, box):
+        """Note that ``array`` equals ``phi`` outside ``box`` (two slices) until either is written:
+        a step that takes it back from ``phi`` copies that box only (:meth:`_copy_of`)."""
+        self._agreements[id(array)] = (array, phi, box)
+
+    def _copy_of(self, phi, box=None):
+        """An image-sized float32 array equal to ``phi`` outside ``box`` (two slices; None: all of
+        it), undefined inside.  An array that a step or a finish left equal to ``phi`` outside a
+        box (the step's box and the bands, :meth:`_agree`) is copied over that box only, not over
+        the image (a disk at 4096^2: 10^7 pixels of phi beyond the step's box, per step)."""
+        out, known = self.take(phi)
+        whole = (slice(0, self.shape[0]), slice(0, self.shape[1]))
+        _copy_outside(phi, out, whole if known is None else known, box)
+        return out
+
+    def redistance(self, phi, keep_front=False, overwrite=False):
         """The reinitialised state of phi (float32); ``keep_front``: phi's zero set kept exactly (a
-        previous result's, see :func:`_redistance`)."""
-        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front)
+        previous result's); ``overwrite``: written into phi (a float32 start that nothing else
+        reads), see :func:`_redistance`."""
+        return _redistance(phi, self.band, dtype=np.float32, scratch=self.scratch, keep_front=keep_front,
+                           overwrite=overwrite)
 
     def locate(self, stepped, previous, changed=None):
         """The zero set of ``stepped`` (a step from the state ``previous`` that ``changed`` phi
@@ -93,7 +123,15 @@ class _Problem:
         into the stepped array itself."""
         if not isinstance(located, _Located):
             return located  # no front: final already
-        return located.finish(self.band, np.float32, self.scratch, previous)
+        self._agreements.pop(id(located.phi), None)  # written below
+        state = located.finish(self.band, np.float32, self.scratch, previous)
+        # the state differs from the previous one only where the step changed phi (and the front
+        # pixels next to it, :meth:`step`) and on its band
+        changed = _bounds(located.changed, self.shape)
+        if changed is not None and state.near_flat.size:
+            self._agree(previous.phi, state.phi,
+                        _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape)))
+        return state
 
     def evaluate(self, state):
         """(6.38) of the zero level set by the common evaluator, as an ``Evaluation``.
@@ -169,6 +207,14 @@ class _Problem:
         differ from ``state.phi``: the band's pixels (flat indices), a box (two slices) or None
         (anywhere), so that its sides are read there only (:meth:`locate`).
         """
+        stepped, changed = self._step(state, force, tau, smooth_force)
+        box = _bounds(changed, self.shape)
+        if box is not None:  # locating it writes the front's distances: one pixel beyond
+            self._agree(stepped, state.phi, _grown(box, self.shape))
+        return stepped, changed
+
+    def _step(self, state, force, tau, smooth_force):
+        """:meth:`step` without the note of where the stepped array equals ``state.phi``."""
         if not smooth_force and tau * self.params.mu <= _EXPLICIT:
             return self._explicit_step(state, force, tau), state.near_flat
         if not smooth_force:
@@ -190,7 +236,7 @@ class _Problem:
             if box is not None and not self._far_flips(state, form, tau, box):
                 return self._box_step(state, form, tau, box), box
         # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
-        rhs = self.take()
+        rhs = self.take()[0]
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
                             tau, rhs)
         return (self._smooth(rhs, tau * self.params.mu) if self.params.mu > 0 else rhs), None
@@ -270,14 +316,14 @@ class _Problem:
     def _box_step(self, state, form, tau, box):
         """Step (a) solved on ``box`` (:meth:`_box`), phi held beyond it."""
         rows, cols = box
-        inner = np.empty((rows.stop - rows.start, cols.stop - cols.start), dtype=np.float32)
+        size = (rows.stop - rows.start, cols.stop - cols.start)
+        if self._box_buffer is None or self._box_buffer.shape != size:
+            self._box_buffer = np.empty(size, dtype=np.float32)
+        inner = self._box_buffer
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
                             tau, inner, rows.start, cols.start)
-        out, phi = self.take(), state.phi
-        out[rows, cols] = self._smooth(inner, tau * self.params.mu, _waves(inner.shape[0]),
-                                       _waves(inner.shape[1]))
-        out[:rows.start], out[rows.stop:] = phi[:rows.start], phi[rows.stop:]
-        out[rows, :cols.start], out[rows, cols.stop:] = phi[rows, :cols.start], phi[rows, cols.stop:]
+        out = self._copy_of(state.phi, box)
+        out[rows, cols] = self._smooth(inner, tau * self.params.mu, _waves(size[0]), _waves(size[1]))
         return out
 
     def _band_smooth(self, state, weight):
@@ -334,8 +380,7 @@ class _Problem:
             z = residual / diagonal
             rz, previous = dot(residual, z), rz
             direction = z + (rz / previous) * direction
-        out = self.take()
-        np.copyto(out, state.phi)
+        out = self._copy_of(state.phi)
         out.ravel()[flat] = x
         return out
 
@@ -353,8 +398,7 @@ class _Problem:
         (:func:`activecontour._kernels.explicit_step`)."""
         m, n = self.shape
         form = self.params.load_form(*force)
-        out = self.take()
-        np.copyto(out, state.phi)
+        out = self._copy_of(state.phi)
         _kernels.explicit_step(state.phi.reshape(-1), state.near_flat, m, n, tau * self.params.mu, self.band,
                                self.values.reshape(m * n, -1), form.constant, form.linear, form.square,
                                self.params.mu, tau, out.reshape(-1))
@@ -364,6 +408,47 @@ class _Problem:
 def _waves(size):
     """The eigenvalues of -Laplace (5-point, Neumann) in the DCT-II basis along an axis of ``size``."""
     return (4.0 * np.sin(np.pi * np.arange(size) / (2.0 * size)) ** 2).astype(np.float32)
+
+
+def _copy_outside(source, target, region, box=None):
+    """Copy ``source`` into ``target`` over ``region`` (two slices) except ``box`` (None: all of
+    it): the rows of the region above and below the box, then its columns left and right of it."""
+    rows, cols = region
+    if box is None:
+        target[rows, cols] = source[rows, cols]
+        return
+    top, bottom = max(box[0].start, rows.start), min(box[0].stop, rows.stop)
+    left, right = max(box[1].start, cols.start), min(box[1].stop, cols.stop)
+    if top >= bottom or left >= right:  # the box misses the region
+        target[rows, cols] = source[rows, cols]
+        return
+    middle = slice(top, bottom)
+    for strip in ((slice(rows.start, top), cols), (slice(bottom, rows.stop), cols),
+                  (middle, slice(cols.start, left)), (middle, slice(right, cols.stop))):
+        target[strip] = source[strip]
+
+
+def _bounds(where, shape):
+    """The bounding box (two slices) of ``where``: flat indices of pixels or a box; None for None."""
+    if where is None or isinstance(where, tuple):
+        return where
+    if where.size == 0:
+        return None
+    n = shape[1]
+    cols = where % n
+    rows = slice(int(where.min()) // n, int(where.max()) // n + 1)
+    return rows, slice(int(cols.min()), int(cols.max()) + 1)
+
+
+def _union(box, other):
+    """The bounding box of two boxes (two slices each)."""
+    return tuple(slice(min(a.start, b.start), max(a.stop, b.stop)) for a, b in zip(box, other, strict=True))
+
+
+def _grown(box, shape):
+    """``box`` widened by one pixel on every side, cut to the image."""
+    return tuple(slice(max(span.start - 1, 0), min(span.stop + 1, size))
+                 for span, size in zip(box, shape, strict=True))
 
 
 def _fast_span(start, stop, size):

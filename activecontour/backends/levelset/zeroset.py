@@ -60,7 +60,11 @@ def level_set_contours(phi):
 
 def _closed_padding(phi):
     """phi padded by one pixel of ``-|phi|``: the zero set closes on the domain edge (inside only)."""
-    padded = np.pad(np.asarray(phi, dtype=np.float64), 1, mode="edge")
+    m, n = np.shape(phi)
+    padded = np.empty((m + 2, n + 2))  # np.pad's "edge" mode, in one array rather than a copy and a pad
+    padded[1:-1, 1:-1] = phi
+    padded[1:-1, 0], padded[1:-1, -1] = padded[1:-1, 1], padded[1:-1, -2]
+    padded[0], padded[-1] = padded[1], padded[-2]
     padded[0], padded[-1] = -np.abs(padded[0]), -np.abs(padded[-1])
     padded[:, 0], padded[:, -1] = -np.abs(padded[:, 0]), -np.abs(padded[:, -1])
     padded[padded == 0] = -1e-300  # phi = 0 is outside, as in the mask phi > 0
