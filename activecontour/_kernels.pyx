@@ -2699,7 +2699,7 @@ def segment_inside(const double[:, ::1] start, const double[:, ::1] end, Py_ssiz
 def cut_ratios(const double[:, ::1] part, const double[:, ::1] centred, const double[:, ::1] normals,
                const Py_ssize_t[::1] first, const Py_ssize_t[::1] second, double least, double[::1] out):
     """The neck ratio of each candidate cut ``(first[k], second[k])`` (a < b) of a part of the
-    corner stage (:func:`activecontour.objects.split._cuts`): the cut's length over the smaller of
+    corner stage (:func:`activecontour.objects.corners._cuts`): the cut's length over the smaller of
     the part's extents along it, on each side of the cut (its vertices ``part``, their offsets
     from the mean ``centred``); infinity for a cut of no length or one that does not face the
     inward normal (``-normals``, the outward unit normals at the part's vertices) within

@@ -7,7 +7,8 @@ Run ``python benchmarks/bench_splitcost.py [--before REV] [--repeat 2] [--scenes
 Per scene, the least CPU time (``time.process_time``: the machine may be shared) over
 ``--repeat`` rounds of :func:`activecontour.segment` with ``separate=False``, with the defaults,
 and with the defaults but :mod:`activecontour.objects.split` as it was at ``--before`` (read with
-``git show``, run in place of this tree's :func:`~activecontour.objects.split.split_touching`);
+``git show`` with its stages' modules, run in place of this tree's
+:func:`~activecontour.objects.split.split_touching`);
 the ratios to ``separate=False``; and, on the textured images of ``benchmarks/bench_texture.py``,
 scikit-image's ``chan_vese`` with its defaults.  Each round runs every variant once, in turn
 first, so the machine's load falls on all alike.  Whether the objects stay the same is
@@ -17,8 +18,10 @@ first, so the machine's load falls on all alike.  Whether the objects stay the s
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import importlib
+import re
 import subprocess
+import sys
 import tempfile
 import time
 import warnings
@@ -57,17 +60,26 @@ def scene(name):
     return getattr(data, name)()
 
 
+#: The split's modules (its stages have modules of their own since the split of split.py; before,
+#: split.py held them all and the others do not exist at that revision)
+SPLIT_MODULES = ("shapes", "corners", "arcs", "necks", "contrast", "split")
+
+
 def split_at(revision):
-    """:func:`split_touching` of ``activecontour/objects/split.py`` at a git revision."""
+    """:func:`split_touching` of ``activecontour/objects/split.py`` and its stages' modules at a git
+    revision (a package of their own, importing each other, not this tree's)."""
     root = Path(__file__).resolve().parents[1]
-    source = subprocess.run(["git", "show", f"{revision}:activecontour/objects/split.py"], cwd=root,
-                            capture_output=True, text=True, check=True).stdout
-    path = Path(tempfile.mkdtemp()) / "split_before.py"
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location("split_before", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.split_touching
+    package = Path(tempfile.mkdtemp()) / "split_before"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    ours = re.compile(r"\bactivecontour\.objects\.(" + "|".join(SPLIT_MODULES) + r")\b")
+    for name in SPLIT_MODULES:
+        shown = subprocess.run(["git", "show", f"{revision}:activecontour/objects/{name}.py"], cwd=root,
+                               capture_output=True, text=True)
+        if shown.returncode == 0:
+            (package / f"{name}.py").write_text(ours.sub(r"split_before.\1", shown.stdout))
+    sys.path.insert(0, str(package.parent))
+    return importlib.import_module("split_before.split").split_touching
 
 
 def main(argv=None):

@@ -110,7 +110,7 @@ def split_by_seeds(objects, labels, seeds, image=None):
     import scipy.ndimage
     import skimage.segmentation
 
-    from activecontour.objects.split import _cut
+    from activecontour.objects.corners import _cut
 
     boxes = scipy.ndimage.find_objects(labels, max_label=len(objects))
     seed_area = np.bincount(seeds.ravel())

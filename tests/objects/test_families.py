@@ -8,23 +8,13 @@ import shapely
 import activecontour as ac
 from activecontour import synthetic
 from activecontour.geometry.curve import orient
+from activecontour.objects.arcs import _arc_parts, _meet_at_corners, _uncovered_parts
+from activecontour.objects.contrast import _block_spread
+from activecontour.objects.corners import CUT_DEPTH, _concave_corners, _corner_parts, _ellipse_cuts
 from activecontour.objects.measure import label_image
 from activecontour.objects.metrics import match_instances
-from activecontour.objects.split import (
-    CUT_DEPTH,
-    MIN_WAIST_DEPTH,
-    _arc_parts,
-    _block_spread,
-    _concave_corners,
-    _corner_parts,
-    _ellipse_axes,
-    _ellipse_cuts,
-    _ellipse_fit,
-    _hull_depth,
-    _meet_at_corners,
-    _uncovered_parts,
-    split_touching,
-)
+from activecontour.objects.shapes import MIN_WAIST_DEPTH, _ellipse_axes, _ellipse_fit, _hull_depth
+from activecontour.objects.split import split_touching
 
 # ---- the families: exact truth, what they say they draw ----------------------------------------
 
@@ -105,7 +95,7 @@ def _clump_of(family, seed, count):
 # (ellipses seed 11: 7 objects whose contacts the contour rounded, so that the borders between the
 # arcs' ellipses end 4-9 px from the corners found, :data:`activecontour.objects.split.
 # ARC_END_REACH`; disks seed 0: 7 disks of which two are pressed inside the clump and own no arc,
-# :func:`activecontour.objects.split._uncovered_parts`)
+# :func:`activecontour.objects.arcs._uncovered_parts`)
 @pytest.mark.parametrize(("family", "seed", "least"), [("ellipses", 11, 0.9), ("disks", 0, 0.7)])
 def test_a_clump_the_arcs_explain_only_in_part_is_split_by_them(family, seed, least):
     curves, inside, truth, image = _clump_of(family, seed, 7)
@@ -115,7 +105,7 @@ def test_a_clump_the_arcs_explain_only_in_part_is_split_by_them(family, seed, le
 
 # (ellipses seed 13: a chain of six, two of them side by side with no neck between them, a part
 # that is no blob and took its neighbours back in the neck stage: the whole chain was one object,
-# :func:`activecontour.objects.split._as_ellipses`)
+# :func:`activecontour.objects.corners._as_ellipses`)
 def test_a_clump_whose_necks_leave_a_part_of_two_ellipses_is_split():
     curves, inside, truth, image = _clump_of("ellipses", 13, 6)
     parts = split_touching([curves], inside.astype(np.int32), image)
@@ -145,7 +135,7 @@ def test_touching_objects_are_split_from_the_level_set_too():
 
 
 # (seed 7: a rod bent sharply, whose border between two ellipses ended at a wiggle of 17 degrees
-# outside the bend, :data:`activecontour.objects.split.ARC_END_TURN`)
+# outside the bend, :data:`activecontour.objects.arcs.ARC_END_TURN`)
 @pytest.mark.parametrize("seed", [1, 4, 5, 7])
 def test_singles_are_never_split(seed):
     image, _ = synthetic.singles(seed)

@@ -375,7 +375,8 @@ def test_thousands_of_small_watershed_parts_merge_into_one():
     import scipy.ndimage
     import skimage.morphology
 
-    from activecontour.objects.split import MIN_SPLIT_RADIUS, NECK_RATIO, _neck_parts
+    from activecontour.objects.necks import NECK_RATIO, _neck_parts
+    from activecontour.objects.shapes import MIN_SPLIT_RADIUS
 
     n = 150
     region = np.pad(np.ones((n, n), dtype=bool), 1)
@@ -392,7 +393,8 @@ def test_merged_part_shapes_are_those_of_regionprops():
     # of regionprops on the merged pixels
     import scipy.ndimage
 
-    from activecontour.objects.split import MAX_PART_ASPECT, MIN_PART_SOLIDITY, _PartShapes
+    from activecontour.objects.necks import _PartShapes
+    from activecontour.objects.shapes import MAX_PART_ASPECT, MIN_PART_SOLIDITY
 
     rng = np.random.default_rng(0)
     for _ in range(20):

@@ -9,7 +9,10 @@ import pytest
 import scipy.ndimage
 import shapely
 
-import activecontour.objects.split as split
+import activecontour.objects.contrast as contrast
+import activecontour.objects.corners as corners
+import activecontour.objects.necks as necks
+import activecontour.objects.shapes as shapes
 from activecontour import _kernels
 from activecontour.geometry.curve import orient, signed_area
 from activecontour.geometry.raster import rasterize
@@ -56,38 +59,38 @@ def test_the_boundary_distance_is_the_fine_distance_transform_at_the_pixel_centr
     # (zoomed: giant windows, a coarser raster with few fine pixels per centre)
     outline = random_outline(seed) * zoom
     region = window_of(outline)
-    fine = split._supersample(region.shape)
+    fine = necks._supersample(region.shape)
     shape = (fine * (region.shape[0] - 1) + 1, fine * (region.shape[1] - 1) + 1)
     # the definition: the whole fine raster's Euclidean distance transform, read every fine pixels
     transform = scipy.ndimage.distance_transform_edt(rasterize([outline * fine], shape))[::fine, ::fine]
     expected = np.where(region, np.maximum((transform - 0.5) / fine, 0.0), 0.0)
-    np.testing.assert_array_equal(split._boundary_distance([outline], region, np.zeros(2)), expected)
+    np.testing.assert_array_equal(necks._boundary_distance([outline], region, np.zeros(2)), expected)
 
 
 def test_a_giant_window_measures_on_a_coarser_raster_that_is_no_power_of_two():
     # 2^20 samples over a window of 400 x 400 pixels: 2.56 times finer, rounded down to 2; 250
     # x 250 gives 4; 180 x 180 gives 5, for which _thinner_than claims nothing
-    assert [split._supersample((n, n)) for n in (400, 250, 180, 100)] == [2, 4, 5, 8]
-    assert not split._thinner_than(np.ones((180, 180), bool), np.zeros((3, 2)), 1e9)
+    assert [necks._supersample((n, n)) for n in (400, 250, 180, 100)] == [2, 4, 5, 8]
+    assert not necks._thinner_than(np.ones((180, 180), bool), np.zeros((3, 2)), 1e9)
 
 
 @pytest.mark.parametrize("seed", range(60))
 def test_the_pixel_raster_bounds_the_boundary_distance_and_a_thin_object_has_no_neck(seed):
     outline = random_outline(seed)
     region = window_of(outline)
-    distance = split._boundary_distance([outline], region, np.zeros(2))
-    if split._supersample(region.shape) & (split._supersample(region.shape) - 1) == 0:
+    distance = necks._boundary_distance([outline], region, np.zeros(2))
+    if necks._supersample(region.shape) & (necks._supersample(region.shape) - 1) == 0:
         bound = scipy.ndimage.distance_transform_edt(rasterize([outline], region.shape))
         assert np.all(distance <= bound)
-    if split._thinner_than(region, outline, split.MIN_SPLIT_RADIUS) and scipy.ndimage.label(region)[1] == 1:
-        concavity = split._concavity(region, outline)
-        parts = split._neck_parts(region, concavity, distance, split.NECK_RATIO, split.MIN_SPLIT_RADIUS)
+    if necks._thinner_than(region, outline, shapes.MIN_SPLIT_RADIUS) and scipy.ndimage.label(region)[1] == 1:
+        concavity = shapes._concavity(region, outline)
+        parts = necks._neck_parts(region, concavity, distance, necks.NECK_RATIO, shapes.MIN_SPLIT_RADIUS)
         assert parts.max() == 1
 
 
 def test_thin_and_thick_outlines_are_both_drawn():
     # the property above must see both sides of the shortcut
-    thin = [split._thinner_than(window_of(o), o, split.MIN_SPLIT_RADIUS)
+    thin = [necks._thinner_than(window_of(o), o, shapes.MIN_SPLIT_RADIUS)
             for o in map(random_outline, range(60))]
     assert 5 <= sum(thin) <= 55
 
@@ -95,9 +98,9 @@ def test_thin_and_thick_outlines_are_both_drawn():
 @pytest.mark.parametrize("seed", range(60))
 def test_the_corner_stage_shortcuts_cut_what_the_full_search_cuts(seed, monkeypatch):
     outline = random_outline(seed)
-    parts = split._corner_parts(outline)
-    monkeypatch.setattr(split, "_uncuttable", lambda area, good: False)
-    full = split._corner_parts(outline)
+    parts = corners._corner_parts(outline)
+    monkeypatch.setattr(corners, "_uncuttable", lambda area, good: False)
+    full = corners._corner_parts(outline)
     assert len(parts) == len(full)
     for part, other in zip(parts, full, strict=True):
         np.testing.assert_array_equal(part, other)
@@ -107,11 +110,11 @@ def test_the_corner_stage_shortcuts_cut_what_the_full_search_cuts(seed, monkeypa
 def test_the_two_sides_of_every_admissible_cut_add_up_to_the_part(seed):
     # what makes a part under twice the smallest part uncuttable
     outline = random_outline(seed)
-    corners, kappa, normals = split._concave_corners(outline)
+    found, kappa, normals = corners._concave_corners(outline)
     is_corner = np.zeros(len(outline), dtype=bool)
-    is_corner[corners] = True
+    is_corner[found] = True
     cycle = np.arange(len(outline))
-    for _, a, b in split._cuts(outline, cycle, is_corner, kappa <= 0, normals):
+    for _, a, b in corners._cuts(outline, cycle, is_corner, kappa <= 0, normals):
         sides = signed_area(outline[cycle[a:b + 1]]), signed_area(outline[np.r_[cycle[b:], cycle[:a + 1]]])
         assert min(sides) > 0
         assert sum(sides) == pytest.approx(signed_area(outline), rel=1e-12)
@@ -125,21 +128,21 @@ def test_neck_parts_with_one_part_thick_enough_merge_into_one(seed):
 
     outline = random_outline(seed)
     region = window_of(outline)
-    distance = split._boundary_distance([outline], region, np.zeros(2))
+    distance = necks._boundary_distance([outline], region, np.zeros(2))
     markers, count = scipy.ndimage.label(skimage.morphology.local_maxima(distance) & region)
     if count <= 1 or scipy.ndimage.label(region)[1] != 1:
         return
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
     peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
-    graph = split._PartGraph(parts, distance, peak.copy(), split._concavity(region, outline),
-                             split.MIN_SPLIT_RADIUS)
-    graph.merge_necks(split.NECK_RATIO)
+    graph = necks._PartGraph(parts, distance, peak.copy(), shapes._concavity(region, outline),
+                             shapes.MIN_SPLIT_RADIUS)
+    graph.merge_necks(necks.NECK_RATIO)
     graph.merge_non_blobs()
     merged = graph.labels()
-    if np.count_nonzero(peak >= split.MIN_SPLIT_RADIUS) <= 1:
+    if np.count_nonzero(peak >= shapes.MIN_SPLIT_RADIUS) <= 1:
         np.testing.assert_array_equal(merged, region.astype(np.int32))
-    np.testing.assert_array_equal(split._neck_parts(region, split._concavity(region, outline), distance,
-                                                    split.NECK_RATIO, split.MIN_SPLIT_RADIUS), merged)
+    np.testing.assert_array_equal(necks._neck_parts(region, shapes._concavity(region, outline), distance,
+                                                    necks.NECK_RATIO, shapes.MIN_SPLIT_RADIUS), merged)
 
 
 @pytest.mark.parametrize("step", [1, 2, 3, 8])
@@ -246,7 +249,7 @@ def test_the_near_distance_compares_with_its_radius_as_the_distance_transform(ra
         inside = scipy.ndimage.gaussian_filter(rng.random((40, 50)), rng.uniform(1, 5)) > 0.48
         inside[0, 0] = False
         transform = scipy.ndimage.distance_transform_edt(inside)
-        near = split._near_distance(inside, radius)
+        near = shapes._near_distance(inside, radius)
         np.testing.assert_array_equal(near > radius, transform > radius)
         np.testing.assert_array_equal(near >= radius, transform >= radius)
         np.testing.assert_array_equal(near[transform <= radius], transform[transform <= radius])
@@ -270,14 +273,14 @@ def test_a_piece_too_small_is_told_right_from_the_cores_alone():
         if len(present) < 2:
             continue
         cores = (np.searchsorted(present, cores) + 1) * (cores > 0)  # ids 1..n, each present
-        pieces = split._nearest_core(mask, cores)
+        pieces = contrast._nearest_core(mask, cores)
         area = np.bincount(pieces.ravel())[1:]
         assert np.all(area >= np.bincount(cores.ravel())[1:])
-        too_small = split._a_piece_too_small(mask, cores)
+        too_small = contrast._a_piece_too_small(mask, cores)
         if too_small:
-            assert area.min() < split.CONTRAST_SIZE_RATIO * area.max()
+            assert area.min() < contrast.CONTRAST_SIZE_RATIO * area.max()
         if np.count_nonzero(cores) == np.count_nonzero(mask):  # the cores are the pieces: told exactly
-            assert too_small == (area.min() < split.CONTRAST_SIZE_RATIO * area.max())
+            assert too_small == (area.min() < contrast.CONTRAST_SIZE_RATIO * area.max())
         told.append(too_small)
     assert 10 <= sum(told) <= len(told) - 10  # both answers drawn
 
@@ -313,7 +316,7 @@ def test_the_compiled_ellipse_fits_are_the_numpy_fits():
         b = rng.integers(a + 20, len(outline) + 1)
         sides += [outline, outline[a:b]]  # whole outlines, and stretches of 20 vertices or more
     sides.append(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]))  # on a line: singular
-    fits = split._ellipse_fits(sides)
+    fits = shapes._ellipse_fits(sides)
     for points, (conic, residual) in zip(sides, fits, strict=True):
         try:
             expected_conic, expected = _ellipse_fit_numpy(points)
@@ -330,7 +333,7 @@ def test_the_compiled_ellipse_fits_are_the_numpy_fits():
         assert conic[7] == pytest.approx(expected_conic[7], rel=1e-12)
         assert residual == pytest.approx(expected, rel=1e-7, abs=1e-9)
     assert sum(conic is None for conic, _ in fits) >= 1
-    assert split._ellipse_fit(sides[0])[1] == fits[0][1]
+    assert shapes._ellipse_fit(sides[0])[1] == fits[0][1]
 
 
 
@@ -338,12 +341,12 @@ def test_the_compiled_ellipse_fits_are_the_numpy_fits():
 def test_may_have_necks_gives_the_concavity_or_none_by_its_tests_in_either_order(seed):
     outline = random_outline(seed)
     region = window_of(outline)
-    concavity = split._concavity(region, outline)
-    found = split._may_have_necks(region, outline, split.MIN_SPLIT_RADIUS)
+    concavity = shapes._concavity(region, outline)
+    found = necks._may_have_necks(region, outline, shapes.MIN_SPLIT_RADIUS)
     whole = scipy.ndimage.label(region)[1] == 1
     # each test refuses on its own, whichever is told first
-    if whole and (np.count_nonzero(concavity >= split.MIN_WAIST_DEPTH) < 2
-                  or split._thinner_than(region, outline, split.MIN_SPLIT_RADIUS)):
+    if whole and (np.count_nonzero(concavity >= shapes.MIN_WAIST_DEPTH) < 2
+                  or necks._thinner_than(region, outline, shapes.MIN_SPLIT_RADIUS)):
         assert found is None
     distance = scipy.ndimage.distance_transform_edt(region)
     if scipy.ndimage.label((distance >= scipy.ndimage.maximum_filter(distance, size=3)) & region)[1] <= 1:
@@ -359,7 +362,7 @@ def test_the_cyclic_gaussian_is_scipys_wrapped_gaussian_to_the_last_bit(seed):
         # curves shorter than the kernel (wrapped more than once), and (K, 2) normals
         count, sigma = int(rng.integers(1, 300)), rng.uniform(0.1, 40)
         values = rng.normal(size=(count,) if rng.random() < 0.5 else (count, 2)) * 10 ** rng.uniform(-3, 3)
-        np.testing.assert_array_equal(split._cyclic_gaussian(values, sigma),
+        np.testing.assert_array_equal(corners._cyclic_gaussian(values, sigma),
                                       scipy.ndimage.gaussian_filter1d(values, sigma, axis=0, mode="wrap"))
 
 
@@ -371,7 +374,7 @@ def test_within_reach_is_the_union_of_the_shifted_arrays(reach):
         expected = np.zeros(count, dtype=bool)
         for shift in range(-reach, reach + 1):
             expected |= np.roll(marked, shift)
-        np.testing.assert_array_equal(split._within(marked, reach), expected)
+        np.testing.assert_array_equal(corners._within(marked, reach), expected)
 
 
 def _segment_inside_numpy(edges, a, b):
@@ -406,20 +409,20 @@ def test_the_compiled_segment_test_is_the_numpy_one():
         edges = outline, np.roll(outline, -1, axis=0)
         for _ in range(60):
             a, b = sorted(rng.choice(len(outline), 2, replace=False))
-            answers.append(split._segment_inside(edges, a, b))
+            answers.append(corners._segment_inside(edges, a, b))
             assert answers[-1] == _segment_inside_numpy(edges, a, b)
     assert 100 < sum(answers) < len(answers) - 100  # both answers drawn
 
 
 def _cut_ratio_numpy(part, normals, a, b):
-    """The neck ratio of the cut (a, b) of a part as :func:`split._cuts` defines it (infinity
+    """The neck ratio of the cut (a, b) of a part as :func:`corners._cuts` defines it (infinity
     when it has no length or a normal does not face it)."""
     direction = part[b] - part[a]
     length = np.hypot(*direction)
     if length == 0:
         return np.inf
     direction = direction / length
-    least = np.cos(np.radians(split.CUT_ALIGN))
+    least = np.cos(np.radians(corners.CUT_ALIGN))
     if -normals[a] @ direction < least or normals[b] @ direction < least:
         return np.inf
     along = (part - part.mean(axis=0)) @ direction
@@ -432,12 +435,12 @@ def test_the_compiled_cut_ratios_are_the_numpy_ones():
     finite = 0
     for seed in range(20):
         outline = random_outline(seed)
-        _, _, normals = split._concave_corners(outline)
+        _, _, normals = corners._concave_corners(outline)
         pairs = np.sort(np.array([rng.choice(len(outline), 2, replace=False) for _ in range(80)]), axis=1)
         ratios = np.empty(len(pairs))
-        split._kernels.cut_ratios(outline, outline - outline.mean(axis=0), normals,
+        _kernels.cut_ratios(outline, outline - outline.mean(axis=0), normals,
                                   pairs[:, 0].copy(), pairs[:, 1].copy(),
-                                  float(np.cos(np.radians(split.CUT_ALIGN))), ratios)
+                                  float(np.cos(np.radians(corners.CUT_ALIGN))), ratios)
         expected = np.array([_cut_ratio_numpy(outline, normals, a, b) for a, b in pairs])
         np.testing.assert_array_equal(np.isinf(ratios), np.isinf(expected))
         np.testing.assert_allclose(ratios[np.isfinite(ratios)], expected[np.isfinite(expected)], rtol=1e-13)
@@ -453,12 +456,12 @@ def test_a_split_by_contrast_needs_two_pixels_min_radius_inside():
     dim = (rows - 20) ** 2 + (cols - 38) ** 2 <= 12 ** 2
     region = np.pad(bright | dim, 1)
     values = np.pad(np.where(bright, 1.0, 0.4), 1)
-    assert split._may_split_by_contrast(region, split.MIN_SPLIT_RADIUS)
-    assert split._contrast_parts(region.astype(np.int32), values, 0.2, split.MIN_SPLIT_RADIUS).max() == 2
+    assert contrast._may_split_by_contrast(region, shapes.MIN_SPLIT_RADIUS)
+    assert contrast._contrast_parts(region.astype(np.int32), values, 0.2, shapes.MIN_SPLIT_RADIUS).max() == 2
     bar = np.zeros((12, 60), dtype=bool)
     bar[3:7, 2:58] = True
-    assert not split._may_split_by_contrast(bar, split.MIN_SPLIT_RADIUS)
-    assert not split._may_split_by_contrast(np.pad(np.ones((7, 7), dtype=bool), 1), 3.0)  # 49 < 2 pi 9
+    assert not contrast._may_split_by_contrast(bar, shapes.MIN_SPLIT_RADIUS)
+    assert not contrast._may_split_by_contrast(np.pad(np.ones((7, 7), dtype=bool), 1), 3.0)  # 49 < 2 pi 9
 
 
 def test_convex_clip_area_is_the_area_of_the_intersection():
@@ -483,7 +486,7 @@ def test_convex_clip_area_is_the_area_of_the_intersection():
 def test_convex_clip_area_is_geos_intersection_area(seed):
     outline = random_outline(seed)
     ellipse = (outline.mean(axis=0) + [2.0, -1.5], np.array([9.0, 5.0]), np.array([[0.6, -0.8], [0.8, 0.6]]))
-    shape = split._ellipse_polygon(ellipse)
+    shape = shapes._ellipse_polygon(ellipse)
     expected = shapely.intersection(shapely.Polygon(shape), shapely.Polygon(outline)).area
     got = _kernels.convex_clip_area(np.ascontiguousarray(outline), shape)
     assert got == pytest.approx(expected, rel=1e-12)
@@ -505,11 +508,11 @@ def test_the_closed_form_ellipse_gate_rejects_what_arc_ellipse_rejects_by_shape(
         (30.0, 5.0): False,  # aspect 6 > MAX_PART_ASPECT
     }
     sides = [_circle_points((100.0, 90.0), axes, turn=0.3) for axes in cases]
-    conics, found, residuals = split._stacked_ellipse_fits(sides)
-    rejected = split._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
-    for side, fit, no, (axes, expected) in zip(sides, split._as_fits(conics, found, residuals), rejected,
+    conics, found, residuals = shapes._stacked_ellipse_fits(sides)
+    rejected = shapes._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
+    for side, fit, no, (axes, expected) in zip(sides, shapes._as_fits(conics, found, residuals), rejected,
                                                cases.items(), strict=True):
-        assert (split._arc_ellipse(side, fit, object_outline) is not None) == expected, axes
+        assert (shapes._arc_ellipse(side, fit, object_outline) is not None) == expected, axes
         assert bool(no) == (not expected), axes
 
 
@@ -521,11 +524,11 @@ def test_the_closed_form_ellipse_gate_never_rejects_an_ellipse_arc_ellipse_keeps
     for _ in range(30):  # stretches of the outline, as the arc grouping fits them
         a = rng.integers(0, len(outline) - 8)
         sides.append(outline[a:rng.integers(a + 8, len(outline) + 1)])
-    conics, found, residuals = split._stacked_ellipse_fits(sides)
-    rejected = split._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
-    for side, fit, no in zip(sides, split._as_fits(conics, found, residuals), rejected, strict=True):
+    conics, found, residuals = shapes._stacked_ellipse_fits(sides)
+    rejected = shapes._clearly_not_arc_ellipses(conics, found, residuals, [len(side) for side in sides])
+    for side, fit, no in zip(sides, shapes._as_fits(conics, found, residuals), rejected, strict=True):
         if no:
-            assert split._arc_ellipse(side, fit, outline) is None
+            assert shapes._arc_ellipse(side, fit, outline) is None
 
 
 def test_a_part_around_a_hole_is_seen_on_the_pixels_and_its_piece_has_the_hole():
@@ -538,7 +541,7 @@ def test_a_part_around_a_hole_is_seen_on_the_pixels_and_its_piece_has_the_hole()
     for corner, inside_one in (((15.0, 10.0), True), ((15.0, 27.0), False)):
         hole = orient(np.array([[0.0, 0.0], [0.0, 6.0], [6.0, 6.0], [6.0, 0.0]]) + corner)[::-1]
         curves = [outer, hole]
-        assert split._around_a_hole(curves, parts, low) == inside_one
+        assert corners._around_a_hole(curves, parts, low) == inside_one
         # what the shortcut stands for: the piece of that part, cut out of the polygon, has the hole
-        pieces = split._cut(curves, parts, low)
+        pieces = corners._cut(curves, parts, low)
         assert any(len(piece) > 1 for piece in pieces) == inside_one
