@@ -6,8 +6,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`build_tables`, :func:`edge_integrals` -- :mod:`activecontour.image`, :mod:`activecontour.energy`
   (the row-antiderivative tables and the exact integrals along the edges, (6.38) and (6.41));
 * :func:`cyclic_thomas` -- :mod:`activecontour.fem` (the block-cyclic tridiagonal solve of (6.40));
-* :func:`segments_meet`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas` --
-  :mod:`activecontour.topology`, :mod:`activecontour.curve` (crossing curves) and
+* :func:`segments_meet`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas`, :func:`border_overlap` --
+  :mod:`activecontour.topology`, :mod:`activecontour.curve` (crossing curves, edges along the border) and
   :mod:`activecontour.backends.network` (a network's segments that meet);
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
