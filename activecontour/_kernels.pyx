@@ -6,8 +6,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
 * :func:`build_tables`, :func:`edge_integrals` -- :mod:`activecontour.image`, :mod:`activecontour.energy`
   (the row-antiderivative tables and the exact integrals along the edges, (6.38) and (6.41));
 * :func:`cyclic_thomas` -- :mod:`activecontour.fem` (the block-cyclic tridiagonal solve of (6.40));
-* :func:`segments_meet`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas` --
-  :mod:`activecontour.topology`, :mod:`activecontour.curve` (crossing curves) and
+* :func:`segments_meet`, :func:`winding`, :func:`winding_banded`, :func:`curve_areas`, :func:`border_overlap` --
+  :mod:`activecontour.topology`, :mod:`activecontour.curve` (crossing curves, edges along the border) and
   :mod:`activecontour.backends.network` (a network's segments that meet);
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
@@ -38,7 +38,7 @@ Loops over a whole image poll for Ctrl-C every few hundred rows.
 from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport INFINITY, M_PI, fabs, fma, hypot, isnan, sin, sqrt
 from libc.stdint cimport uint64_t
-from libc.stdlib cimport calloc, free, malloc, realloc
+from libc.stdlib cimport calloc, free, malloc, qsort, realloc
 from libc.string cimport memcpy
 
 cdef Py_ssize_t _POLL_ROWS = 256
@@ -509,6 +509,87 @@ def curve_areas(const double[:, ::1] points, const Py_ssize_t[::1] next_index, c
                 b = next_index[e]
                 total += points[e, 0] * points[b, 1] - points[b, 0] * points[e, 1]
             out[k] = 0.5 * total
+
+
+
+cdef struct _Span:
+    # an edge lying on one side of the domain: its extent along that side, and its index
+    double low
+    double high
+    Py_ssize_t index
+
+
+cdef int _span_order(const void *a, const void *b) noexcept nogil:
+    # by ``low``, ties by index: the order of a stable sort of the edges by ``low``
+    cdef const _Span *x = <const _Span *> a
+    cdef const _Span *y = <const _Span *> b
+    if x.low < y.low:
+        return -1
+    if x.low > y.low:
+        return 1
+    return (x.index > y.index) - (x.index < y.index)
+
+
+def border_overlap(const double[:, ::1] points, const Py_ssize_t[::1] next_index, const double[:, ::1] bounds):
+    """Whether a corner of ``bounds`` (2, 2) is left twice, or two edges lying on the same side
+    overlap: :func:`activecontour.geometry.topology.border_overlap`.  Per side, the edges on it
+    sorted by their low end (ties in edge order); an edge starting before the farthest reach of
+    the earlier ones, by more than ``1e-12 max(1, |side|)``, overlaps one of them."""
+    cdef Py_ssize_t n = points.shape[0], e, b, k, axis, side, count
+    cdef Py_ssize_t leaves[4]
+    cdef Py_ssize_t lying[4]
+    cdef double value, reach, tolerance
+    cdef bint found = False
+    cdef _Span *spans
+    for k in range(4):
+        leaves[k] = lying[k] = 0
+    for e in range(n):
+        if (points[e, 0] != bounds[0, 0] and points[e, 0] != bounds[1, 0] and points[e, 1] != bounds[0, 1]
+                and points[e, 1] != bounds[1, 1]):
+            continue  # an edge that starts off the border neither leaves a corner nor lies on a side
+        b = next_index[e]
+        for k in range(4):
+            # corner k = (bounds[k // 2, 0], bounds[k % 2, 1]); side k: axis k // 2, bounds[k % 2, axis]
+            if (points[e, 0] == bounds[k // 2, 0] and points[e, 1] == bounds[k % 2, 1]
+                    and not (points[b, 0] == bounds[k // 2, 0] and points[b, 1] == bounds[k % 2, 1])):
+                leaves[k] += 1
+            value = bounds[k % 2, k // 2]
+            if points[e, k // 2] == value and points[b, k // 2] == value:
+                lying[k] += 1
+    for k in range(4):
+        if leaves[k] > 1:
+            return True
+    for k in range(4):
+        if lying[k] < 2:
+            continue
+        axis, side = k // 2, k % 2
+        value = bounds[side, axis]
+        spans = <_Span *> malloc(lying[k] * sizeof(_Span))
+        if spans == NULL:
+            raise MemoryError()
+        count = 0
+        for e in range(n):
+            b = next_index[e]
+            if points[e, axis] == value and points[b, axis] == value:
+                spans[count].low = points[e, 1 - axis] if points[e, 1 - axis] < points[b, 1 - axis] \
+                    else points[b, 1 - axis]
+                spans[count].high = points[e, 1 - axis] if points[e, 1 - axis] > points[b, 1 - axis] \
+                    else points[b, 1 - axis]
+                spans[count].index = e
+                count += 1
+        qsort(spans, count, sizeof(_Span), _span_order)
+        tolerance = 1e-12 * (fabs(value) if fabs(value) > 1.0 else 1.0)
+        reach = spans[0].high
+        for e in range(1, count):
+            if spans[e].low < reach - tolerance:
+                found = True
+                break
+            if spans[e].high > reach:
+                reach = spans[e].high
+        free(spans)
+        if found:
+            return True
+    return False
 
 
 cdef struct Grid:

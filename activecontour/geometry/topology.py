@@ -180,35 +180,11 @@ def border_overlap(points, next_index, bounds):
     see, and which make a winding number of 2 (a double-counted strip) or a zero-width slit.  A
     region's boundary covers every point of the border at most once, and each corner at most once.
     """
-    # only vertices on the border take part: one pass over the points finds them
-    rows, cols = points[:, 0], points[:, 1]
-    on = np.flatnonzero((rows == bounds[0, 0]) | (rows == bounds[1, 0]) | (cols == bounds[0, 1])
-                        | (cols == bounds[1, 1]))
-    if on.size < 2:
-        return False
-    start, end = points[on], points[next_index[on]]
-    # passing a corner twice (two vertices clipped onto it) makes a curve that touches itself
-    # there, a lobe of which can be turned over without any crossing
-    for corner_r in bounds[:, 0]:
-        for corner_c in bounds[:, 1]:
-            at = (start[:, 0] == corner_r) & (start[:, 1] == corner_c)
-            leaves = at & ~((end[:, 0] == corner_r) & (end[:, 1] == corner_c))
-            if np.count_nonzero(leaves) > 1:  # departures from the corner, one per visit
-                return True
-    for axis in (0, 1):
-        along = 1 - axis
-        for side in bounds[:, axis]:
-            edge_on = (start[:, axis] == side) & (end[:, axis] == side)
-            if np.count_nonzero(edge_on) < 2:
-                continue
-            low = np.minimum(start[edge_on, along], end[edge_on, along])
-            high = np.maximum(start[edge_on, along], end[edge_on, along])
-            order = np.argsort(low, kind="stable")
-            low, high = low[order], high[order]
-            reach = np.maximum.accumulate(high)[:-1]  # the farthest any earlier edge gets
-            if np.any(low[1:] < reach - 1e-12 * max(1.0, abs(float(side)))):
-                return True
-    return False
+    # one pass over the edges in compiled code; per side, the edges on it sorted by their low end
+    # (ties in edge order), an edge that starts before the farthest reach of the earlier ones
+    return bool(_kernels.border_overlap(np.ascontiguousarray(points, dtype=np.float64),
+                                        np.ascontiguousarray(next_index, dtype=np.intp),
+                                        np.ascontiguousarray(bounds, dtype=np.float64)))
 
 
 def region_problem(curves):

@@ -7,6 +7,7 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
 import activecontour as ac
+from activecontour import _kernels
 from activecontour.geometry import topology
 from activecontour.geometry.curve import signed_area
 
@@ -89,6 +90,54 @@ def test_border_overlap_sees_collinear_edges_on_the_border():
     assert topology.border_overlap(twice, following, bounds)
     square = ac.rectangle((-0.5, -0.5), (10, 10))
     assert not topology.border_overlap(square, np.roll(np.arange(4), -1), bounds)
+
+
+
+def _border_overlap_reference(points, next_index, bounds):
+    """border_overlap as it was written in numpy before the compiled kernel: the specification."""
+    rows, cols = points[:, 0], points[:, 1]
+    on = np.flatnonzero((rows == bounds[0, 0]) | (rows == bounds[1, 0]) | (cols == bounds[0, 1])
+                        | (cols == bounds[1, 1]))
+    if on.size < 2:
+        return False
+    start, end = points[on], points[next_index[on]]
+    for corner_r in bounds[:, 0]:
+        for corner_c in bounds[:, 1]:
+            at = (start[:, 0] == corner_r) & (start[:, 1] == corner_c)
+            if np.count_nonzero(at & ~((end[:, 0] == corner_r) & (end[:, 1] == corner_c))) > 1:
+                return True
+    for axis in (0, 1):
+        for side in bounds[:, axis]:
+            edge_on = (start[:, axis] == side) & (end[:, axis] == side)
+            if np.count_nonzero(edge_on) < 2:
+                continue
+            low = np.minimum(start[edge_on, 1 - axis], end[edge_on, 1 - axis])
+            high = np.maximum(start[edge_on, 1 - axis], end[edge_on, 1 - axis])
+            order = np.argsort(low, kind="stable")
+            reach = np.maximum.accumulate(high[order])[:-1]
+            if np.any(low[order][1:] < reach - 1e-12 * max(1.0, abs(float(side)))):
+                return True
+    return False
+
+
+def test_border_overlap_in_compiled_code_equals_its_numpy_definition():
+    # vertices drawn from a coarse grid that holds the border's rows and columns several times:
+    # corners visited once and twice, edges along a side forwards, backwards, of zero length and
+    # nested, curves touching the border at a vertex; in order or in any cyclic order
+    rng = np.random.default_rng(7)
+    seen = set()
+    for _ in range(4000):
+        bounds = np.array([[-0.5, -0.5], [rng.choice([2.5, 3.5]), rng.choice([1.5, 3.5])]])
+        grid_r = np.concatenate([np.repeat(bounds[:, 0], 3), np.arange(-0.5, bounds[1, 0] + 0.5, 0.5)])
+        grid_c = np.concatenate([np.repeat(bounds[:, 1], 3), np.arange(-0.5, bounds[1, 1] + 0.5, 0.5)])
+        k = rng.integers(1, 12)
+        points = np.column_stack([rng.choice(grid_r, k), rng.choice(grid_c, k)])
+        next_index = rng.permutation(k) if rng.random() < 0.3 else np.roll(np.arange(k), -1)
+        expected = _border_overlap_reference(points, next_index, bounds)
+        assert _kernels.border_overlap(points, next_index, bounds) == expected
+        assert topology.border_overlap(points, next_index, bounds) is expected
+        seen.add(expected)
+    assert seen == {False, True}
 
 
 def test_dropping_small_curves_never_raises_the_energy():
