@@ -165,9 +165,13 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
         # segment's run without the objects' pass (no object ids are returned)
         problem = prepare(image, Settings(**arguments))
         if isinstance(init_level_set, str) and init_level_set == "checkerboard":
-            init = _checkerboard_start(problem.normalised, mu, arguments)
-            if "options" in arguments:
-                problem = dataclasses.replace(problem, settings=Settings(**arguments))
+            init = _checkerboard_start(problem.normalised, mu)
+            if init is not None:  # flowed from as the default start is: a 2 px first smoothing,
+                from activecontour.backends.polygon import _START_SMOOTHING  # no global move
+
+                options = {"global_start": False, "smoothing": _START_SMOOTHING}
+                settings = dataclasses.replace(problem.settings, options=options)
+                problem = dataclasses.replace(problem, settings=settings)
         result = solve_problem(problem, init, objects=False)
         segmentation, energies = result.mask, result.energies
     if not extended_output:
@@ -208,23 +212,20 @@ def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_leve
     return _initial_region(init_level_set, shape), keywords
 
 
-def _checkerboard_start(values, mu, keywords):
+def _checkerboard_start(values, mu):
     """scikit-image's ``"checkerboard"`` here: the default start's threshold set, of the normalised
     image ``values`` (M, N, C) blurred by whichever of ``CHECKERBOARD_BLURS`` gives it the lowest
-    (6.38) (:func:`activecontour.initial.threshold_starts`), flowed from as the default start is
-    (resampled at the polygon's spacing, a 2 px first smoothing, no global move: it is one
-    already).  ``keywords`` gain those options."""
+    (6.38) (:func:`activecontour.initial.threshold_starts`), resampled at the polygon's spacing;
+    None for ``mu="auto"`` (segment's default start) or no threshold set.  It is flowed from as the
+    default start is (:func:`chan_vese` sets those options)."""
     from activecontour.backends.options import PolygonOptions
-    from activecontour.backends.polygon import _START_SMOOTHING
     from activecontour.geometry.curve import resample
     from activecontour.initial import threshold_starts
 
     if not _is_number(mu) or mu < 0:
-        return None  # "auto": segment's default start
+        return None
     spacing = PolygonOptions().spacing
     curves = [resample(c, spacing) for c in threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]]
-    if curves:
-        keywords["options"] = {"global_start": False, "smoothing": _START_SMOOTHING}
     return curves or None
 
 

@@ -99,7 +99,7 @@ def test_checkerboard_takes_the_blur_whose_threshold_set_is_lowest():
     values = image[..., None] - image.min()
     values /= values.max()
     costs = [threshold_split(_blurred(values, b), values, 0.25)[2] for b in compat.CHECKERBOARD_BLURS]
-    start = compat._checkerboard_start(values, 0.25, {})
+    start = compat._checkerboard_start(values, 0.25)
     chosen = compat.CHECKERBOARD_BLURS[int(np.argmin(costs))]
     assert costs[0] > min(costs)  # the test means something: 1 px is not the best here
     expected = [resample(c, 1.0) for c in threshold_starts(values, 0.25, blurs=(chosen,))[0]]  # spacing
