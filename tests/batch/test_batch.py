@@ -134,7 +134,7 @@ def _exit_on_three(x):
 
 def _exit_on_one(x):
     if x == 0:
-        time.sleep(1.0)  # in flight when item 1's worker dies
+        time.sleep(1.0)  # as a rule in flight when item 1's worker dies
     if x == 1:
         os._exit(1)
     return x
@@ -146,8 +146,12 @@ def test_a_dead_worker_fails_only_the_items_in_flight_and_the_rest_go_to_a_new_p
     outcomes = dict(batch.map_unordered(_exit_on_one, range(6), jobs=2))
     assert sorted(outcomes) == list(range(6))
     assert isinstance(outcomes[1][1], BrokenProcessPool)
-    assert outcomes[0][1] is None or isinstance(outcomes[0][1], BrokenProcessPool)  # in flight
-    assert [outcomes[k] for k in range(2, 6)] == [(k, None) for k in range(2, 6)]
+    failed = {k for k, (_, error) in outcomes.items() if error is not None}
+    # at most the two in flight when item 1's worker died: item 0 as a rule, but on a loaded
+    # machine item 0 may finish first (a slow worker start) and item 2 be the one in flight
+    assert len(failed) <= 2
+    assert all(isinstance(outcomes[k][1], BrokenProcessPool) for k in failed)
+    assert all(outcomes[k] == (k, None) for k in set(range(6)) - failed)  # the rest: a new pool
 
 
 def test_a_dead_worker_fails_items_but_not_the_iteration():
