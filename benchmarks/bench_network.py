@@ -1,4 +1,4 @@
-"""Where the N-region polygon (the network, ``backends/network.py``) spends its CPU, next to the
+"""Where the N-region polygon (the network, ``backends/network/``) spends its CPU, next to the
 level set (the label field) in the same run: scikit-image's coins, page, camera and text with
 ``n_regions=3`` (issue 24.5: the polygon at most 1.5x the level set).
 
@@ -20,16 +20,18 @@ import skimage.data
 
 import activecontour as ac
 from activecontour.backends import labelfield
-from activecontour.backends import network as network_module
+from activecontour.backends.network import flow, graph, h1
 
 _SCENES = ("coins", "page", "camera", "text")
-_METHODS = {network_module._Flow: ("run", "evaluate", "drop_islands", "resolve", "remesh"),
-            network_module.Network: ("force", "factors", "velocity", "steps", "simple", "faces",
-                                     "closed_loops")}
+# each looked up when called: the flow's methods, its module's Steps, the H^1 system's functions
+_METHODS = {flow._Flow: ("run", "evaluate", "drop_islands", "resolve", "remesh"), flow: ("Steps",),
+            h1: ("nodal_force", "factorised", "velocity"),
+            graph.Network: ("simple", "faces", "closed_loops")}
 
 
 def _timed(owner, name, spent):
-    """``owner.name`` wrapped to add its calls and CPU seconds to ``spent[name]``."""
+    """``owner.name`` (a method, or a module's function or class) wrapped to add its calls and CPU
+    seconds to ``spent[name]``."""
     method = getattr(owner, name)
 
     def wrapper(*args, **kwargs):

@@ -8,7 +8,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import activecontour as ac
-from activecontour.backends.network import Network, segment_network
+from activecontour.backends.network import Network, h1, segment_network
+from activecontour.backends.network.steps import Steps
 from activecontour.energy import evaluate_partition
 from activecontour.geometry.partition import chain, class_boundary, class_soup
 from activecontour.geometry.raster import rasterize
@@ -80,7 +81,7 @@ def test_network_force_is_the_gradient_of_the_energy_at_every_kind_of_node():
     shift = np.random.default_rng(3).uniform(-0.2, 0.2, network.nodes.shape)
     nodes = network.nodes + shift * np.column_stack(network.free)  # off the lattice, border nodes on it
     constants = evaluate_partition(model, network.boundary(nodes), params, 3).constants
-    force = network.force(nodes, model, params, constants)
+    force = h1.nodal_force(network, nodes, model, params, constants)
     degree = np.bincount(np.concatenate([network.start[network.interface], network.end[network.interface]]),
                          minlength=len(nodes))
     junction = np.flatnonzero(degree >= 3)
@@ -145,7 +146,7 @@ def test_one_pass_moments_are_each_regions_green_integrals():
     model, _ = _setup(image, 0.1)
     checked = 0
     for network, nodes, moved in _moved_networks(12, 9):
-        steps, dt = network.steps(nodes, moved - nodes), 1.0
+        steps, dt = Steps(network, nodes, moved - nodes), 1.0
         while not (steps.admissible(dt, nodes + dt * (moved - nodes))
                    and network.simple(nodes + dt * (moved - nodes))):
             dt *= 0.5
@@ -167,7 +168,7 @@ def test_steps_admit_what_the_direct_tests_admit():
     verdicts = set()
     for network, nodes, _ in _moved_networks(40, 11):
         velocity = rng.normal(size=nodes.shape) * np.column_stack(network.free)
-        steps = network.steps(nodes, velocity)
+        steps = Steps(network, nodes, velocity)
         sign = np.sign(network.face_areas(nodes))
         m, n = network.shape
         old = nodes[network.end] - nodes[network.start]
@@ -213,8 +214,8 @@ def test_velocity_solves_the_h1_system_on_the_free_nodes():
     rng = np.random.default_rng(14)
     for network, _, nodes in _moved_networks(10, 15):
         force = rng.normal(size=nodes.shape)
-        velocity = network.velocity(nodes, force)
-        matrix = network.stiffness(nodes)
+        velocity = h1.velocity(network, nodes, force)
+        matrix = h1.stiffness(network, nodes)
         for component, free in enumerate(network.free):
             index = np.flatnonzero(free)
             assert np.all(velocity[~free, component] == 0)
@@ -226,8 +227,8 @@ def test_h1_form_integrates_linear_functions_and_kills_constants():
     _, classes = _antialiased((30, 30), _rings((14.2, 15.1), [11.0, 5.0]), [0, 1, 2])
     network = Network.of_classes(classes)
     nodes = network.nodes
-    matrix = network.stiffness(nodes, smoothing=1.0).toarray()
-    mass = network.stiffness(nodes, smoothing=0.0).toarray()
+    matrix = h1.stiffness(network, nodes, smoothing=1.0).toarray()
+    mass = h1.stiffness(network, nodes, smoothing=0.0).toarray()
     stiffness = matrix - mass
     ones = np.ones(len(nodes))
     np.testing.assert_allclose(stiffness @ ones, 0.0, atol=1e-12)

@@ -192,7 +192,7 @@ def test_band_cholesky_reports_a_matrix_that_is_not_positive_definite():
 def test_h1_band_is_the_stiffness_matrix_in_band_form():
     # chains and a junction of segments between random nodes, some nodes held (position -1), the
     # rest in a shuffled order: the band is Network.stiffness's matrix restricted and reordered
-    from activecontour.backends.network import Network
+    from activecontour.backends.network import Network, h1
 
     rng = np.random.default_rng(6)
     for _ in range(10):
@@ -207,7 +207,7 @@ def test_h1_band_is_the_stiffness_matrix_in_band_form():
         position[order] = np.arange(order.size)
         sides = np.zeros(len(start), dtype=np.intp)
         network = Network(nodes, start, end, sides, sides + 1, (21, 21))
-        dense = network.stiffness(nodes).toarray()[np.ix_(order, order)]
+        dense = h1.stiffness(network, nodes).toarray()[np.ix_(order, order)]
         pairs = np.abs(position[start] - position[end])[(position[start] >= 0) & (position[end] >= 0)]
         width = int(pairs.max()) if pairs.size else 0
         band = np.zeros((order.size, width + 1))
