@@ -225,6 +225,31 @@ def test_the_distance_peaks_kernel_is_the_distance_transform_and_its_pieces_of_p
 
 
 @pytest.mark.parametrize("seed", range(4))
+def test_the_h_maxima_count_is_skimages(seed):
+    """The necks' gate counts the pieces of skimage's h-maxima: distance transforms of blobs (the
+    gate's input), images of a few grey levels (plateaus, ties with the marker) and smooth noise,
+    at the gate's h and others; small, since skimage's own answer is the truth compared with."""
+    import skimage.morphology
+
+    rng = np.random.default_rng(seed)
+    counts = []
+    for trial in range(150):
+        m, n = rng.integers(1, 40, 2)
+        if trial % 3 == 0:
+            smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 4))
+            image = scipy.ndimage.distance_transform_edt(np.pad(smooth > 0.5, 1))
+        elif trial % 3 == 1:
+            image = rng.integers(0, 5, (m, n)).astype(float)
+        else:
+            image = scipy.ndimage.gaussian_filter(rng.random((m, n)), 1.5) * 10
+        for h in (0.25, necks.MIN_NECK_DEPTH / 2, 1.0):
+            count = necks._h_maxima_count(image, h)
+            assert count == scipy.ndimage.label(skimage.morphology.h_maxima(image, h))[1]
+            counts.append(count)
+    assert min(counts) == 0 and max(counts) >= 3
+
+
+@pytest.mark.parametrize("seed", range(4))
 def test_the_fill_holes_kernel_fills_as_scipy_on_the_framed_mask(seed):
     from activecontour import _kernels
 
