@@ -267,10 +267,13 @@ def _cyclic_gaussian(values, sigma):
     offsets = np.arange(-radius, radius + 1)
     weights = np.exp(-0.5 / (sigma * sigma) * offsets ** 2)
     weights = weights / weights.sum()
-    index, count = np.arange(len(values)), len(values)
+    count = len(values)
+    # the values wrapped ``radius`` places beyond both ends (one gather): the taps are slices
+    wrapped = values[np.arange(-radius, count + radius) % count]
     smooth = values * weights[radius]
     for j in range(radius, 0, -1):
-        smooth += (values[(index - j) % count] + values[(index + j) % count]) * weights[radius + j]
+        before, after = wrapped[radius - j:radius - j + count], wrapped[radius + j:radius + j + count]
+        smooth += (before + after) * weights[radius + j]
     return smooth
 
 
