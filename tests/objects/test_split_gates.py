@@ -570,3 +570,22 @@ def test_a_part_around_a_hole_is_seen_on_the_pixels_and_its_piece_has_the_hole()
         # what the shortcut stands for: the piece of that part, cut out of the polygon, has the hole
         pieces = corners._cut(curves, parts, low)
         assert any(len(piece) > 1 for piece in pieces) == inside_one
+
+
+def test_an_outline_under_twice_the_smallest_part_is_split_without_its_curvature(monkeypatch):
+    """An L of 39 px^2 (under 2 pi MIN_SPLIT_RADIUS^2), its inner corner 1.4 px inside its hull:
+    past the concavity gate, but neither the arc stage nor the corner stage reads its curvature,
+    so it is not computed, and the object stays whole."""
+    import activecontour.objects.split as split
+
+    outline = orient(np.array([[2.0, 2.0], [2.0, 10.0], [5.0, 10.0], [5.0, 5.0], [10.0, 5.0], [10.0, 2.0]]))
+    assert signed_area(outline) < 2 * np.pi * shapes.MIN_SPLIT_RADIUS ** 2
+    assert shapes._hull_depth(outline).max() >= shapes.MIN_WAIST_DEPTH
+    labels = rasterize([outline], (14, 14)).astype(np.int32)
+
+    def unread(_):
+        raise AssertionError("the curvature was computed")
+
+    monkeypatch.setattr(split, "_bent", unread)
+    (kept,), = split.split_touching([[outline]], labels)
+    np.testing.assert_array_equal(kept, outline)
