@@ -2819,6 +2819,45 @@ def cut_ratios(const double[:, ::1] part, const double[:, ::1] centred, const do
         out[k] = length / (extent if extent > 1e-12 else 1e-12)
 
 
+
+def ray_hits(const double[:, ::1] start, const double[:, ::1] edge, const double[:, :, ::1] turns,
+             const double[:, ::1] normals, const Py_ssize_t[::1] positions, Py_ssize_t[:, ::1] nearest,
+             double[:, ::1] along, unsigned char[:, ::1] hit):
+    """For each ray ``-turns[t] @ normals[c]`` (as numpy's BLAS computes a matrix times a
+    2-vector, ``(A @ y)_i = fma(A_i0, y0, A_i1 y1)``) from vertex ``positions[c]`` of a part (its edges from
+    ``start[e]`` along ``edge[e]``) the first edge it meets (:func:`activecontour.objects.corners.
+    _ray_hits`): ``nearest[c, t]``, the least distance along the ray over the edges it crosses
+    (``along_ray > 1e-9``, ``0 <= along_edge <= 1``, a denominator above 1e-12 in size, not the
+    two edges at the vertex), the first such edge on a tie and edge 0 when there is none, as
+    ``numpy.argmin`` picks it; ``along[c, t]``, where on that edge it lies (``along_edge``), and
+    ``hit[c, t]``, whether the ray crosses it.  The numpy definition's arithmetic, term by term."""
+    cdef Py_ssize_t c, t, e, count = start.shape[0], at
+    cdef double r0, r1, o0, o1, denominator, on_ray, on_edge, best
+    cdef bint crosses
+    for c in range(positions.shape[0]):
+        at = positions[c]
+        for t in range(turns.shape[0]):
+            r0 = -fma(turns[t, 0, 0], normals[c, 0], turns[t, 0, 1] * normals[c, 1])
+            r1 = -fma(turns[t, 1, 0], normals[c, 0], turns[t, 1, 1] * normals[c, 1])
+            best = INFINITY
+            nearest[c, t] = 0
+            hit[c, t] = 0
+            for e in range(count):
+                o0 = start[e, 0] - start[at, 0]
+                o1 = start[e, 1] - start[at, 1]
+                denominator = r0 * edge[e, 1] - r1 * edge[e, 0]
+                on_ray = (o0 * edge[e, 1] - o1 * edge[e, 0]) / denominator
+                on_edge = (o0 * r1 - o1 * r0) / denominator
+                crosses = (fabs(denominator) > 1e-12 and on_ray > 1e-9 and on_edge >= 0 and on_edge <= 1
+                           and e != at and (e + 1) % count != at)
+                if e == 0 or (crosses and on_ray < best):
+                    if crosses and on_ray < best:
+                        best = on_ray
+                    nearest[c, t] = e
+                    along[c, t] = on_edge
+                    hit[c, t] = crosses
+
+
 # ==== end of split2's kernels ===================================================================
 
 

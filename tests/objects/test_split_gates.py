@@ -473,6 +473,57 @@ def test_the_compiled_cut_ratios_are_the_numpy_ones():
     assert 50 < finite < 20 * 80 - 50  # cuts facing their normals, and cuts that do not
 
 
+def _ray_hits_numpy(outline, cycle, edges, positions, normals):
+    """The definition of :func:`corners._ray_hits` in numpy (all rays against all edges)."""
+    count = len(cycle)
+    start, edge = edges[0], edges[1] - edges[0]
+    original = np.roll(cycle, -1) == (cycle + 1) % len(outline)
+    turns = [np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+             for angle in np.radians(corners.CUT_RAYS)]
+    rays = np.array([[-turn @ normals[cycle[a]] for turn in turns] for a in positions])
+    offset = start[None, :, :] - start[positions][:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denominator = (rays[:, :, 0, None] * edge[None, None, :, 1]
+                       - rays[:, :, 1, None] * edge[None, None, :, 0])
+        along_ray = ((offset[:, :, 0] * edge[:, 1] - offset[:, :, 1] * edge[:, 0])[:, None, :]
+                     / denominator)
+        along_edge = (offset[:, None, :, 0] * rays[:, :, 1, None]
+                      - offset[:, None, :, 1] * rays[:, :, 0, None]) / denominator
+    index = np.arange(count)
+    away = (index[None, :] != positions[:, None]) & ((index[None, :] + 1) % count != positions[:, None])
+    hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
+           & away[:, None, :])
+    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)
+    corner, angle = np.indices(nearest.shape)
+    b = np.where(along_edge[corner, angle, nearest] < 0.5, nearest, (nearest + 1) % count)
+    a = positions[corner]
+    chosen = hit[corner, angle, nearest] & original[nearest] & (b != a)
+    return list(zip(a[chosen].tolist(), b[chosen].tolist(), strict=True))
+
+
+def test_the_compiled_ray_hits_are_the_numpy_ones():
+    """Rays from random vertices of whole outlines and of parts cut from them (a cut's edge is
+    no edge of the object's outline), and from vertices next to the part's start and end."""
+    rng = np.random.default_rng(7)
+    found = 0
+    for seed in range(30):
+        outline = random_outline(seed)
+        _, _, normals = corners._concave_corners(outline)
+        for _ in range(4):
+            if rng.random() < 0.5:
+                cycle = np.arange(len(outline))
+            else:
+                a, b = np.sort(rng.choice(len(outline), 2, replace=False))
+                cycle = np.arange(a, b + 1)
+            edges = outline[cycle], np.roll(outline[cycle], -1, axis=0)
+            positions = np.unique(np.r_[rng.choice(len(cycle), min(len(cycle), 5), replace=False), 0,
+                                        len(cycle) - 1])
+            hits = corners._ray_hits(outline, cycle, edges, positions, normals)
+            assert hits == _ray_hits_numpy(outline, cycle, edges, positions, normals)
+            found += len(hits)
+    assert found > 100
+
+
 def test_a_split_by_contrast_needs_two_pixels_min_radius_inside():
     # a bright and a dim disk side by side, without a waist: split by contrast, and the test
     # before it lets it through; a bar 4 px wide has no pixel 3 px from its outside
