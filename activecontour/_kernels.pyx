@@ -39,7 +39,7 @@ from cpython.exc cimport PyErr_CheckSignals
 from libc.math cimport INFINITY, M_PI, fabs, fma, hypot, isnan, sin, sqrt
 from libc.stdint cimport uint64_t
 from libc.stdlib cimport calloc, free, malloc, qsort, realloc
-from libc.string cimport memcpy
+from libc.string cimport memcpy, memmove
 
 cdef Py_ssize_t _POLL_ROWS = 256
 
@@ -2819,6 +2819,45 @@ def cut_ratios(const double[:, ::1] part, const double[:, ::1] centred, const do
         out[k] = length / (extent if extent > 1e-12 else 1e-12)
 
 
+
+def ray_hits(const double[:, ::1] start, const double[:, ::1] edge, const double[:, :, ::1] turns,
+             const double[:, ::1] normals, const Py_ssize_t[::1] positions, Py_ssize_t[:, ::1] nearest,
+             double[:, ::1] along, unsigned char[:, ::1] hit):
+    """For each ray ``-turns[t] @ normals[c]`` (as numpy's BLAS computes a matrix times a
+    2-vector, ``(A @ y)_i = fma(A_i0, y0, A_i1 y1)``) from vertex ``positions[c]`` of a part (its edges from
+    ``start[e]`` along ``edge[e]``) the first edge it meets (:func:`activecontour.objects.corners.
+    _ray_hits`): ``nearest[c, t]``, the least distance along the ray over the edges it crosses
+    (``along_ray > 1e-9``, ``0 <= along_edge <= 1``, a denominator above 1e-12 in size, not the
+    two edges at the vertex), the first such edge on a tie and edge 0 when there is none, as
+    ``numpy.argmin`` picks it; ``along[c, t]``, where on that edge it lies (``along_edge``), and
+    ``hit[c, t]``, whether the ray crosses it.  The numpy definition's arithmetic, term by term."""
+    cdef Py_ssize_t c, t, e, count = start.shape[0], at
+    cdef double r0, r1, o0, o1, denominator, on_ray, on_edge, best
+    cdef bint crosses
+    for c in range(positions.shape[0]):
+        at = positions[c]
+        for t in range(turns.shape[0]):
+            r0 = -fma(turns[t, 0, 0], normals[c, 0], turns[t, 0, 1] * normals[c, 1])
+            r1 = -fma(turns[t, 1, 0], normals[c, 0], turns[t, 1, 1] * normals[c, 1])
+            best = INFINITY
+            nearest[c, t] = 0
+            hit[c, t] = 0
+            for e in range(count):
+                o0 = start[e, 0] - start[at, 0]
+                o1 = start[e, 1] - start[at, 1]
+                denominator = r0 * edge[e, 1] - r1 * edge[e, 0]
+                on_ray = (o0 * edge[e, 1] - o1 * edge[e, 0]) / denominator
+                on_edge = (o0 * r1 - o1 * r0) / denominator
+                crosses = (fabs(denominator) > 1e-12 and on_ray > 1e-9 and on_edge >= 0 and on_edge <= 1
+                           and e != at and (e + 1) % count != at)
+                if e == 0 or (crosses and on_ray < best):
+                    if crosses and on_ray < best:
+                        best = on_ray
+                    nearest[c, t] = e
+                    along[c, t] = on_edge
+                    hit[c, t] = crosses
+
+
 # ==== end of split2's kernels ===================================================================
 
 
@@ -2836,20 +2875,17 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
     rows, row by row), then per row the lower envelope of the parabolas ``(j - q)^2 + g_q^2``
     over the columns q (:func:`_lower_envelope`).
     O(pixels); the peaks' pieces by a flood fill over the peaks alone."""
-    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, p, last, di, dj, at
-    cdef Py_ssize_t size = 0, capacity = 1024, pieces = 0
+    cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, k, last, di, dj
+    cdef Py_ssize_t pieces = 0
     cdef long long far = m + 1, value
     cdef bint peak
     cdef Py_ssize_t *vertex = <Py_ssize_t *> malloc(max(n, 1) * sizeof(Py_ssize_t))
     cdef long long *height = <long long *> malloc(max(n, 1) * sizeof(long long))
     cdef unsigned char *flag = <unsigned char *> calloc(max(m * n, 1), sizeof(unsigned char))
-    cdef Py_ssize_t *stack = <Py_ssize_t *> malloc(capacity * sizeof(Py_ssize_t))
-    cdef Py_ssize_t *grown
-    if vertex == NULL or height == NULL or flag == NULL or stack == NULL:
+    if vertex == NULL or height == NULL or flag == NULL:
         free(vertex)
         free(height)
         free(flag)
-        free(stack)
         raise MemoryError()
     with nogil:
         for i in range(m):
@@ -2880,43 +2916,174 @@ def distance_peaks(const unsigned char[:, ::1] mask, long long[:, ::1] out):
                             peak = False
                 if peak:
                     flag[i * n + j] = 1
-        for at in range(m * n):
-            if flag[at] != 1:
-                continue
-            pieces += 1
-            flag[at] = 2
-            stack[0] = at
-            size = 1
-            while size > 0:
-                size -= 1
-                p = stack[size]
-                i, j = p // n, p % n
-                for k in range(4):
-                    di = (k == 1) - (k == 0)
-                    dj = (k == 3) - (k == 2)
-                    if not (0 <= i + di < m and 0 <= j + dj < n) or flag[(i + di) * n + j + dj] != 1:
-                        continue
-                    flag[(i + di) * n + j + dj] = 2
-                    if size == capacity:
-                        capacity *= 2
-                        grown = <Py_ssize_t *> realloc(stack, capacity * sizeof(Py_ssize_t))
-                        if grown == NULL:
-                            pieces = -1
-                            break
-                        stack = grown
-                    stack[size] = (i + di) * n + j + dj
-                    size += 1
-                if pieces < 0:
-                    break
-            if pieces < 0:
-                break
+        pieces = _pieces(flag, m, n)
     free(vertex)
     free(height)
     free(flag)
-    free(stack)
     if pieces < 0:
         raise MemoryError()
     return pieces
+
+
+cdef Py_ssize_t _pieces(unsigned char *flag, Py_ssize_t m, Py_ssize_t n) noexcept nogil:
+    """The number of 4-connected pieces of the pixels flagged 1 in an m x n array (row-major),
+    each flagged 2 as a flood fill reaches it (as ``scipy.ndimage.label``'s count with its default
+    structure); -1 when memory runs out."""
+    cdef Py_ssize_t at, size, capacity = 1024, pieces = 0, p, i, j, k, di, dj
+    cdef Py_ssize_t *stack = <Py_ssize_t *> malloc(capacity * sizeof(Py_ssize_t))
+    cdef Py_ssize_t *grown
+    if stack == NULL:
+        return -1
+    for at in range(m * n):
+        if flag[at] != 1:
+            continue
+        pieces += 1
+        flag[at] = 2
+        stack[0] = at
+        size = 1
+        while size > 0:
+            size -= 1
+            p = stack[size]
+            i, j = p // n, p % n
+            for k in range(4):
+                di = (k == 1) - (k == 0)
+                dj = (k == 3) - (k == 2)
+                if not (0 <= i + di < m and 0 <= j + dj < n) or flag[(i + di) * n + j + dj] != 1:
+                    continue
+                flag[(i + di) * n + j + dj] = 2
+                if size == capacity:
+                    capacity *= 2
+                    grown = <Py_ssize_t *> realloc(stack, capacity * sizeof(Py_ssize_t))
+                    if grown == NULL:
+                        free(stack)
+                        return -1
+                    stack = grown
+                stack[size] = (i + di) * n + j + dj
+                size += 1
+    free(stack)
+    return pieces
+
+
+def h_maxima_pieces(const double[:, ::1] image, const double[:, ::1] shifted, double h):
+    """The number of 4-connected pieces of ``skimage.morphology.h_maxima(image, h)`` where it
+    reconstructs (``scipy.ndimage.label``'s count, default structure), given its marker
+    ``shifted`` (``image - h - resolution``, computed as it computes it, at most ``image``): the
+    pixels whose residue ``image - rec`` is at least ``h``, ``rec`` the grey reconstruction by
+    dilation of ``shifted`` under ``image`` with the 3 x 3 footprint
+    (``skimage.morphology.reconstruction``'s default).
+
+    The reconstruction is a lattice operation (each value the largest over paths of 8-neighbours
+    of the least of the marker at the path's start and the image along it: every value one of
+    the inputs'), so any exact algorithm gives skimage's values to the last bit: Vincent's hybrid
+    one (IEEE Trans. Image Process. 2(2), 1993), a raster and an anti-raster scan, then a queue
+    of the pixels still to raise.  O(pixels) for a distance transform, with no sort."""
+    cdef Py_ssize_t m = image.shape[0], n = image.shape[1], i, j, di, dj, p, q, pieces = 0
+    cdef _Queue queue
+    cdef double value, best
+    cdef bint later
+    cdef double *rec = <double *> malloc(max(m * n, 1) * sizeof(double))
+    cdef unsigned char *flag = <unsigned char *> calloc(max(m * n, 1), sizeof(unsigned char))
+    queue.head, queue.tail, queue.capacity = 0, 0, 1024
+    queue.items = <Py_ssize_t *> malloc(queue.capacity * sizeof(Py_ssize_t))
+    if rec == NULL or flag == NULL or queue.items == NULL:
+        free(rec)
+        free(flag)
+        free(queue.items)
+        raise MemoryError()
+    with nogil:
+        # raster scan: each pixel raised to its neighbours before it, up to the image
+        for i in range(m):
+            for j in range(n):
+                best = shifted[i, j]
+                for di in range(-1, 1):
+                    for dj in range(-1, 2):
+                        if (di == 0 and dj >= 0) or i + di < 0 or not 0 <= j + dj < n:
+                            continue
+                        if rec[(i + di) * n + j + dj] > best:
+                            best = rec[(i + di) * n + j + dj]
+                rec[i * n + j] = best if best < image[i, j] else image[i, j]
+        # anti-raster scan: the same with the neighbours after it; a pixel that may still raise
+        # one of those is queued
+        for i in range(m - 1, -1, -1):
+            for j in range(n - 1, -1, -1):
+                best = rec[i * n + j]
+                for di in range(0, 2):
+                    for dj in range(-1, 2):
+                        if (di == 0 and dj <= 0) or i + di >= m or not 0 <= j + dj < n:
+                            continue
+                        if rec[(i + di) * n + j + dj] > best:
+                            best = rec[(i + di) * n + j + dj]
+                value = best if best < image[i, j] else image[i, j]
+                rec[i * n + j] = value
+                later = False
+                for di in range(0, 2):
+                    for dj in range(-1, 2):
+                        if (di == 0 and dj <= 0) or i + di >= m or not 0 <= j + dj < n:
+                            continue
+                        q = (i + di) * n + j + dj
+                        if rec[q] < value and rec[q] < image[i + di, j + dj]:
+                            later = True
+                if later and not _enqueue(&queue, i * n + j):
+                    pieces = -1
+                    break
+            if pieces < 0:
+                break
+        # propagation: a queued pixel raises each neighbour below it and below the image
+        while pieces >= 0 and queue.head < queue.tail:
+            p = queue.items[queue.head]
+            queue.head += 1
+            i, j = p // n, p % n
+            value = rec[p]
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    if (di == 0 and dj == 0) or not (0 <= i + di < m and 0 <= j + dj < n):
+                        continue
+                    q = (i + di) * n + j + dj
+                    if rec[q] < value and rec[q] != image[i + di, j + dj]:
+                        rec[q] = value if value < image[i + di, j + dj] else image[i + di, j + dj]
+                        if not _enqueue(&queue, q):
+                            pieces = -1
+                            break
+                if pieces < 0:
+                    break
+        if pieces >= 0:
+            for i in range(m):
+                for j in range(n):
+                    if image[i, j] - rec[i * n + j] >= h:
+                        flag[i * n + j] = 1
+            pieces = _pieces(flag, m, n)
+    free(rec)
+    free(flag)
+    free(queue.items)
+    if pieces < 0:
+        raise MemoryError()
+    return pieces
+
+
+cdef struct _Queue:
+    Py_ssize_t *items
+    Py_ssize_t head, tail, capacity
+
+
+cdef bint _enqueue(_Queue *queue, Py_ssize_t item) noexcept nogil:
+    """Append to a first-in first-out queue (its live part moved to the front, or the array
+    doubled, when the end is reached); False when memory runs out."""
+    cdef Py_ssize_t count
+    cdef Py_ssize_t *grown
+    if queue.tail == queue.capacity:
+        count = queue.tail - queue.head
+        if count < queue.capacity // 2:
+            memmove(queue.items, queue.items + queue.head, count * sizeof(Py_ssize_t))
+        else:
+            grown = <Py_ssize_t *> realloc(queue.items, 2 * queue.capacity * sizeof(Py_ssize_t))
+            if grown == NULL:
+                return False
+            queue.items, queue.capacity = grown, 2 * queue.capacity
+            memmove(queue.items, queue.items + queue.head, count * sizeof(Py_ssize_t))
+        queue.head, queue.tail = 0, count
+    queue.items[queue.tail] = item
+    queue.tail += 1
+    return True
 
 
 def fill_holes(unsigned char[:, ::1] mask):

@@ -116,9 +116,12 @@ def _contrast_parts(parts, values, least, min_radius):
             largest = max(p.area for p in props)
             # a piece's inscribed radius on its box and a pixel more (the nearest pixel outside
             # a piece touches it)
-            # (the size first: a blob's solidity and moments cost a convex hull image)
-            if not all(p.area >= CONTRAST_SIZE_RATIO * largest and _is_blob(p)
-                       and _inscribed_radius_reaches(pieces, p.label, p.slice, min_radius) for p in props):
+            # (every piece's size first, then every piece's inscribed radius, one compiled pass
+            # each: a blob's solidity and moments cost a convex hull image and skimage's moments;
+            # the tests are and-ed, so their order changes no answer)
+            if not (all(p.area >= CONTRAST_SIZE_RATIO * largest for p in props)
+                    and all(_inscribed_radius_reaches(pieces, p.label, p.slice, min_radius) for p in props)
+                    and all(_is_blob(p) for p in props)):
                 pieces = None
         if pieces is None:
             count += 1

@@ -267,10 +267,13 @@ def _cyclic_gaussian(values, sigma):
     offsets = np.arange(-radius, radius + 1)
     weights = np.exp(-0.5 / (sigma * sigma) * offsets ** 2)
     weights = weights / weights.sum()
-    index, count = np.arange(len(values)), len(values)
+    count = len(values)
+    # the values wrapped ``radius`` places beyond both ends (one gather): the taps are slices
+    wrapped = values[np.arange(-radius, count + radius) % count]
     smooth = values * weights[radius]
     for j in range(radius, 0, -1):
-        smooth += (values[(index - j) % count] + values[(index + j) % count]) * weights[radius + j]
+        before, after = wrapped[radius - j:radius - j + count], wrapped[radius + j:radius + j + count]
+        smooth += (before + after) * weights[radius + j]
     return smooth
 
 
@@ -307,6 +310,11 @@ def _cuts(outline, cycle, is_corner, flat, normals):
             yield ratio, a, b
 
 
+#: The rotations of :data:`CUT_RAYS` (angles, 2, 2).
+_RAY_TURNS = np.array([[[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]
+                       for angle in np.radians(CUT_RAYS)])
+
+
 def _ray_hits(outline, cycle, edges, positions, normals):
     """The pairs (a, b) of positions in ``cycle``: rays from each corner ``cycle[a]`` (``a`` in
     ``positions``) along its inward normal (turned by ``CUT_RAYS``) first meet the part's outline
@@ -317,27 +325,17 @@ def _ray_hits(outline, cycle, edges, positions, normals):
         return []
     start, edge = edges[0], edges[1] - edges[0]
     original = np.roll(cycle, -1) == (cycle + 1) % len(outline)
-    turns = [np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
-             for angle in np.radians(CUT_RAYS)]
-    # ray (corner, angle), as (2,) vectors stacked: (corners, angles, 2)
-    rays = np.array([[-turn @ normals[cycle[a]] for turn in turns] for a in positions])
-    offset = start[None, :, :] - start[positions][:, None, :]  # (corners, edges, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        denominator = (rays[:, :, 0, None] * edge[None, None, :, 1]
-                       - rays[:, :, 1, None] * edge[None, None, :, 0])
-        along_ray = ((offset[:, :, 0] * edge[:, 1] - offset[:, :, 1] * edge[:, 0])[:, None, :]
-                     / denominator)
-        along_edge = (offset[:, None, :, 0] * rays[:, :, 1, None]
-                      - offset[:, None, :, 1] * rays[:, :, 0, None]) / denominator
-    index = np.arange(count)
-    away = (index[None, :] != positions[:, None]) & ((index[None, :] + 1) % count != positions[:, None])
-    hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
-           & away[:, None, :])
-    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)  # (corners, angles)
-    corner, angle = np.indices(nearest.shape)
-    b = np.where(along_edge[corner, angle, nearest] < 0.5, nearest, (nearest + 1) % count)
+    # ray (corner, angle) ``-turn @ normal`` and the first edge it crosses, compiled (the numpy
+    # definition: ``tests/objects/test_split_gates.py``)
+    shape = (len(positions), len(_RAY_TURNS))
+    nearest, along, hit = np.empty(shape, dtype=np.intp), np.empty(shape), np.empty(shape, dtype=np.uint8)
+    _kernels.ray_hits(np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(edge), _RAY_TURNS,
+                      np.ascontiguousarray(normals[cycle[positions]], dtype=np.float64),
+                      np.ascontiguousarray(positions, dtype=np.intp), nearest, along, hit)
+    b = np.where(along < 0.5, nearest, (nearest + 1) % count)
+    corner = np.indices(shape)[0]
     a = positions[corner]
-    chosen = hit[corner, angle, nearest] & original[nearest] & (b != a)
+    chosen = hit.astype(bool) & original[nearest] & (b != a)
     return list(zip(a[chosen].tolist(), b[chosen].tolist(), strict=True))
 
 

@@ -65,15 +65,25 @@ def _may_have_necks(region, outline, min_radius):
     whole = scipy.ndimage.label(region)[1] == 1
     if whole and _thinner_than(region, outline, min_radius):
         return None
-    import skimage.morphology  # here: most objects are decided before (0.3 s of a cold import)
-
     # (the square roots of the squared transform: scipy.ndimage.distance_transform_edt's values)
-    if scipy.ndimage.label(skimage.morphology.h_maxima(np.sqrt(squared), MIN_NECK_DEPTH / 2))[1] <= 1:
+    if _h_maxima_count(np.sqrt(squared), MIN_NECK_DEPTH / 2) <= 1:
         return None
     concavity = _concavity(region, outline)
     if whole and np.count_nonzero(concavity >= MIN_WAIST_DEPTH) < 2:
         return None
     return concavity
+
+
+def _h_maxima_count(image, h):
+    """The number of 4-connected pieces of ``skimage.morphology.h_maxima(image, h)`` (a float
+    image, h > 0), ``scipy.ndimage.label``'s count: the same marker, computed as skimage computes
+    it, reconstructed under the image by one compiled pass (:func:`activecontour._kernels.
+    h_maxima_pieces`, O(pixels) without skimage's sort: 0.09 of 0.12 s of this gate on brick's
+    textured object of 166 000 pixels)."""
+    if h > np.ptp(image):  # (skimage: no maxima)
+        return 0
+    shifted = image - h - 2 * np.finfo(image.dtype).resolution * np.abs(image)
+    return _kernels.h_maxima_pieces(np.ascontiguousarray(image), np.ascontiguousarray(shifted), float(h))
 
 
 #: :func:`_boundary_distance` measures on a raster this many times finer than the pixels ...

@@ -225,6 +225,31 @@ def test_the_distance_peaks_kernel_is_the_distance_transform_and_its_pieces_of_p
 
 
 @pytest.mark.parametrize("seed", range(4))
+def test_the_h_maxima_count_is_skimages(seed):
+    """The necks' gate counts the pieces of skimage's h-maxima: distance transforms of blobs (the
+    gate's input), images of a few grey levels (plateaus, ties with the marker) and smooth noise,
+    at the gate's h and others; small, since skimage's own answer is the truth compared with."""
+    import skimage.morphology
+
+    rng = np.random.default_rng(seed)
+    counts = []
+    for trial in range(150):
+        m, n = rng.integers(1, 40, 2)
+        if trial % 3 == 0:
+            smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 4))
+            image = scipy.ndimage.distance_transform_edt(np.pad(smooth > 0.5, 1))
+        elif trial % 3 == 1:
+            image = rng.integers(0, 5, (m, n)).astype(float)
+        else:
+            image = scipy.ndimage.gaussian_filter(rng.random((m, n)), 1.5) * 10
+        for h in (0.25, necks.MIN_NECK_DEPTH / 2, 1.0):
+            count = necks._h_maxima_count(image, h)
+            assert count == scipy.ndimage.label(skimage.morphology.h_maxima(image, h))[1]
+            counts.append(count)
+    assert min(counts) == 0 and max(counts) >= 3
+
+
+@pytest.mark.parametrize("seed", range(4))
 def test_the_fill_holes_kernel_fills_as_scipy_on_the_framed_mask(seed):
     from activecontour import _kernels
 
@@ -448,6 +473,57 @@ def test_the_compiled_cut_ratios_are_the_numpy_ones():
     assert 50 < finite < 20 * 80 - 50  # cuts facing their normals, and cuts that do not
 
 
+def _ray_hits_numpy(outline, cycle, edges, positions, normals):
+    """The definition of :func:`corners._ray_hits` in numpy (all rays against all edges)."""
+    count = len(cycle)
+    start, edge = edges[0], edges[1] - edges[0]
+    original = np.roll(cycle, -1) == (cycle + 1) % len(outline)
+    turns = [np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+             for angle in np.radians(corners.CUT_RAYS)]
+    rays = np.array([[-turn @ normals[cycle[a]] for turn in turns] for a in positions])
+    offset = start[None, :, :] - start[positions][:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denominator = (rays[:, :, 0, None] * edge[None, None, :, 1]
+                       - rays[:, :, 1, None] * edge[None, None, :, 0])
+        along_ray = ((offset[:, :, 0] * edge[:, 1] - offset[:, :, 1] * edge[:, 0])[:, None, :]
+                     / denominator)
+        along_edge = (offset[:, None, :, 0] * rays[:, :, 1, None]
+                      - offset[:, None, :, 1] * rays[:, :, 0, None]) / denominator
+    index = np.arange(count)
+    away = (index[None, :] != positions[:, None]) & ((index[None, :] + 1) % count != positions[:, None])
+    hit = ((np.abs(denominator) > 1e-12) & (along_ray > 1e-9) & (along_edge >= 0) & (along_edge <= 1)
+           & away[:, None, :])
+    nearest = np.argmin(np.where(hit, along_ray, np.inf), axis=2)
+    corner, angle = np.indices(nearest.shape)
+    b = np.where(along_edge[corner, angle, nearest] < 0.5, nearest, (nearest + 1) % count)
+    a = positions[corner]
+    chosen = hit[corner, angle, nearest] & original[nearest] & (b != a)
+    return list(zip(a[chosen].tolist(), b[chosen].tolist(), strict=True))
+
+
+def test_the_compiled_ray_hits_are_the_numpy_ones():
+    """Rays from random vertices of whole outlines and of parts cut from them (a cut's edge is
+    no edge of the object's outline), and from vertices next to the part's start and end."""
+    rng = np.random.default_rng(7)
+    found = 0
+    for seed in range(30):
+        outline = random_outline(seed)
+        _, _, normals = corners._concave_corners(outline)
+        for _ in range(4):
+            if rng.random() < 0.5:
+                cycle = np.arange(len(outline))
+            else:
+                a, b = np.sort(rng.choice(len(outline), 2, replace=False))
+                cycle = np.arange(a, b + 1)
+            edges = outline[cycle], np.roll(outline[cycle], -1, axis=0)
+            positions = np.unique(np.r_[rng.choice(len(cycle), min(len(cycle), 5), replace=False), 0,
+                                        len(cycle) - 1])
+            hits = corners._ray_hits(outline, cycle, edges, positions, normals)
+            assert hits == _ray_hits_numpy(outline, cycle, edges, positions, normals)
+            found += len(hits)
+    assert found > 100
+
+
 def test_a_split_by_contrast_needs_two_pixels_min_radius_inside():
     # a bright and a dim disk side by side, without a waist: split by contrast, and the test
     # before it lets it through; a bar 4 px wide has no pixel 3 px from its outside
@@ -545,3 +621,22 @@ def test_a_part_around_a_hole_is_seen_on_the_pixels_and_its_piece_has_the_hole()
         # what the shortcut stands for: the piece of that part, cut out of the polygon, has the hole
         pieces = corners._cut(curves, parts, low)
         assert any(len(piece) > 1 for piece in pieces) == inside_one
+
+
+def test_an_outline_under_twice_the_smallest_part_is_split_without_its_curvature(monkeypatch):
+    """An L of 39 px^2 (under 2 pi MIN_SPLIT_RADIUS^2), its inner corner 1.4 px inside its hull:
+    past the concavity gate, but neither the arc stage nor the corner stage reads its curvature,
+    so it is not computed, and the object stays whole."""
+    import activecontour.objects.split as split
+
+    outline = orient(np.array([[2.0, 2.0], [2.0, 10.0], [5.0, 10.0], [5.0, 5.0], [10.0, 5.0], [10.0, 2.0]]))
+    assert signed_area(outline) < 2 * np.pi * shapes.MIN_SPLIT_RADIUS ** 2
+    assert shapes._hull_depth(outline).max() >= shapes.MIN_WAIST_DEPTH
+    labels = rasterize([outline], (14, 14)).astype(np.int32)
+
+    def unread(_):
+        raise AssertionError("the curvature was computed")
+
+    monkeypatch.setattr(split, "_bent", unread)
+    (kept,), = split.split_touching([[outline]], labels)
+    np.testing.assert_array_equal(kept, outline)
