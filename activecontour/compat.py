@@ -162,15 +162,21 @@ def chan_vese(image, mu=0.25, lambda1=1.0, lambda2=1.0, tol=1e-3, max_num_iter=5
         domain = rectangle((-0.5, -0.5), (image.shape[0] - 0.5, image.shape[1] - 0.5))
         energies = [_energy(image, [domain] if init.inside else [], arguments)]
     else:
-        # segment's run without the objects' pass (no object ids are returned)
-        problem = prepare(image, Settings(**arguments))
-        if isinstance(init_level_set, str) and init_level_set == "checkerboard":
-            init = _checkerboard_start(problem.normalised, mu)
-            if init is not None:  # flowed from as the default start is: a 2 px first smoothing,
-                from activecontour.backends.polygon import _START_SMOOTHING  # no global move
+        # segment's run without the objects' pass (no object ids are returned).  The checkerboard
+        # start is flowed from as the default start is: a 2 px first smoothing, no global move.
+        # Those options are set as the settings are made (they are checked once: a tenth of a
+        # small image's call) and taken back in the rare case that there is no such start.
+        checkerboard = isinstance(init_level_set, str) and init_level_set == "checkerboard"
+        options = None
+        if checkerboard:
+            from activecontour.backends.polygon import _START_SMOOTHING
 
-                options = {"global_start": False, "smoothing": _START_SMOOTHING}
-                settings = dataclasses.replace(problem.settings, options=options)
+            options = {"global_start": False, "smoothing": _START_SMOOTHING}
+        problem = prepare(image, Settings(**arguments, options=options))
+        if checkerboard:
+            init = _checkerboard_start(problem.normalised, mu)
+            if init is None:  # segment's default start, flowed with the default options
+                settings = dataclasses.replace(problem.settings, options=None)
                 problem = dataclasses.replace(problem, settings=settings)
         result = solve_problem(problem, init, objects=False)
         segmentation, energies = result.mask, result.energies

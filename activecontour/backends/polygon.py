@@ -510,8 +510,10 @@ class _Memory:
             q -= alpha * y
             alphas.append(alpha)
         s, y, _ = self.pairs[-1]
-        metric_y = -velocity(geometry, y.reshape(load.shape)).ravel()  # b^{-1} y
-        r = _dot(s, y) / max(_dot(y, metric_y), 1e-300) * -velocity(geometry, q.reshape(load.shape)).ravel()
+        # b^{-1} y and b^{-1} q in one solve (one elimination for the four columns)
+        solved = -velocity(geometry, np.hstack([y.reshape(load.shape), q.reshape(load.shape)]))
+        metric_y, r = solved[:, :2].ravel(), solved[:, 2:].ravel()
+        r *= _dot(s, y) / max(_dot(y, metric_y), 1e-300)
         for (s, y, rho), alpha in zip(self.pairs, reversed(alphas), strict=True):
             r += s * (alpha - rho * _dot(y, r))
         direction = -r.reshape(load.shape)

@@ -302,3 +302,37 @@ def test_distance_is_scipys_exactly():
     far = np.ones((1, 1500), dtype=bool)
     far[0, 0] = False
     np.testing.assert_array_equal(compat._distance(far), np.arange(1500.0)[np.newaxis])
+
+
+@pytest.mark.parametrize("image", ["noisy_disk", "blank"])
+def test_the_checkerboard_call_checks_its_settings_once_and_flows_with_its_options(image, noisy_disk,
+                                                                                   monkeypatch):
+    """The settings of a checkerboard call are made and checked once (not again to set the flow's
+    options), and the flow gets the checkerboard's options (a 2 px first smoothing, no global
+    move) when there is a checkerboard start, segment's defaults when there is none (a blank
+    image has no threshold set)."""
+    from activecontour.backends.polygon import _START_SMOOTHING
+    from activecontour.settings import Settings
+
+    image = noisy_disk[0] if image == "noisy_disk" else np.full((32, 48), 0.5)
+    made, flowed = [], []
+    original_check, original_solve = Settings.__post_init__, compat.solve_problem
+
+    def check(settings):
+        made.append(settings.options)
+        original_check(settings)
+
+    def solve(problem, init, **keywords):
+        flowed.append((init, problem.settings.backend_options))
+        return original_solve(problem, init, **keywords)
+
+    monkeypatch.setattr(Settings, "__post_init__", check)
+    monkeypatch.setattr(compat, "solve_problem", solve)
+    chan_vese(image)
+    (init, options), = flowed
+    if init is None:  # no start: the default start, flowed as segment flows it
+        assert made[-1] is None
+        assert options.smoothing is None and options.global_start
+    else:
+        assert len(made) == 1
+        assert options.smoothing == _START_SMOOTHING and not options.global_start

@@ -197,3 +197,59 @@ def test_a_lobe_still_moving_holds_the_stop_while_the_mean_is_below_tol():
             movement.add((points + k * speed * moving[:, None] * outward, next_index, offsets))
         assert len(movement.blocks) == 1
         assert movement.still(tol) == slow
+
+
+def test_lbfgs_direction_is_the_two_loop_product_of_the_dense_inverse_hessian():
+    """The accelerated direction is -H f, with H built densely from its definition: H_0 = gamma b^-1
+    (gamma = s.y / y.b^-1 y of the last pair), then H <- V^T H V + rho s s^T, V = I - rho y s^T,
+    for each stored pair (s, y) in order; held components are zero."""
+    from activecontour.backends.polygon import _Memory
+    from activecontour.geometry import fem
+    from activecontour.geometry.curve import stack_curves
+
+    rng = np.random.default_rng(3)
+    curves = [ac.circle((20.0, 20.0), 9.0, n=40), ac.circle((60.0, 50.0), 6.0, n=25)]
+    points, next_index, offsets = stack_curves(curves)
+    k = len(points)
+    previous = np.arange(-1, k - 1)
+    previous[offsets[:-1]] = offsets[1:] - 1
+    h = np.hypot(*(points[next_index] - points).T)
+    mass, stiff = fem.mass_diagonals(h, previous), fem.stiffness_diagonals(h, previous)
+    diagonal, off = mass[0] + 4.0 * stiff[0], mass[1] + 4.0 * stiff[1]
+
+    def velocity(geometry, load):
+        return -fem.cyclic_solve(diagonal, off, load, offsets)
+
+    # the dense metric on the raveled (row, col) components: one block per curve, per component
+    block = np.zeros((k, k))
+    for a, b in zip(offsets[:-1], offsets[1:], strict=True):
+        block[a:b, a:b] = fem.cyclic_matrix(diagonal[a:b], off[a:b]).toarray()
+    metric = np.kron(block, np.eye(2))
+    hessian = np.diag(rng.uniform(1.0, 3.0, 2 * k))  # y = hessian s: positive curvature
+    memory = _Memory(True, size=4)
+    geometry = (points, next_index, offsets)
+    load = rng.normal(size=(k, 2))
+    for _ in range(6):  # more pairs than the memory holds: the oldest go
+        moved = (points + rng.normal(scale=0.1, size=points.shape), next_index, offsets)
+        new_load = load + (hessian @ (moved[0] - points).ravel()).reshape(k, 2)
+        memory.remember(geometry, moved, load, new_load)
+        geometry = (moved[0], next_index, offsets)
+        points, load = moved[0], new_load
+    held = np.zeros((k, 2), dtype=bool)
+    held[[0, 7, 50], [0, 1, 1]] = True
+    force = np.where(held, 0.0, rng.normal(size=(k, 2)))
+
+    s_last, y_last = memory.pairs[-1][:2]
+    inverse = np.linalg.inv(metric)
+    dense = (s_last @ y_last) / (y_last @ inverse @ y_last) * inverse
+    for s, y, _ in memory.pairs:
+        rho = 1.0 / (s @ y)
+        v = np.eye(2 * k) - rho * np.outer(y, s)
+        dense = v.T @ dense @ v + rho * np.outer(s, s)
+    expected = -(dense @ force.ravel()).reshape(k, 2)
+    expected[held] = 0.0
+
+    direction = memory.direction(geometry, force, held, velocity)
+    assert len(memory.pairs) == 4
+    assert direction is not None and np.sum(force * direction) < 0
+    np.testing.assert_allclose(direction, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
