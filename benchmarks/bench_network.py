@@ -25,8 +25,8 @@ from activecontour.backends.network import flow, graph, h1
 _SCENES = ("coins", "page", "camera", "text")
 # each looked up when called: the flow's methods, its module's Steps, the H^1 system's functions
 _METHODS = {flow._Flow: ("run", "evaluate", "drop_islands", "resolve", "remesh"), flow: ("Steps",),
-            h1: ("nodal_force", "factorised", "velocity"),
-            graph.Network: ("simple", "faces", "closed_loops")}
+            h1: ("nodal_force", "factorised", "velocity", "normal_part"),
+            graph.Network: ("simple", "faces", "closed_loops", "closed_areas", "meeting_pairs", "meet_among")}
 
 
 def _timed(owner, name, spent):
