@@ -16,7 +16,7 @@ _BOX_SHARE = 0.5  # a box over more than this share of the image: the whole imag
 _COARSE = 4  # the far field's test grid: blocks of 4 x 4 pixels
 _TILE_MARGIN = 8  # pixels: step (a)'s tiles cover the cells within this of the band (_tiles)
 _MIN_CORE = 32  # pixels: the least side of a tile's cell (more than twice the margin)
-_TILE_SHARE = 0.5  # tiles over more than this share of the box (or image) they replace: not used
+_TILE_SHARE = 0.75  # tiles over more than this share of the box (or image) they replace: not used
 
 
 def heaviside(phi, epsilon=1.0):
@@ -320,10 +320,7 @@ class _Problem:
             size = (-(-m // k), -(-n // k))
             means = np.empty((channels,) + size, dtype=np.float32)
             squares = np.empty_like(means)
-            for channel in range(channels):
-                values = self.values[..., channel].astype(np.float32)
-                _kernels.block_means(values, k, means[channel])
-                _kernels.block_means(np.square(values, out=values), k, squares[channel])
+            _kernels.block_moments(self.values, k, means, squares)
             # a block on an image side holds one line of pixels on it: 1 / (its pixels across it)
             sides = []
             for blocks, length in zip(size, self.shape, strict=True):
@@ -377,9 +374,8 @@ class _Problem:
         if self._tile_buffer is None or self._tile_buffer.size < count * side * side:
             self._tile_buffer = np.empty(count * side * side, dtype=np.float32)
         stack = self._tile_buffer[: count * side * side].reshape(count, side, side)
-        for index in range(count):
-            _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square,
-                                self.params.mu, tau, stack[index], tiles.top[index], tiles.left[index])
+        _kernels.force_step_tiles(state.phi, self.values, form.constant, form.linear, form.square,
+                                  self.params.mu, tau, stack, tiles.top, tiles.left)
         spectrum = scipy.fft.dctn(stack, axes=(1, 2), norm="ortho", overwrite_x=True)
         waves = _waves(side)
         _kernels.divide_spectrum(spectrum.reshape(count * side, side), np.tile(waves, count), waves,
@@ -389,24 +385,22 @@ class _Problem:
         # the coarse blocks beyond the cells widened by the halo (block-aligned: core and halo are
         # multiples of the block)
         near = np.zeros(held.shape, dtype=bool)
-        for index in range(count):
-            rows, cols = tiles.widened(index)
-            near[rows.start // k: -(-rows.stop // k), cols.start // k: -(-cols.stop // k)] = True
+        for top, bottom, left, right in zip(*tiles.widened, strict=True):
+            near[top // k: -(-bottom // k), left // k: -(-right // k)] = True
         far = held[~near]
         if far.size and far.min() < 0.5 * self.band:
             return None
-        pieces = [(index, rows, cols) for index in range(count) for rows, cols in tiles.halo_pieces(index)]
-        limit = 0.5 * self.band
-        for index, rows, cols in pieces:  # the halo beyond the cells, from the tiles' values
-            values = stack[index][tiles.within(index, rows, cols)]
-            if (values.min() < limit) if state.phi[rows.start, cols.start] > 0 else (values.max() > -limit):
-                return None
+        # the halo beyond the cells, from the tiles' values: a piece lies in a cell beyond the
+        # band, all on the side of its first pixel
+        pieces = tiles.halo_pieces
+        pieces[:, 5] = np.where(state.phi[pieces[:, 1], pieces[:, 3]] > 0, 1, -1)
+        if not _kernels.tile_pieces(stack, tiles.top, tiles.left, pieces, 0.5 * self.band, state.phi,
+                                    False):  # tested only: phi is not written
+            return None
         out = self._copy_of(state.phi)
-        for index, rows, cols in pieces:
-            out[rows, cols] = stack[index][tiles.within(index, rows, cols)]
-        for index in range(count):  # the cells last: a tile is exact on its own cell
-            rows, cols = tiles.cell(index)
-            out[rows, cols] = stack[index][tiles.within(index, rows, cols)]
+        _kernels.tile_pieces(stack, tiles.top, tiles.left, pieces, 0.0, out, True)
+        # the cells last: a tile is exact on its own cell
+        _kernels.tile_pieces(stack, tiles.top, tiles.left, tiles.cells, 0.0, out, True)
         return out
 
     def _box_step(self, state, form, tau, box):
@@ -507,54 +501,43 @@ class _Tiles:
     ``grid``: which cells (``core`` x ``core`` pixels, the last ones cut at the image's edge) are
     solved; ``cell_r, cell_c`` their indices; ``top, left`` the first pixel of each one's tile of
     ``side`` x ``side`` pixels; ``halo`` (a multiple of ``_COARSE``, at most ``reach / 2 + 3``) how
-    far beyond the cells the tiles' values are written and tested; ``box`` the bounding box of the
-    cells widened by the halo (two slices); ``pixels`` the tiles' total size.
+    far beyond the cells the tiles' values are written and tested; ``cells`` and ``halo_pieces``
+    the rectangles ``(tile, first row, stop row, first column, stop column, 0)`` of the cells and
+    of the halo's parts that lie in cells not solved (its sides and corners, each in one
+    neighbouring cell), for :func:`activecontour._kernels.tile_pieces`; ``widened`` the cells
+    widened by the halo (rows and columns, first and stop, per tile); ``box`` their bounding box
+    (two slices); ``pixels`` the tiles' total size.
     """
 
     def __init__(self, grid, cell_r, cell_c, core, side, reach, shape):
         m, n = shape
         self.grid, self.cell_r, self.cell_c = grid, cell_r, cell_c
         self.core, self.side, self.shape = core, side, shape
-        self.halo = _COARSE * -(-reach // (2 * _COARSE))
-        self.top = np.clip(cell_r * core - reach, 0, m - side)
-        self.left = np.clip(cell_c * core - reach, 0, n - side)
+        self.halo = halo = _COARSE * -(-reach // (2 * _COARSE))
+        self.top = np.clip(cell_r * core - reach, 0, m - side).astype(np.intp)
+        self.left = np.clip(cell_c * core - reach, 0, n - side).astype(np.intp)
         self.pixels = len(cell_r) * side * side
-        self.box = tuple(slice(max(int(cells.min()) * core - self.halo, 0),
-                               min((int(cells.max()) + 1) * core + self.halo, size))
-                         for cells, size in zip((cell_r, cell_c), shape, strict=True))
-
-    def cell(self, index):
-        """The pixels of cell ``index`` (two slices)."""
-        return tuple(slice(i * self.core, min((i + 1) * self.core, size))
-                     for i, size in zip((self.cell_r[index], self.cell_c[index]), self.shape, strict=True))
-
-    def widened(self, index):
-        """Cell ``index`` widened by the halo, cut to the image (two slices)."""
-        return tuple(slice(max(span.start - self.halo, 0), min(span.stop + self.halo, size))
-                     for span, size in zip(self.cell(index), self.shape, strict=True))
-
-    def halo_pieces(self, index):
-        """The parts of the halo around cell ``index`` that lie in cells not solved (two slices each):
-        the halo's sides and corners, each in one neighbouring cell."""
-        i, j = self.cell_r[index], self.cell_c[index]
-        cell = self.cell(index)
-        spans = []
-        for span, size in zip(cell, self.shape, strict=True):
-            spans.append({-1: slice(span.start - self.halo, span.start), 0: span,
-                          1: slice(span.stop, min(span.stop + self.halo, size))})
+        spans = []  # per axis: the cell's span, and the halo before and after it, (first, stop)
+        for cells, size in zip((cell_r, cell_c), shape, strict=True):
+            first, stop = cells * core, np.minimum((cells + 1) * core, size)
+            spans.append({-1: (first - halo, first), 0: (first, stop),
+                          1: (stop, np.minimum(stop + halo, size))})
+        index = np.arange(len(cell_r))
+        self.cells = np.column_stack([index, *spans[0][0], *spans[1][0], 0 * index]).astype(np.intp)
+        self.widened = (np.maximum(spans[0][-1][0], 0), spans[0][1][1],
+                        np.maximum(spans[1][-1][0], 0), spans[1][1][1])
+        solved = np.pad(grid, 1, constant_values=True)  # beyond the image: no piece
         pieces = []
         for dr in (-1, 0, 1):
             for dc in (-1, 0, 1):
-                r, c = i + dr, j + dc
-                if (dr or dc) and 0 <= r < self.grid.shape[0] and 0 <= c < self.grid.shape[1] \
-                        and not self.grid[r, c]:
-                    pieces.append((spans[0][dr], spans[1][dc]))
-        return pieces
-
-    def within(self, index, rows, cols):
-        """Image pixels ``rows, cols`` as slices of tile ``index``."""
-        top, left = self.top[index], self.left[index]
-        return slice(rows.start - top, rows.stop - top), slice(cols.start - left, cols.stop - left)
+                if dr or dc:
+                    keep = ~solved[cell_r + 1 + dr, cell_c + 1 + dc]
+                    pieces.append(np.column_stack([index[keep], spans[0][dr][0][keep], spans[0][dr][1][keep],
+                                                   spans[1][dc][0][keep], spans[1][dc][1][keep],
+                                                   0 * index[keep]]))
+        self.halo_pieces = np.concatenate(pieces).astype(np.intp)
+        self.box = (slice(int(self.widened[0].min()), int(self.widened[1].max())),
+                    slice(int(self.widened[2].min()), int(self.widened[3].max())))
 
 
 def _area(box):
