@@ -16,6 +16,7 @@ _BOX_SHARE = 0.5  # a box over more than this share of the image: the whole imag
 _COARSE = 4  # the far field's test grid: blocks of 4 x 4 pixels
 _TILE_MARGIN = 8  # pixels: step (a)'s tiles cover the cells within this of the band (_tiles)
 _MIN_CORE = 32  # pixels: the least side of a tile's cell (more than twice the margin)
+_TILE_MIN = 2**19  # pixels: a smaller box (or image) is solved as it is, without looking for tiles
 _TILE_SHARE = 0.75  # tiles over more than this share of the box (or image) they replace: not used
 
 
@@ -237,10 +238,11 @@ class _Problem:
         form = self.params.load_form(*force)
         if self.params.mu > 0:
             weight = tau * self.params.mu
-            box, tiles = self._box(state, weight), self._tiles(state, weight)
+            box = self._box(state, weight)
+            area = self.shape[0] * self.shape[1] if box is None else _area(box)  # the DCT pair's
+            tiles = self._tiles(state, weight) if area >= _TILE_MIN else None
             held = None  # the coarse grid's step (_coarse_held), computed once
-            if tiles is not None and tiles.pixels <= _TILE_SHARE * (
-                    self.shape[0] * self.shape[1] if box is None else _area(box)):
+            if tiles is not None and tiles.pixels <= _TILE_SHARE * area:
                 held = self._coarse_held(state, form, tau)
                 stepped = self._tile_step(state, form, tau, tiles, held)
                 if stepped is not None:
