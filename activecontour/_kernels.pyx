@@ -25,6 +25,7 @@ One implementation of each loop; the Python modules that own the mathematics cal
   solve and the bounds of an iteration's steps);
 * :func:`front_and_cells`, :func:`cell_segments`, :func:`nearest_segments`, :func:`grow_band`,
   :func:`band_distances`, :func:`edge_soup`, :func:`swept_area`, :func:`force_step`,
+  :func:`force_step_tiles`, :func:`tile_pieces`, :func:`block_moments`,
   :func:`divide_spectrum`, :func:`block_means`, :func:`explicit_step`, :func:`band_couplings`, :func:`sides`,
   :func:`sides_at`, :func:`front_distances`, :func:`segment_table` -- :mod:`activecontour.backends.levelset` (the
   sides of phi, the front, the marching-squares segments of the zero set and their table, the
@@ -1977,36 +1978,95 @@ def force_step(const float[:, ::1] phi, const double[:, :, ::1] values, double c
     quadratic form in the channels ``values (M, N, C)`` (``QuadraticForm.density``, term by term
     in the same order), plus ``wall`` per side of the image that a pixel lies on.  ``out`` may be
     a box of the image: its pixel ``(i, j)`` is the image's ``(row0 + i, col0 + j)``."""
-    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], channels = values.shape[2]
     cdef Py_ssize_t rows = out.shape[0], cols = out.shape[1]
-    cdef Py_ssize_t block, i, j, r, c, ch
-    cdef double f, v
-    if row0 < 0 or col0 < 0 or row0 + rows > m or col0 + cols > n:
+    cdef Py_ssize_t block
+    if row0 < 0 or col0 < 0 or row0 + rows > phi.shape[0] or col0 + cols > phi.shape[1]:
         raise ValueError("force_step: the box lies outside the image")
     for block in range(0, rows, _POLL_ROWS):
         with nogil:
-            for i in range(block, min(block + _POLL_ROWS, rows)):
-                r = row0 + i
-                for j in range(cols):
-                    c = col0 + j
-                    f = constant
-                    for ch in range(channels):
-                        v = values[r, c, ch]
-                        if square[ch] != 0:
-                            f += v * (linear[ch] + square[ch] * v)
-                        else:
-                            f += linear[ch] * v
-                    if wall > 0:  # the wall term, columns first as in the numpy blocks
-                        if c == 0:
-                            f += wall
-                        if c == n - 1:
-                            f += wall
-                        if r == 0:
-                            f += wall
-                        if r == m - 1:
-                            f += wall
-                    out[i, j] = <float> (phi[r, c] - tau * f)
+            _force_rows(phi, values, constant, linear, square, wall, tau, out, row0, col0, block,
+                        min(block + _POLL_ROWS, rows))
         PyErr_CheckSignals()
+
+
+cdef void _force_rows(const float[:, ::1] phi, const double[:, :, ::1] values, double constant,
+                      const double[::1] linear, const double[::1] square, double wall, double tau,
+                      float[:, ::1] out, Py_ssize_t row0, Py_ssize_t col0, Py_ssize_t first,
+                      Py_ssize_t stop) noexcept nogil:
+    """Rows ``first .. stop - 1`` of :func:`force_step`'s ``out``."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], channels = values.shape[2]
+    cdef Py_ssize_t cols = out.shape[1], i, j, r, c, ch
+    cdef double f, v
+    for i in range(first, stop):
+        r = row0 + i
+        for j in range(cols):
+            c = col0 + j
+            f = constant
+            for ch in range(channels):
+                v = values[r, c, ch]
+                if square[ch] != 0:
+                    f += v * (linear[ch] + square[ch] * v)
+                else:
+                    f += linear[ch] * v
+            if wall > 0:  # the wall term, columns first as in the numpy blocks
+                if c == 0:
+                    f += wall
+                if c == n - 1:
+                    f += wall
+                if r == 0:
+                    f += wall
+                if r == m - 1:
+                    f += wall
+            out[i, j] = <float> (phi[r, c] - tau * f)
+
+
+def force_step_tiles(const float[:, ::1] phi, const double[:, :, ::1] values, double constant,
+                     const double[::1] linear, const double[::1] square, double wall, double tau,
+                     float[:, :, ::1] out, const Py_ssize_t[::1] tops, const Py_ssize_t[::1] lefts):
+    """:func:`force_step` into every tile ``out[t]`` (``S x S``), whose pixel ``(i, j)`` is the
+    image's ``(tops[t] + i, lefts[t] + j)``: the right-hand sides of the smoothed step on tiles
+    along the band (:meth:`activecontour.backends.levelset.scheme._Problem._tile_step`)."""
+    cdef Py_ssize_t t, side = out.shape[1]
+    for t in range(out.shape[0]):
+        if tops[t] < 0 or lefts[t] < 0 or tops[t] + side > phi.shape[0] or lefts[t] + out.shape[2] > phi.shape[1]:
+            raise ValueError("force_step_tiles: a tile lies outside the image")
+        with nogil:
+            _force_rows(phi, values, constant, linear, square, wall, tau, out[t], tops[t], lefts[t], 0, side)
+        PyErr_CheckSignals()
+
+
+def tile_pieces(const float[:, :, ::1] tiles, const Py_ssize_t[::1] tops, const Py_ssize_t[::1] lefts,
+                const Py_ssize_t[:, ::1] pieces, float limit, float[:, ::1] out, bint write):
+    """Rectangles of tiles, tested or written into the image ``out``.
+
+    ``pieces (P, 6)``: tile, first row, stop row, first column, stop column (image coordinates,
+    inside the tile ``tiles[tile]`` whose pixel ``(0, 0)`` is the image's ``(tops[tile],
+    lefts[tile])``) and side: +1 (a piece inside: its values must be at least ``limit``), -1 (outside:
+    at most ``-limit``) or 0 (not tested).  ``write``: copy every piece into ``out``; else test
+    them only.  Returns False when a tested piece fails (nothing is written then), else True.
+    """
+    cdef Py_ssize_t k, i, j, t, top, left
+    cdef float value
+    cdef bint passed = True
+    for k in range(pieces.shape[0]):
+        t = pieces[k, 0]
+        if pieces[k, 1] < tops[t] or pieces[k, 2] > tops[t] + tiles.shape[1] \
+                or pieces[k, 3] < lefts[t] or pieces[k, 4] > lefts[t] + tiles.shape[2] \
+                or pieces[k, 2] > out.shape[0] or pieces[k, 4] > out.shape[1]:
+            raise ValueError("tile_pieces: a piece lies outside its tile or the image")
+    with nogil:
+        for k in range(pieces.shape[0]):
+            if not passed:
+                break
+            t, top, left = pieces[k, 0], tops[pieces[k, 0]], lefts[pieces[k, 0]]
+            for i in range(pieces[k, 1], pieces[k, 2]):
+                for j in range(pieces[k, 3], pieces[k, 4]):
+                    value = tiles[t, i - top, j - left]
+                    if write:
+                        out[i, j] = value
+                    elif (pieces[k, 5] > 0 and value < limit) or (pieces[k, 5] < 0 and value > -limit):
+                        passed = False
+    return passed
 
 
 def divide_spectrum(float[:, ::1] spectrum, const float[::1] wave_r, const float[::1] wave_c, float weight):
@@ -2060,6 +2120,42 @@ def block_means(const float[:, ::1] a, Py_ssize_t k, float[:, ::1] out):
             for bj in range(out.shape[1]):
                 cols_in = <float> (min(k * bj + k, n) - k * bj)
                 out[bi, bj] /= rows_in * cols_in
+
+
+def block_moments(const double[:, :, ::1] values, Py_ssize_t k, float[:, :, ::1] means,
+                  float[:, :, ::1] squares):
+    """:func:`block_means` of every channel of ``values (M, N, C)`` rounded to float32 and of its
+    square (in float32), into ``means`` and ``squares`` ``(C, M', N')``, in one pass without the
+    float32 copies: the same sums in the same order, so the same numbers."""
+    cdef Py_ssize_t m = values.shape[0], n = values.shape[1], channels = values.shape[2]
+    cdef Py_ssize_t block, i, j, bi, bj, ch
+    cdef float rows_in, cols_in, total, total_sq, v, area
+    means[:, :, :] = 0
+    squares[:, :, :] = 0
+    for block in range(0, m, _POLL_ROWS):
+        with nogil:
+            for i in range(block, min(block + _POLL_ROWS, m)):
+                bi = i // k
+                for ch in range(channels):
+                    for bj in range(means.shape[2]):
+                        total = 0
+                        total_sq = 0
+                        for j in range(k * bj, min(k * bj + k, n)):
+                            v = <float> values[i, j, ch]
+                            total += v
+                            total_sq += v * v
+                        means[ch, bi, bj] += total
+                        squares[ch, bi, bj] += total_sq
+        PyErr_CheckSignals()
+    with nogil:
+        for ch in range(channels):
+            for bi in range(means.shape[1]):
+                rows_in = <float> (min(k * bi + k, m) - k * bi)
+                for bj in range(means.shape[2]):
+                    cols_in = <float> (min(k * bj + k, n) - k * bj)
+                    area = rows_in * cols_in
+                    means[ch, bi, bj] /= area
+                    squares[ch, bi, bj] /= area
 
 
 def explicit_step(const float[::1] phi, const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n,

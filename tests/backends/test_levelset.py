@@ -199,6 +199,52 @@ def test_smoothed_step_that_flips_a_far_region_is_solved_on_the_whole_image():
     np.testing.assert_array_equal(stepped, whole)
 
 
+def _ring_problem(hole, step=1.0, mu=0.05):
+    """A 1024^2 two-region problem whose band is a ring: a disk of 0.8 and radius 400 on 0.2 (with
+    a hole of -1 and radius 60 at its centre when ``hole``: far darker than the outside, its force
+    is five times the typical one), the start the circle of radius 400, and the smoothed step's
+    constants and tau for ``step`` pixels."""
+    shape, centre = (1024, 1024), (511.5, 511.5)
+    image = np.where(_circle_distance(shape, centre, 400.0) > 0, 0.8, 0.2)
+    if hole:
+        image[_circle_distance(shape, centre, 60.0) > 0] = -1.0
+    image = sy.add_noise(image, 0.1, 0)
+    problem = _Problem(ImageModel(normalize_image(image)), ChanVeseParameters(mu=mu), DEFAULT_OPTIONS)
+    state = problem.redistance(_circle_distance(shape, centre, 400.0).astype(np.float32))
+    current = problem.evaluate(state)
+    force, scale = problem.force(current.c_in, current.c_out)
+    return problem, state, force, problem.time_step(step, scale)
+
+
+def test_smoothed_step_along_a_ring_is_solved_on_tiles_as_on_the_whole_image():
+    # the ring's box is most of the image: tiles along the band cost a fraction of it, and on
+    # every tile's cell the step differs from the whole image's by exp(-8) of the force's jumps
+    problem, state, force, tau = _ring_problem(hole=False)
+    tiles = problem._tiles(state, tau * problem.params.mu)
+    assert tiles is not None and tiles.pixels < 0.5 * 1024 * 1024
+    stepped, changed = problem.step(state, force, tau, True)
+    assert changed == tiles.box
+    whole, _ = _whole_image_step(problem, state, force, tau)
+    near = np.abs(whole) < problem.band
+    assert np.abs(stepped[near] - whole[near]).max() <= 1e-4
+    assert np.array_equal(stepped > 0, whole > 0)  # the same sides everywhere, the interior's too
+
+
+def test_smoothed_step_that_opens_a_hole_inside_the_ring_is_not_solved_on_tiles():
+    # the hole lies far inside the ring, beyond every tile: the coarse grid's test sees it flip,
+    # and the step is solved where the hole is
+    problem, state, force, tau = _ring_problem(hole=True, mu=0.01)  # l = sqrt(tau mu) < 1 px
+    tiles = problem._tiles(state, tau * problem.params.mu)
+    assert tiles is not None and tiles.pixels < 0.5 * 1024 * 1024  # tiles would be cheaper
+    hole = (slice(500, 524), slice(500, 524))
+    assert not tiles.grid[511 // tiles.core, 511 // tiles.core]  # no tile's cell there
+    whole, _ = _whole_image_step(problem, state, force, tau)
+    assert (whole[hole] < 0).all()  # the whole image's step opens the hole
+    stepped, _ = problem.step(state, force, tau, True)
+    assert (stepped[hole] < 0).all()
+    assert np.array_equal(stepped > 0, whole > 0)
+
+
 def test_a_step_into_a_recycled_array_copies_phi_only_where_that_array_may_differ():
     # a rejected box step leaves its array equal to phi outside the box (and the front pixels one
     # pixel beyond it): the next step into that array copies phi there only, not the image

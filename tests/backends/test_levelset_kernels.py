@@ -233,6 +233,63 @@ def test_block_means_are_the_means_of_the_blocks_cut_at_the_edge(shape, k):
     np.testing.assert_allclose(out, expected, rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.parametrize("shape, k", [((12, 8, 1), 4), ((13, 10, 3), 4), ((5, 7, 2), 3)])
+def test_block_moments_are_the_block_means_of_each_channel_and_its_square(shape, k):
+    values = np.random.default_rng(20).normal(size=shape)
+    size = (shape[2], -(-shape[0] // k), -(-shape[1] // k))
+    means, squares = np.empty(size, dtype=np.float32), np.empty(size, dtype=np.float32)
+    _kernels.block_moments(values, k, means, squares)
+    for channel in range(shape[2]):
+        rounded = values[..., channel].astype(np.float32)
+        expected = np.empty(size[1:], dtype=np.float32)
+        _kernels.block_means(rounded, k, expected)  # the same sums in the same order
+        np.testing.assert_array_equal(means[channel], expected)
+        _kernels.block_means(np.square(rounded), k, expected)
+        np.testing.assert_array_equal(squares[channel], expected)
+
+
+def test_force_step_on_tiles_is_force_step_on_each_tile():
+    rng = np.random.default_rng(21)
+    m, n = 11, 13
+    values = rng.uniform(size=(m, n, 2))
+    phi = rng.normal(size=(m, n)).astype(np.float32)
+    form = ChanVeseParameters(mu=0.3).load_form(rng.uniform(size=2), rng.uniform(size=2))
+    tops, lefts = np.array([0, 6, 3], dtype=np.intp), np.array([8, 0, 4], dtype=np.intp)
+    tiles = np.empty((3, 5, 5), dtype=np.float32)
+    terms = (form.constant, form.linear, form.square, 0.3, 0.7)
+    _kernels.force_step_tiles(phi, values, *terms, tiles, tops, lefts)
+    for tile, top, left in zip(tiles, tops, lefts, strict=True):
+        expected = np.empty((5, 5), dtype=np.float32)
+        _kernels.force_step(phi, values, *terms, expected, top, left)
+        np.testing.assert_array_equal(tile, expected)
+    with pytest.raises(ValueError, match="outside the image"):
+        _kernels.force_step_tiles(phi, values, *terms, tiles, tops + 3, lefts)
+
+
+def test_tile_pieces_test_the_sides_and_copy_the_rectangles():
+    tiles = np.arange(2 * 4 * 4, dtype=np.float32).reshape(2, 4, 4) - 8.0  # tile 0: -8..7, tile 1: 8..23
+    tops, lefts = np.array([0, 2], dtype=np.intp), np.array([1, 3], dtype=np.intp)
+    out = np.zeros((6, 8), dtype=np.float32)
+    # tile 1's rows 2..3 (image) hold 8..15 >= 8: inside passes at limit 8; tile 0's last row (image
+    # row 3: 4..7) fails at -limit 5 if it is outside (7 > -5), passes untested
+    inside = np.array([[1, 2, 4, 3, 7, 1]], dtype=np.intp)
+    assert _kernels.tile_pieces(tiles, tops, lefts, inside, 8.0, out, False)
+    assert not _kernels.tile_pieces(tiles, tops, lefts, inside, 8.5, out, False)
+    outside = np.array([[0, 3, 4, 1, 5, -1]], dtype=np.intp)
+    assert not _kernels.tile_pieces(tiles, tops, lefts, outside, 5.0, out, False)
+    assert _kernels.tile_pieces(tiles, tops, lefts, outside * [1, 1, 1, 1, 1, 0], 5.0, out, False)
+    assert not out.any()  # testing writes nothing
+    both = np.concatenate([inside, outside])
+    assert _kernels.tile_pieces(tiles, tops, lefts, both, 0.0, out, True)
+    expected = np.zeros_like(out)
+    expected[2:4, 3:7] = tiles[1, 0:2, 0:4]
+    expected[3:4, 1:5] = tiles[0, 3:4, 0:4]
+    np.testing.assert_array_equal(out, expected)
+    with pytest.raises(ValueError, match="outside its tile"):
+        _kernels.tile_pieces(tiles, tops, lefts, np.array([[0, 0, 5, 1, 5, 0]], dtype=np.intp), 0.0, out,
+                             True)
+
+
 def test_divide_spectrum_applies_the_inverse_of_one_minus_weight_laplace():
     # after the division, multiplying by 1 + weight (lambda_r + lambda_c) gives the spectrum back
     rng = np.random.default_rng(17)

@@ -101,8 +101,13 @@ are computed in float64 from it).  A step (a) is one DCT pair (O(MN log MN), flo
 computed in one compiled pass) over the band's bounding box widened by ``band + 8 sqrt(tau mu)``
 (S's kernel decays as ``exp(-r / sqrt(tau mu))``: near Gamma the box's Neumann sides change the
 step by < 1e-4 px), phi held beyond it, when the box is at most half the image and the step,
-solved on a 4x coarser grid, flips no block beyond it; else over the image; a step (b) works on
-the band only (explicit, or conjugate gradients).  A step is written into a recycled array, which
+solved on a 4x coarser grid, flips no block beyond it; else over the image.  Where the band is a
+thin ring in a large box (a large object) the step is solved on tiles along the band instead:
+square cells of about twice that reach holding band pixels, each on its own tile reaching as far
+beyond it (one batched DCT pair), phi held beyond the cells, when the tiles cost at most 3/4 of
+the box or the image and neither the tiles' values around the cells nor the coarse grid's beyond
+them come within half the band of flipping.  A step (b) works on the band only (explicit, or
+conjugate gradients).  A step is written into a recycled array, which
 equals phi already but for the box of the step or finish that last wrote it (noted per array):
 phi is copied over that box only, not over the image.  The reinitialisation
 reads the sides only where the step changed phi (its box, the image, or for a step (b) the band's

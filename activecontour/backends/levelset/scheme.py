@@ -14,6 +14,10 @@ _EXPLICIT = 0.25  # step (b) is explicit (stable, on the band alone) up to tau m
 _REACH = 8.0  # S's kernel decays as exp(-r / l), l = sqrt(tau mu): a box reaching 8 l beyond the band
 _BOX_SHARE = 0.5  # a box over more than this share of the image: the whole image
 _COARSE = 4  # the far field's test grid: blocks of 4 x 4 pixels
+_TILE_MARGIN = 8  # pixels: step (a)'s tiles cover the cells within this of the band (_tiles)
+_MIN_CORE = 32  # pixels: the least side of a tile's cell (more than twice the margin)
+_TILE_MIN = 2**19  # pixels: a smaller box (or image) is solved as it is, without looking for tiles
+_TILE_SHARE = 0.75  # tiles over more than this share of the box (or image) they replace: not used
 
 
 def heaviside(phi, epsilon=1.0):
@@ -64,6 +68,7 @@ class _Problem:
         self._spare = []
         self._agreements = {}  # id(array): (array, phi, box): array equals phi outside box
         self._box_buffer = None  # the smoothed step's box, reused while its size holds
+        self._tile_buffer = None  # the smoothed step's tiles (_tile_step), reused while large enough
         self._coarse = None  # the far field's test grid (_coarse_tables)
 
     def take(self, like=None):
@@ -232,9 +237,20 @@ class _Problem:
             return rhs, changed
         form = self.params.load_form(*force)
         if self.params.mu > 0:
-            box = self._box(state, tau * self.params.mu)
-            if box is not None and not self._far_flips(state, form, tau, box):
-                return self._box_step(state, form, tau, box), box
+            weight = tau * self.params.mu
+            box = self._box(state, weight)
+            area = self.shape[0] * self.shape[1] if box is None else _area(box)  # the DCT pair's
+            tiles = self._tiles(state, weight) if area >= _TILE_MIN else None
+            held = None  # the coarse grid's step (_coarse_held), computed once
+            if tiles is not None and tiles.pixels <= _TILE_SHARE * area:
+                held = self._coarse_held(state, form, tau)
+                stepped = self._tile_step(state, form, tau, tiles, held)
+                if stepped is not None:
+                    return stepped, tiles.box
+            if box is not None:
+                held = self._coarse_held(state, form, tau) if held is None else held
+                if not self._far_flips(held, box):
+                    return self._box_step(state, form, tau, box), box
         # phi - tau f over the image in one compiled pass (f: the model's form, the wall term)
         rhs = self.take()[0]
         _kernels.force_step(state.phi, self.values, form.constant, form.linear, form.square, self.params.mu,
@@ -263,13 +279,12 @@ class _Problem:
             return None
         return rows, cols
 
-    def _far_flips(self, state, form, tau, box):
-        """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
-        is ``+-band - tau S(f)``, a region far from Gamma flipping where the smoothed force
-        outweighs the band (a hole opening without a seed).  Tested on a grid coarser by
-        ``_COARSE`` (block means of ``phi - tau f``, f from the block means of the channels and
-        their squares, S with the same length ``l``): a far block whose value comes within half
-        the band of zero sends the step to the whole image."""
+    def _coarse_held(self, state, form, tau):
+        """Step (a) on a grid coarser by ``_COARSE``, signed by the side of each block: block means
+        of ``phi - tau f`` (f from the block means of the channels and their squares), S with the
+        same length ``l = sqrt(tau mu)``, times +1 where the block's first pixel is inside and -1
+        outside.  Far from Gamma phi is ``+-band`` and a block whose value comes within half the
+        band of zero may flip (a hole opening without a seed): :meth:`_far_flips`."""
         k = _COARSE
         means, squares, wall = self._coarse_tables()
         coarse = np.empty(wall.shape, dtype=np.float32)
@@ -283,7 +298,14 @@ class _Problem:
         coarse -= np.float32(tau) * force
         coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
                               _waves(coarse.shape[1]))
-        held = np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
+        return np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
+
+    def _far_flips(self, held, box):
+        """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
+        is ``+-band - tau S(f)``, a region far from Gamma flipping where the smoothed force
+        outweighs the band.  Tested on the coarse grid (:meth:`_coarse_held`): a far block whose
+        value comes within half the band of zero sends the step to the whole image."""
+        k = _COARSE
         # the blocks that reach into the box are not far: the rest are four strips around them
         rows, cols = box
         first, last = rows.start // k, -(-rows.stop // k)
@@ -300,10 +322,7 @@ class _Problem:
             size = (-(-m // k), -(-n // k))
             means = np.empty((channels,) + size, dtype=np.float32)
             squares = np.empty_like(means)
-            for channel in range(channels):
-                values = self.values[..., channel].astype(np.float32)
-                _kernels.block_means(values, k, means[channel])
-                _kernels.block_means(np.square(values, out=values), k, squares[channel])
+            _kernels.block_moments(self.values, k, means, squares)
             # a block on an image side holds one line of pixels on it: 1 / (its pixels across it)
             sides = []
             for blocks, length in zip(size, self.shape, strict=True):
@@ -312,6 +331,79 @@ class _Problem:
                 sides.append(((starts == 0).astype(np.float64) + (starts == starts[-1])) / across)
             self._coarse = means, squares, (sides[0][:, None] + sides[1][None, :]).astype(np.float32)
         return self._coarse
+
+    def _tiles(self, state, weight):
+        """The tiles on which step (a) is solved along the band (:meth:`_tile_step`), or None.
+
+        The image is cut into square cells of ``core`` pixels (a multiple of ``_COARSE``); the
+        cells holding a pixel within ``_TILE_MARGIN`` of the band are solved, each on a tile of
+        ``side`` pixels reaching ``reach = band + _REACH l`` beyond it (pushed inside the image at
+        its border, where the Neumann side is exact), ``side`` a length the DCT is fast on and about
+        twice the reach: the cost per length of band, ``side^2 / core``, is then least.  A ring
+        of band on a large image: tiles of a few 10^5 pixels instead of its whole bounding box.
+        """
+        if state.near_flat.size == 0:
+            return None
+        m, n = self.shape
+        reach = int(np.ceil(self.band + _REACH * np.sqrt(weight)))
+        side = scipy.fft.next_fast_len(max(4 * reach + _COARSE, 2 * reach + _MIN_CORE), real=True)
+        core = (side - 2 * reach) // _COARSE * _COARSE
+        if side > min(m, n):
+            return None
+        rows, cols = np.divmod(state.near_flat, n)
+        grid = np.zeros((-(-m // core), -(-n // core)), dtype=bool)
+        # a cell holds a pixel within the margin of a band pixel: the margin's corners are in it
+        # or in a cell next to it (core > 2 margin)
+        for row in (np.maximum(rows - _TILE_MARGIN, 0), np.minimum(rows + _TILE_MARGIN, m - 1)):
+            for col in (np.maximum(cols - _TILE_MARGIN, 0), np.minimum(cols + _TILE_MARGIN, n - 1)):
+                grid[row // core, col // core] = True
+        cell_r, cell_c = np.nonzero(grid)
+        return _Tiles(grid, cell_r, cell_c, core, side, reach, self.shape)
+
+    def _tile_step(self, state, form, tau, tiles, held):
+        """Step (a) solved on ``tiles`` (:meth:`_tiles`), phi held beyond them, or None when it may
+        flip a pixel beyond their cells.
+
+        Each tile is one DCT pair (all tiles in one batched call) with Neumann sides ``reach``
+        beyond its cell: on the cell the step differs from the whole image's by < ``exp(-_REACH)``
+        of the force's jumps (~1e-4 px), as on the band's box.  Beyond the cells phi is
+        ``+-band``: within ``tiles.halo`` of a cell (more than ``reach / 2`` inside its tile) the
+        tile's values are written as well and tested, further out the coarse grid's
+        (:meth:`_far_flips`'s test, on the blocks beyond the cells widened by the halo); a value
+        within half the band of zero sends the step to the band's box or the image.
+        """
+        count, side = len(tiles.cell_r), tiles.side
+        if self._tile_buffer is None or self._tile_buffer.size < count * side * side:
+            self._tile_buffer = np.empty(count * side * side, dtype=np.float32)
+        stack = self._tile_buffer[: count * side * side].reshape(count, side, side)
+        _kernels.force_step_tiles(state.phi, self.values, form.constant, form.linear, form.square,
+                                  self.params.mu, tau, stack, tiles.top, tiles.left)
+        spectrum = scipy.fft.dctn(stack, axes=(1, 2), norm="ortho", overwrite_x=True)
+        waves = _waves(side)
+        _kernels.divide_spectrum(spectrum.reshape(count * side, side), np.tile(waves, count), waves,
+                                 np.float32(tau * self.params.mu))
+        stack = scipy.fft.idctn(spectrum, axes=(1, 2), norm="ortho", overwrite_x=True)
+        k = _COARSE
+        # the coarse blocks beyond the cells widened by the halo (block-aligned: core and halo are
+        # multiples of the block)
+        near = np.zeros(held.shape, dtype=bool)
+        for top, bottom, left, right in zip(*tiles.widened, strict=True):
+            near[top // k: -(-bottom // k), left // k: -(-right // k)] = True
+        far = held[~near]
+        if far.size and far.min() < 0.5 * self.band:
+            return None
+        # the halo beyond the cells, from the tiles' values: a piece lies in a cell beyond the
+        # band, all on the side of its first pixel
+        pieces = tiles.halo_pieces
+        pieces[:, 5] = np.where(state.phi[pieces[:, 1], pieces[:, 3]] > 0, 1, -1)
+        if not _kernels.tile_pieces(stack, tiles.top, tiles.left, pieces, 0.5 * self.band, state.phi,
+                                    False):  # tested only: phi is not written
+            return None
+        out = self._copy_of(state.phi)
+        _kernels.tile_pieces(stack, tiles.top, tiles.left, pieces, 0.0, out, True)
+        # the cells last: a tile is exact on its own cell
+        _kernels.tile_pieces(stack, tiles.top, tiles.left, tiles.cells, 0.0, out, True)
+        return out
 
     def _box_step(self, state, form, tau, box):
         """Step (a) solved on ``box`` (:meth:`_box`), phi held beyond it."""
@@ -403,6 +495,56 @@ class _Problem:
                                self.values.reshape(m * n, -1), form.constant, form.linear, form.square,
                                self.params.mu, tau, out.reshape(-1))
         return out
+
+
+class _Tiles:
+    """The cells and tiles of step (a) along the band (:meth:`_Problem._tiles`).
+
+    ``grid``: which cells (``core`` x ``core`` pixels, the last ones cut at the image's edge) are
+    solved; ``cell_r, cell_c`` their indices; ``top, left`` the first pixel of each one's tile of
+    ``side`` x ``side`` pixels; ``halo`` (a multiple of ``_COARSE``, at most ``reach / 2 + 3``) how
+    far beyond the cells the tiles' values are written and tested; ``cells`` and ``halo_pieces``
+    the rectangles ``(tile, first row, stop row, first column, stop column, 0)`` of the cells and
+    of the halo's parts that lie in cells not solved (its sides and corners, each in one
+    neighbouring cell), for :func:`activecontour._kernels.tile_pieces`; ``widened`` the cells
+    widened by the halo (rows and columns, first and stop, per tile); ``box`` their bounding box
+    (two slices); ``pixels`` the tiles' total size.
+    """
+
+    def __init__(self, grid, cell_r, cell_c, core, side, reach, shape):
+        m, n = shape
+        self.grid, self.cell_r, self.cell_c = grid, cell_r, cell_c
+        self.core, self.side, self.shape = core, side, shape
+        self.halo = halo = _COARSE * -(-reach // (2 * _COARSE))
+        self.top = np.clip(cell_r * core - reach, 0, m - side).astype(np.intp)
+        self.left = np.clip(cell_c * core - reach, 0, n - side).astype(np.intp)
+        self.pixels = len(cell_r) * side * side
+        spans = []  # per axis: the cell's span, and the halo before and after it, (first, stop)
+        for cells, size in zip((cell_r, cell_c), shape, strict=True):
+            first, stop = cells * core, np.minimum((cells + 1) * core, size)
+            spans.append({-1: (first - halo, first), 0: (first, stop),
+                          1: (stop, np.minimum(stop + halo, size))})
+        index = np.arange(len(cell_r))
+        self.cells = np.column_stack([index, *spans[0][0], *spans[1][0], 0 * index]).astype(np.intp)
+        self.widened = (np.maximum(spans[0][-1][0], 0), spans[0][1][1],
+                        np.maximum(spans[1][-1][0], 0), spans[1][1][1])
+        solved = np.pad(grid, 1, constant_values=True)  # beyond the image: no piece
+        pieces = []
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                if dr or dc:
+                    keep = ~solved[cell_r + 1 + dr, cell_c + 1 + dc]
+                    pieces.append(np.column_stack([index[keep], spans[0][dr][0][keep], spans[0][dr][1][keep],
+                                                   spans[1][dc][0][keep], spans[1][dc][1][keep],
+                                                   0 * index[keep]]))
+        self.halo_pieces = np.concatenate(pieces).astype(np.intp)
+        self.box = (slice(int(self.widened[0].min()), int(self.widened[1].max())),
+                    slice(int(self.widened[2].min()), int(self.widened[3].max())))
+
+
+def _area(box):
+    """The number of pixels of a box (two slices)."""
+    return (box[0].stop - box[0].start) * (box[1].stop - box[1].start)
 
 
 def _waves(size):
