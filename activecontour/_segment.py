@@ -333,18 +333,29 @@ def _pointed(problem, run, init, callback):
     object), its margin doubles; up to the whole image.  A neighbour reaching the edge does not
     count.  When the run finds objects but none holds any of the drawn region (a curve drawn on
     the background), nothing was pointed at: the result is empty.
+
+    An object that holds less than half of the drawn region and has less than half of its own
+    area in it (:func:`_reaches_in`) is a neighbour reaching into the drawn curve, not the object
+    drawn around (all of which is in the curve) or inside (which is all of the curve): it is
+    taken out of the domain and the run repeated.  Such a neighbour becomes the object found
+    when it is much brighter than the one drawn around: the constants (6.42) of the
+    neighbourhood are then the bright one's and the background's, and the dim object reads as
+    background.
     """
     shape = problem.shape
     drawn = drawn_region(init, shape)
     problem = dataclasses.replace(problem, settings=dataclasses.replace(problem.settings,
                                                                       inside=_objects_side(problem)))
-    around, margin = drawn, ROI_INIT_MARGIN
+    around, margin, reaching = drawn, ROI_INIT_MARGIN, np.zeros(shape, dtype=bool)
     while True:
         neighbourhood = init_neighbourhood(around, margin)
-        solution = _solve(problem, run, init, _without_neighbours(problem, neighbourhood, around),
-                          callback)
+        domain = _without_neighbours(problem, neighbourhood, around)
+        solution = _solve(problem, run, init, _apart_in_box(domain, reaching), callback)
         (r0, c0, r1, c1), objects, labels, target = _pointed_in(solution, drawn)
         mine = labels == target
+        if target and _reaches_in(mine, drawn[r0:r1, c0:c1]):  # a neighbour, not the object
+            reaching[r0:r1, c0:c1] |= mine
+            continue
         if neighbourhood.all() or (not target and labels.any()) or (
                 target and not (mine & _near_edge(neighbourhood, (r0, c0, r1, c1))).any()):
             break
@@ -370,6 +381,27 @@ def _pointed(problem, run, init, callback):
     start = Start([curve + offset for curve in objects[target - 1]], np.zeros(shape, dtype=bool))
     start.mask[r0:r1, c0:c1] = mine
     return _solve(problem, run, start, roi, callback)
+
+
+def _reaches_in(mine, drawn):
+    """Whether the object ``mine`` (bool) is a neighbour reaching into the ``drawn`` region, not
+    the object drawn around or inside: it holds less than half of the drawn region (a curve
+    drawn inside an object is all object) and has less than half of its own area in it (an
+    object drawn around is all in it)."""
+    held = 2 * np.count_nonzero(mine & drawn)
+    return held < np.count_nonzero(drawn) and held < np.count_nonzero(mine)
+
+
+def _apart_in_box(domain, others):
+    """:func:`apart` of a whole-image ``domain`` and ``others`` (bool (M, N)), computed in the
+    domain's bounding box; ``domain`` itself when ``others`` has none."""
+    if not others.any():
+        return domain
+    r0, c0, r1, c1 = resolve_roi(domain, domain.shape)[0]
+    window = (slice(r0, r1), slice(c0, c1))
+    carved = np.zeros_like(domain)
+    carved[window] = apart(domain[window], others[window], np.zeros_like(domain[window]))
+    return carved
 
 
 def _without_neighbours(problem, neighbourhood, drawn):

@@ -99,3 +99,26 @@ def test_a_curve_on_the_background_points_at_nothing():
     image = synthetic.add_noise(image, 0.05, seed=2)
     res = ac.segment(image, ac.circle((75.0, 75.0), 8.0), roi="init")
     assert res.labels.max() == 0 and not res.mask.any()
+
+
+@pytest.fixture(scope="module")
+def dim_beside_bright():
+    """A dim disk 2 px from a bright one (intensities 0.35 and 0.9 on 0.1, SNR 8 on the dim
+    one): on a neighbourhood holding both, two regions with their own constants (6.42) take
+    the bright disk for the object and the dim one for background."""
+    dim, bright = synthetic.disk((60.0, 48.0), 12.0), synthetic.disk((60.0, 72.0), 10.0)
+    size = (120, 120)
+    image = (synthetic.render(dim, size, inside=0.25, outside=0.0)[0]
+             + synthetic.render(bright, size, inside=0.8, outside=0.0)[0] + 0.1)
+    return synthetic.add_noise(image, 0.03, seed=5, blur=1.0), synthetic.render(dim, size)[1], \
+        synthetic.render(bright, size)[1]
+
+
+@pytest.mark.parametrize("factor", [1.1, 1.8])
+@pytest.mark.parametrize("kind", ["circle", "box"])
+def test_a_bright_neighbour_reaching_into_the_curve_is_not_the_object(dim_beside_bright, kind, factor):
+    # the wide curve holds a rim of the bright disk: the object drawn around is still the dim one
+    image, dim, bright = dim_beside_bright
+    res = ac.segment(image, _drawn(kind, (60.0, 48.0), factor * 12.0), roi="init")
+    assert synthetic.dice(res.mask, dim) >= 0.95
+    assert not (res.mask & bright).any()
