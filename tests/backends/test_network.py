@@ -606,3 +606,24 @@ def test_no_class_contour_is_a_sliver_through_a_pinch():
             as_curve(curve, name=f"class_contours[{k}][{j}]")  # raises for a degenerate curve
     assert res.energy == pytest.approx(
         ac.chan_vese_energy(crop, regions=res.class_contours, mu=res.mu, color="vector"), rel=1e-9)
+
+
+def test_a_trial_is_tested_for_crossings_in_full_once(monkeypatch):
+    # a pinch resolved after a step held back by it takes the pairs that met from the flow's own
+    # crossing test of that trial: no trial's nodes go through the full test twice (the camera crop
+    # of the stall, whose steps cross at a pinch)
+    import hashlib
+
+    import skimage.data
+
+    tested = []
+    meeting_pairs = Network.meeting_pairs
+
+    def spy(self, nodes, limit=16):
+        tested.append(hashlib.sha256(np.ascontiguousarray(nodes).tobytes()).hexdigest())
+        return meeting_pairs(self, nodes, limit)
+
+    monkeypatch.setattr(Network, "meeting_pairs", spy)
+    crop = skimage.data.camera()[230:263, 199:240]
+    ac.segment(crop, n_regions=3, separate=False)
+    assert tested and len(set(tested)) == len(tested)

@@ -202,7 +202,7 @@ class _Flow:
         self.network, self.current = network, current
         return True
 
-    def resolve(self, crossed):
+    def resolve(self, crossed, pairs=None):
         """Resolve the pinch that held the step back, where the pairs of interface segments that
         meet in the trial ``crossed`` (:meth:`Network.meeting_pairs`) tell: join them the other
         way (:meth:`Network.reconnected`), or else make one node of the ends of each segment
@@ -212,12 +212,15 @@ class _Flow:
         network is still simple and J has not risen; else those loops alone are dropped where
         that lowers J (a region shrinking to nothing).  Returns whether the network changed."""
         network, nodes = self.network, self.nodes
-        pairs = network.meeting_pairs(crossed)
+        pairs = network.meeting_pairs(crossed) if pairs is None else pairs
         ends = np.unique(np.concatenate([network.start[pairs], network.end[pairs]], axis=None))
-        near = network.interface & (np.isin(network.start, ends) | np.isin(network.end, ends))
-        lengths = np.linalg.norm(nodes.take(network.end, axis=0) - nodes.take(network.start, axis=0), axis=1)
+        at_ends = np.zeros(len(nodes), dtype=bool)
+        at_ends[ends] = True
+        near = np.flatnonzero(network.interface & (at_ends[network.start] | at_ends[network.end]))
+        step = nodes.take(network.end[near], axis=0) - nodes.take(network.start[near], axis=0)
+        lengths = np.linalg.norm(step, axis=1)
         for changed in (lambda: network.reconnected(pairs, nodes),
-                        lambda: network.collapsed(np.flatnonzero(near & (lengths < _TINY)), nodes)):
+                        lambda: network.collapsed(near[lengths < _TINY], nodes)):
             candidate = changed()
             if (candidate is not None and candidate[0].simple_after(network, nodes)
                     and self.replace(*candidate, ends)):
@@ -275,19 +278,19 @@ class _Flow:
                     # crossing, the segments that met are tested alone first: where two of them
                     # still meet, the shorter step crosses too, without a pass over the network
                     if pinched is not None and network.meet_among(trial, pinched):
-                        crossings.append((dt, trial))
+                        crossings.append((dt, trial, None))
                     elif (pairs := network.meeting_pairs(trial)).size == 0:
                         candidate = self.evaluate(network, trial)
                         if candidate.energy <= current.energy + _ARMIJO * dt * slope:
                             break
                     else:
-                        crossings.append((dt, trial))
+                        crossings.append((dt, trial, pairs))
                         pinched = np.unique(pairs)
                 dt *= 0.5
             else:
                 # a region folding over itself as the flow shrinks it: drop it and go on (the
                 # first crossing trial that lowers J enough tells where)
-                crossed = next((trial for step, trial in crossings if self.evaluate(network, trial).energy
+                crossed = next((trial for step, trial, _ in crossings if self.evaluate(network, trial).energy
                                 <= current.energy + _ARMIJO * step * slope), None)
                 if crossed is not None and self.drop_islands(network.crossing_nodes(crossed)):
                     factors, dt_next = None, None
@@ -298,7 +301,7 @@ class _Flow:
             self.nodes, self.current = trial, candidate
             n_iter += 1
             self.energies.append(candidate.energy)
-            if crossings and self.resolve(crossings[-1][1]):
+            if crossings and self.resolve(*crossings[-1][1:]):
                 factors, dt_next, held = None, None, 0
             else:
                 held = held + 1 if crossings else 0

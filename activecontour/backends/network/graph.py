@@ -165,12 +165,14 @@ class Network:
         """The signed area of every face (:meth:`faces`), or of the faces ``which`` (indices)."""
         face, segment, sign = self.faces()
         if which is not None:
-            chosen = np.isin(face, which)
+            chosen = np.zeros(len(self.face_counts), dtype=bool)
+            chosen[which] = True
+            chosen = chosen[face]
             face, segment, sign = np.searchsorted(which, face[chosen]), segment[chosen], sign[chosen]
             count = len(which)
         else:
             count = int(face.max()) + 1 if face.size else 0
-        a, b = nodes[self.start[segment]], nodes[self.end[segment]]
+        a, b = nodes.take(self.start[segment], axis=0), nodes.take(self.end[segment], axis=0)
         twice = sign * (a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1])
         return 0.5 * np.bincount(face, weights=twice, minlength=count)
 
