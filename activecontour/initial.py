@@ -201,25 +201,27 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
         for a, b in pairs:
             a, b = np.maximum(a, b).ravel(), np.minimum(a, b).ravel()
             separated += np.bincount(b, minlength=bins) - np.bincount(a, minlength=bins)
-        # the cost after bin k only at the bins where something changes: a bin without pixels
-        # or separated pairs adds exact zeros to every running sum, so its cost equals the bin's
+        # the cost after bin k (no threshold after the last bin), where most bins are empty (a
+        # small image) only at the bins where something changes: a bin without pixels or
+        # separated pairs adds exact zeros to every running sum, so its cost equals the bin's
         # before it, which argmin (the first of equal minima) prefers; bin 0 holds the minimum.
-        # Far fewer bins than 16384 on a small image; the totals are summed over all of them
+        # The totals are summed over all bins, as the running sums' ends would be
         total_count, total_sums = count.sum(), sums.sum(axis=1)[:, None]
-        changes = np.flatnonzero((count != 0) | (separated != 0))
-        changes = changes[changes < bins - 1]  # no threshold after the last bin
-        below_count = np.cumsum(count[changes])
-        below_sums = np.cumsum(sums[:, changes], axis=1)
+        changes = np.flatnonzero((count[:-1] != 0) | (separated[:-1] != 0))
+        kept = slice(0, bins - 1) if 2 * len(changes) > bins else changes
+        below_count = np.cumsum(count[kept])
+        below_sums = np.cumsum(sums[:, kept], axis=1)
         above_count = total_count - below_count
         above_sums = total_sums - below_sums
         with np.errstate(divide="ignore", invalid="ignore"):
             fit_cost = (squares - np.sum(below_sums**2, axis=0) / below_count
                         - np.sum(above_sums**2, axis=0) / above_count) / channels
-        cost = step * (fit_cost + mu * np.pi / 4.0 * np.cumsum(separated[changes]))
+        cost = step * (fit_cost + mu * np.pi / 4.0 * np.cumsum(separated[kept]))
         cost[(below_count == 0) | (above_count == 0)] = np.inf
         i = int(np.argmin(cost))
         if cost[i] < best[2]:
-            best = (axis, low + (int(changes[i]) + 1) / scale, float(cost[i]))
+            k = i if isinstance(kept, slice) else int(changes[i])
+            best = (axis, low + (k + 1) / scale, float(cost[i]))
     return best
 
 
