@@ -100,11 +100,12 @@ def chan_vese_energy(image, contours=None, *, classes=None, regions=None, mu=_DE
     curves = [as_curve(c, name=f"contours[{i}]") for i, c in enumerate(contours)]
     for i, curve in enumerate(curves):
         _check_in_domain(curve, model.bounds, f"contours[{i}]")
-    from activecontour.geometry.regions import orient_by_nesting
+    from activecontour.geometry.regions import nesting, orient_by_nesting, polygons
     from activecontour.geometry.topology import region_problem
 
-    curves = orient_by_nesting(curves)
-    problem = region_problem(curves)
+    nested = nesting(polygons(curves))  # once, for the orientation and the check
+    curves = orient_by_nesting(curves, nested[0])
+    problem = region_problem(curves, nested)
     if problem is not None:
         raise ValueError(f"contours do not bound a region, (6.38) is not defined: {problem}")
     points, next_index, _ = stack_curves(curves)

@@ -201,17 +201,27 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
         for a, b in pairs:
             a, b = np.maximum(a, b).ravel(), np.minimum(a, b).ravel()
             separated += np.bincount(b, minlength=bins) - np.bincount(a, minlength=bins)
-        below_count, below_sums = np.cumsum(count)[:-1], np.cumsum(sums, axis=1)[:, :-1]
-        above_count = count.sum() - below_count
-        above_sums = sums.sum(axis=1)[:, None] - below_sums
+        # the cost after bin k (no threshold after the last bin), where most bins are empty (a
+        # small image) only at the bins where something changes: a bin without pixels or
+        # separated pairs adds exact zeros to every running sum, so its cost equals the bin's
+        # before it, which argmin (the first of equal minima) prefers; bin 0 holds the minimum.
+        # The totals are summed over all bins, as the running sums' ends would be
+        total_count, total_sums = count.sum(), sums.sum(axis=1)[:, None]
+        changes = np.flatnonzero((count[:-1] != 0) | (separated[:-1] != 0))
+        kept = slice(0, bins - 1) if 2 * len(changes) > bins else changes
+        below_count = np.cumsum(count[kept])
+        below_sums = np.cumsum(sums[:, kept], axis=1)
+        above_count = total_count - below_count
+        above_sums = total_sums - below_sums
         with np.errstate(divide="ignore", invalid="ignore"):
             fit_cost = (squares - np.sum(below_sums**2, axis=0) / below_count
                         - np.sum(above_sums**2, axis=0) / above_count) / channels
-        cost = step * (fit_cost + mu * np.pi / 4.0 * np.cumsum(separated)[:-1])
+        cost = step * (fit_cost + mu * np.pi / 4.0 * np.cumsum(separated[kept]))
         cost[(below_count == 0) | (above_count == 0)] = np.inf
-        k = int(np.argmin(cost))
-        if cost[k] < best[2]:
-            best = (axis, low + (k + 1) / scale, float(cost[k]))
+        i = int(np.argmin(cost))
+        if cost[i] < best[2]:
+            k = i if isinstance(kept, slice) else int(changes[i])
+            best = (axis, low + (k + 1) / scale, float(cost[i]))
     return best
 
 
@@ -492,10 +502,11 @@ def region_boundary(curves):
     are not a region (6.38) is defined on.
     """
     from activecontour.geometry import topology
-    from activecontour.geometry.regions import orient_by_nesting
+    from activecontour.geometry.regions import nesting, orient_by_nesting, polygons
 
-    oriented = orient_by_nesting(curves)
-    if topology.region_problem(oriented) is None:
+    nested = nesting(polygons(curves))  # once, for the orientation and the check
+    oriented = orient_by_nesting(curves, nested[0])
+    if topology.region_problem(oriented, nested) is None:
         return oriented
     return topology.region_union(curves) or oriented
 

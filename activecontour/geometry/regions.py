@@ -127,12 +127,13 @@ def nesting(shapes):
     return depth, parent, same
 
 
-def orient_by_nesting(curves):
+def orient_by_nesting(curves, depth=None):
     """The curves oriented by :func:`nesting`: a curve inside an even number of the others made an
     outer boundary (positive), inside an odd number a hole (negative), whatever orientation it was
     given in (``skimage.measure.find_contours`` walks outlines clockwise, OpenCV's
-    ``findContours`` counterclockwise in (x, y), shapely either way)."""
-    depth = nesting(polygons(curves))[0]
+    ``findContours`` counterclockwise in (x, y), shapely either way).  ``depth``: the first of
+    ``nesting(polygons(curves))`` when the caller has it (it is not computed again)."""
+    depth = nesting(polygons(curves))[0] if depth is None else depth
     return [orient(np.asarray(c, dtype=np.float64), hole=d % 2 == 1)
             for c, d in zip(curves, depth, strict=True)]
 

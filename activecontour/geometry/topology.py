@@ -187,7 +187,7 @@ def border_overlap(points, next_index, bounds):
                                         np.ascontiguousarray(bounds, dtype=np.float64)))
 
 
-def region_problem(curves):
+def region_problem(curves, nested=None):
     """Why oriented closed curves do not bound a region, or None when they do.
 
     They bound one when every curve is a simple polygon (no self-crossing, no self-touching), no
@@ -197,6 +197,15 @@ def region_problem(curves):
     0 or 1 everywhere and (6.38) is defined: shapely's ``is_valid`` holds for the polygons with
     their holes.  Crossing or overlapping input (winding numbers 2 or -1) gives an energy of no
     region, such as -1e12 for a curve run twice along the image border.
+
+    Parameters
+    ----------
+    curves : list of ndarray (K, 2)
+    nested : tuple, optional
+        :func:`activecontour.geometry.regions.nesting` of the curves' polygons when the caller has
+        it (as :func:`activecontour.geometry.regions.orient_by_nesting`'s caller does): it is not
+        computed again.  Nesting does not depend on orientation, so the curves before orienting
+        give the same.
 
     Returns
     -------
@@ -221,7 +230,7 @@ def region_problem(curves):
     if invalid.size:
         i = int(invalid[0])
         return f"contours[{i}] crosses or touches itself ({shapely.is_valid_reason(polygons[i])})"
-    depth, parent, same = nesting(polygons)
+    depth, parent, same = nesting(polygons) if nested is None else nested
     if same:
         return f"contours[{same[0][0]}] and contours[{same[0][1]}] are the same curve"
     areas = curve_areas(points, next_index, offsets)

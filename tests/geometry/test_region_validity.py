@@ -150,3 +150,48 @@ def test_dropping_small_curves_never_raises_the_energy():
     assert result.energy < empty
     assert result.status != 3 and result.mask.sum() == 3
     assert np.all(np.diff(result.energies) <= 0)
+
+
+def _count_nesting(monkeypatch):
+    """Count the calls of the one rule of nesting, wherever it is read from."""
+    from activecontour.geometry import regions
+
+    calls = []
+    original = regions.nesting
+
+    def counted(shapes):
+        calls.append(len(shapes))
+        return original(shapes)
+
+    monkeypatch.setattr(regions, "nesting", counted)
+    monkeypatch.setattr(topology, "nesting", counted)
+    return calls
+
+
+def test_nested_curves_are_nested_once_for_the_orientation_and_the_check(monkeypatch):
+    from activecontour.initial import region_boundary
+
+    # an outer square, a hole in it, an island in the hole, all given clockwise
+    curves = [ac.rectangle((0, 0), (30, 30))[::-1], ac.rectangle((5, 5), (25, 25))[::-1],
+              ac.rectangle((10, 10), (20, 20))[::-1]]
+    calls = _count_nesting(monkeypatch)
+    oriented = region_boundary(curves)
+    assert calls == [3]
+    assert [signed_area(c) > 0 for c in oriented] == [True, False, True]
+    image = np.zeros((32, 32))
+    del calls[:]
+    # a blank image, mu = 0: every term of (6.38) is 0; what counts is the nesting's calls
+    assert ac.chan_vese_energy(image, curves, mu=0.0) == pytest.approx(0.0, abs=1e-12)
+    assert calls == [3]
+
+
+def test_the_region_check_reads_a_nesting_it_is_given():
+    from activecontour.geometry.regions import nesting, polygons
+
+    outer, hole = ac.rectangle((0, 0), (30, 30)), ac.rectangle((5, 5), (25, 25))[::-1]
+    for curves in ([outer, hole], [outer, outer[::-1]], [outer, hole[::-1]]):
+        nested = nesting(polygons(curves))
+        assert topology.region_problem(curves, nested) == topology.region_problem(curves)
+    # a nesting that says the hole lies in nothing makes it a wrongly oriented outer boundary
+    assert "negatively oriented inside 0" in topology.region_problem(
+        [outer, hole], (np.array([0, 0]), np.array([-1, -1]), []))
