@@ -16,6 +16,7 @@ from activecontour.backends.levelset.redistancing import (
     _front_pixels,
     _front_segments,
     _redistance,
+    _Scratch,
 )
 from activecontour.backends.levelset.scheme import _force, _swept_area
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _edge_soup
@@ -506,3 +507,18 @@ def test_segment_table_columns_are_start_direction_and_inverse_squared_length():
         np.testing.assert_array_equal(column, np.append(values, sentinel))
         np.testing.assert_array_equal(column32, np.append(values, sentinel).astype(np.float32))
     assert table.columns[4][3] == 0.0  # the point
+
+
+def test_band_growth_reuses_the_scratch_work_arrays_whatever_they_hold():
+    # the band's pixel list and ring scratch are kept between reinitialisations (their pages are
+    # not faulted in anew): whatever a previous band left in them, the result is a fresh one's
+    rows, cols = np.indices((40, 50), dtype=np.float64)
+    phi = (12.0 - np.hypot(rows - 19.5, cols - 24.0)).astype(np.float32)
+    scratch = _Scratch(phi.shape)
+    grown, chosen = scratch.grown, scratch.chosen
+    grown.fill(-7)
+    chosen.fill(-7)
+    state = _redistance(phi, 4.0, dtype=np.float32, scratch=scratch)
+    assert scratch.grown is grown and scratch.chosen is chosen
+    np.testing.assert_array_equal(state.phi, _redistance(phi, 4.0, dtype=np.float32).phi)
+    np.testing.assert_array_equal(state.near_flat, _redistance(phi, 4.0, dtype=np.float32).near_flat)

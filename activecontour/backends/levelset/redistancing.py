@@ -32,7 +32,9 @@ class _Scratch:
     A framed (M + 2) x (N + 2) grid: ``visited`` (the frame marked, sparing every bounds check)
     and ``owner`` (segment ids, -1: none); ``mark``, M x N, for the search of the front next to
     the previous one.  Filling them anew for every reinitialisation would touch every pixel;
-    clearing what one band touched is O(band).
+    clearing what one band touched is O(band).  ``grown`` and ``chosen``, of the framed grid's
+    size: the band's pixels and the ring scratch of :func:`activecontour._kernels.grow_band`,
+    written before they are read; kept so that their pages are not faulted in anew per band.
     """
 
     def __init__(self, shape):
@@ -43,6 +45,8 @@ class _Scratch:
         self.visited = visited.ravel()
         self.owner = np.full((m + 2) * self.width, -1, dtype=np.int32)
         self.mark = np.zeros(m * n, dtype=np.uint8)
+        self.grown = np.empty(self.visited.size, dtype=np.intp)
+        self.chosen = np.empty(self.visited.size, dtype=np.int32)
 
 
 def signed_distance(phi, band=np.inf):
@@ -351,9 +355,9 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     # a pixel k rings away from the front pixels is at least k - 1 from Gamma
     max_rings = int(np.ceil(band)) + 1 if np.isfinite(band) else m + n
     start_r, start_c, dir_r, dir_c, inverse = segments.columns
-    out = np.empty(visited.size, dtype=np.intp)
+    out = scratch.grown
     out[: ring.size] = ring
-    count = _kernels.grow_band(visited.view(np.uint8), owner, out, np.empty(visited.size, np.int32),
+    count = _kernels.grow_band(visited.view(np.uint8), owner, out, scratch.chosen,
                                ring.size, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
                                dir_c, inverse, np.ascontiguousarray(segments.links, dtype=np.intp))
     # every pixel keeps its side, at least _MIN_DISTANCE from Gamma: the sign pattern, and so the
