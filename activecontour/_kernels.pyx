@@ -2276,7 +2276,6 @@ def copy_boxes(const real[:, ::1] source, real[:, ::1] target, const Py_ssize_t[
             for r in range(row0, row1):
                 for c in range(col0, col1):
                     target[r, c] = source[r, c]
-    return None
 
 
 def sides_at(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,
