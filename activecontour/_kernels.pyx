@@ -2230,27 +2230,52 @@ def band_couplings(const Py_ssize_t[::1] flat, Py_ssize_t m, Py_ssize_t n, int[:
 
 
 def sides(const real[:, ::1] phi, const unsigned char[:, ::1] before, unsigned char[:, ::1] positive,
-          Py_ssize_t row0, Py_ssize_t row1, Py_ssize_t col0, Py_ssize_t col1, Py_ssize_t[::1] switched):
-    """``positive = phi > 0`` and the pixels whose side differs from ``before``, in one pass over the
-    box of rows ``row0:row1`` and columns ``col0:col1`` (where a step changed phi; beyond it
-    ``positive`` is left as it is) (:func:`activecontour.backends.levelset.redistancing._locate`):
-    ``switched`` (room for every pixel of the box) gets their flat indices in the image in
-    increasing order; returns how many."""
-    cdef Py_ssize_t n = phi.shape[1], block, r, c, count = 0
+          const Py_ssize_t[:, ::1] boxes, Py_ssize_t[::1] switched):
+    """``positive = phi > 0`` and the pixels whose side differs from ``before``, in one pass over
+    each box (rows ``(first row, stop row, first column, stop column)``: where a step changed phi;
+    beyond them ``positive`` is left as it is)
+    (:func:`activecontour.backends.levelset.redistancing._locate`): ``switched`` (room for every
+    pixel of the boxes) gets their flat indices in the image, per box in increasing order (a pixel
+    of two boxes twice); returns how many."""
+    cdef Py_ssize_t m = phi.shape[0], n = phi.shape[1], b, block, r, c, count = 0
+    cdef Py_ssize_t row0, row1, col0, col1
     cdef unsigned char side
-    if row0 < 0 or col0 < 0 or row1 > phi.shape[0] or col1 > n:
-        raise ValueError("sides: the box lies outside the image")
-    for block in range(row0, row1, _POLL_ROWS):
-        with nogil:
-            for r in range(block, min(block + _POLL_ROWS, row1)):
-                for c in range(col0, col1):
-                    side = phi[r, c] > 0
-                    positive[r, c] = side
-                    if side != before[r, c]:
-                        switched[count] = r * n + c
-                        count += 1
-        PyErr_CheckSignals()
+    for b in range(boxes.shape[0]):
+        row0, row1, col0, col1 = boxes[b, 0], boxes[b, 1], boxes[b, 2], boxes[b, 3]
+        if row0 < 0 or col0 < 0 or row1 > m or col1 > n:
+            raise ValueError("sides: a box lies outside the image")
+        if row1 <= row0 or col1 <= col0:
+            continue
+        if count + (row1 - row0) * (col1 - col0) > switched.shape[0]:
+            raise ValueError("sides: no room in switched for the boxes' pixels")
+        for block in range(row0, row1, _POLL_ROWS):
+            with nogil:
+                for r in range(block, min(block + _POLL_ROWS, row1)):
+                    for c in range(col0, col1):
+                        side = phi[r, c] > 0
+                        positive[r, c] = side
+                        if side != before[r, c]:
+                            switched[count] = r * n + c
+                            count += 1
+            PyErr_CheckSignals()
     return count
+
+
+def copy_boxes(const real[:, ::1] source, real[:, ::1] target, const Py_ssize_t[:, ::1] boxes):
+    """``target = source`` over each box (rows as for :func:`sides`): the previous state's phi put
+    back where a step changed it (:meth:`activecontour.backends.levelset.redistancing._Located.finish`)."""
+    cdef Py_ssize_t m = source.shape[0], n = source.shape[1], b, r, c
+    cdef Py_ssize_t row0, row1, col0, col1
+    if target.shape[0] != m or target.shape[1] != n:
+        raise ValueError("copy_boxes: source and target differ in shape")
+    for b in range(boxes.shape[0]):
+        row0, row1, col0, col1 = boxes[b, 0], boxes[b, 1], boxes[b, 2], boxes[b, 3]
+        if row0 < 0 or col0 < 0 or row1 > m or col1 > n:
+            raise ValueError("copy_boxes: a box lies outside the image")
+        with nogil:
+            for r in range(row0, row1):
+                for c in range(col0, col1):
+                    target[r, c] = source[r, c]
 
 
 def sides_at(const real[::1] phi, const unsigned char[::1] before, unsigned char[::1] positive,

@@ -16,6 +16,7 @@ from activecontour.backends.levelset.redistancing import (
     _front_pixels,
     _front_segments,
     _redistance,
+    _Scratch,
 )
 from activecontour.backends.levelset.scheme import _force, _swept_area
 from activecontour.backends.levelset.zeroset import _cell_segments, _change_cells, _edge_soup
@@ -350,6 +351,11 @@ def test_band_couplings_name_each_neighbour_in_the_band_or_held_beyond_it():
                 assert held[d, i] == (q if q is not None and q not in position else -1)
 
 
+def _box_rows(*boxes):
+    """Boxes ``(first row, stop row, first column, stop column)`` as the kernels take them."""
+    return np.array(boxes, dtype=np.intp)
+
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_sides_are_phi_above_zero_and_the_pixels_that_changed_side(dtype):
     rng = np.random.default_rng(20)
@@ -357,7 +363,8 @@ def test_sides_are_phi_above_zero_and_the_pixels_that_changed_side(dtype):
     before = rng.random((50, 100)) < 0.5
     positive = np.empty((50, 100), dtype=bool)
     switched = np.empty(5000, dtype=np.intp)
-    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), 0, 50, 0, 100, switched)
+    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), _box_rows((0, 50, 0, 100)),
+                           switched)
     np.testing.assert_array_equal(positive, phi > 0)
     np.testing.assert_array_equal(switched[:count], np.flatnonzero((phi > 0) != before))
 
@@ -383,20 +390,59 @@ def test_sides_of_a_box_leave_the_rest_as_it_was():
     before = rng.random((40, 60)) < 0.5
     positive = ~before  # every pixel wrong: only the box's are written
     switched = np.empty(phi.size, dtype=np.intp)
-    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), 5, 17, 20, 51, switched)
+    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), _box_rows((5, 17, 20, 51)),
+                           switched)
     box = np.zeros(phi.shape, dtype=bool)
     box[5:17, 20:51] = True
     np.testing.assert_array_equal(positive, np.where(box, phi > 0, ~before))
     np.testing.assert_array_equal(switched[:count], np.flatnonzero(box & ((phi > 0) != before)))
     with pytest.raises(ValueError, match="outside the image"):
-        _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), 0, 41, 0, 60, switched)
+        _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), _box_rows((0, 41, 0, 60)),
+                       switched)
 
 
-@pytest.mark.parametrize("where", ["anywhere", "box", "band"])
+def test_sides_of_overlapping_boxes_read_each_box_and_find_a_shared_pixel_twice():
+    # a step on tiles writes the cells and pieces of the halo around them, which may overlap
+    rng = np.random.default_rng(23)
+    phi = rng.normal(size=(40, 60)).astype(np.float32)
+    before = rng.random((40, 60)) < 0.5
+    positive = ~before  # every pixel wrong: only the boxes' are written
+    boxes = _box_rows((5, 17, 20, 51), (10, 30, 40, 60), (7, 7, 0, 9))  # the last one empty
+    inside = np.zeros((len(boxes),) + phi.shape, dtype=bool)
+    for mask, (top, bottom, left, right) in zip(inside, boxes, strict=True):
+        mask[top:bottom, left:right] = True
+    differ = (phi > 0) != before
+    switched = np.empty(int(inside.sum()), dtype=np.intp)
+    count = _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), boxes, switched)
+    union = inside.any(axis=0)
+    np.testing.assert_array_equal(positive, np.where(union, phi > 0, ~before))
+    assert count == (inside & differ).sum()  # a pixel of two boxes twice
+    np.testing.assert_array_equal(np.unique(switched[:count]), np.flatnonzero(union & differ))
+    with pytest.raises(ValueError, match="no room"):
+        _kernels.sides(phi, before.view(np.uint8), positive.view(np.uint8), boxes, switched[:5])
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_copy_boxes_copies_the_boxes_only(dtype):
+    rng = np.random.default_rng(25)
+    source = rng.normal(size=(30, 20)).astype(dtype)
+    target = np.zeros((30, 20), dtype=dtype)
+    boxes = _box_rows((2, 9, 3, 12), (6, 30, 10, 20))
+    _kernels.copy_boxes(source, target, boxes)
+    expected = np.zeros_like(target)
+    expected[2:9, 3:12] = source[2:9, 3:12]
+    expected[6:30, 10:20] = source[6:30, 10:20]
+    np.testing.assert_array_equal(target, expected)
+    with pytest.raises(ValueError, match="outside the image"):
+        _kernels.copy_boxes(source, target, _box_rows((0, 31, 0, 5)))
+
+
+@pytest.mark.parametrize("where", ["anywhere", "box", "boxes", "band"])
 def test_a_located_step_scores_as_its_reinitialised_state(where):
     # the front pixels' distances alone fix the zero set (marching squares reads only them): a
     # step scored before its band is grown has the energy of the state it becomes.  A step that
-    # changed phi in a box or on the band only is located and finished there only, in place
+    # changed phi in a box, in overlapping boxes or on the band only is located and finished
+    # there only, in place
     from activecontour.backends.levelset.redistancing import _locate, _Located
     from activecontour.energy import evaluate
     from activecontour.imaging.tables import ImageModel
@@ -415,11 +461,16 @@ def test_a_located_step_scores_as_its_reinitialised_state(where):
         previous = _redistance((14 - np.hypot(rows - centre[0], cols - centre[1])).astype(np.float32), 4.0,
                                dtype=np.float32)
         noise = rng.normal(scale=0.8, size=previous.phi.shape)
-        changed = {"anywhere": None, "box": (slice(2, 47), slice(1, 53)), "band": previous.near_flat}[where]
+        boxes = np.array([[2, 30, 1, 40], [20, 47, 30, 53], [25, 40, 3, 20]], dtype=np.intp)  # overlapping
+        changed = {"anywhere": None, "box": (slice(2, 47), slice(1, 53)), "boxes": boxes,
+                   "band": previous.near_flat}[where]
         if changed is not None:
             held = np.ones(noise.shape, dtype=bool)
             if where == "box":
                 held[changed] = False
+            elif where == "boxes":
+                for top, bottom, left, right in changed:
+                    held[top:bottom, left:right] = False
             else:
                 held.ravel()[changed] = False
             noise[held] = 0.0
@@ -456,3 +507,18 @@ def test_segment_table_columns_are_start_direction_and_inverse_squared_length():
         np.testing.assert_array_equal(column, np.append(values, sentinel))
         np.testing.assert_array_equal(column32, np.append(values, sentinel).astype(np.float32))
     assert table.columns[4][3] == 0.0  # the point
+
+
+def test_band_growth_reuses_the_scratch_work_arrays_whatever_they_hold():
+    # the band's pixel list and ring scratch are kept between reinitialisations (their pages are
+    # not faulted in anew): whatever a previous band left in them, the result is a fresh one's
+    rows, cols = np.indices((40, 50), dtype=np.float64)
+    phi = (12.0 - np.hypot(rows - 19.5, cols - 24.0)).astype(np.float32)
+    scratch = _Scratch(phi.shape)
+    grown, chosen = scratch.grown, scratch.chosen
+    grown.fill(-7)
+    chosen.fill(-7)
+    state = _redistance(phi, 4.0, dtype=np.float32, scratch=scratch)
+    assert scratch.grown is grown and scratch.chosen is chosen
+    np.testing.assert_array_equal(state.phi, _redistance(phi, 4.0, dtype=np.float32).phi)
+    np.testing.assert_array_equal(state.near_flat, _redistance(phi, 4.0, dtype=np.float32).near_flat)

@@ -110,10 +110,11 @@ them come within half the band of flipping.  A step (b) works on the band only (
 conjugate gradients).  A step is written into a recycled array, which
 equals phi already but for the box of the step or finish that last wrote it (noted per array):
 phi is copied over that box only, not over the image.  The reinitialisation
-reads the sides only where the step changed phi (its box, the image, or for a step (b) the band's
-pixels; the front is searched next to the previous one and the pixels that changed side) and,
-for an accepted step, is written into the stepped array itself: the previous phi copied back over
-the step's box (nothing for a step (b)), then O(band) (a rejected step costs its front), with
+reads the sides only where the step changed phi (its box, the image, the cells and halo pieces
+a step on tiles wrote, or for a step (b) the band's pixels; the front is searched next to the
+previous one and the pixels that changed side) and, for an accepted step, is written into the
+stepped array itself: the previous phi copied back over those boxes (nothing for a step (b)),
+then O(band) (a rejected step costs its front), with
 work arrays kept between iterations; the energy is O(|Gamma|) from the cells the
 reinitialisation found.  The image itself stays float64 (the model's tables and the common
 evaluator are exact in float64; the polygon backend shares them).

@@ -32,7 +32,9 @@ class _Scratch:
     A framed (M + 2) x (N + 2) grid: ``visited`` (the frame marked, sparing every bounds check)
     and ``owner`` (segment ids, -1: none); ``mark``, M x N, for the search of the front next to
     the previous one.  Filling them anew for every reinitialisation would touch every pixel;
-    clearing what one band touched is O(band).
+    clearing what one band touched is O(band).  ``grown`` and ``chosen``, of the framed grid's
+    size: the band's pixels and the ring scratch of :func:`activecontour._kernels.grow_band`,
+    written before they are read; kept so that their pages are not faulted in anew per band.
     """
 
     def __init__(self, shape):
@@ -43,6 +45,8 @@ class _Scratch:
         self.visited = visited.ravel()
         self.owner = np.full((m + 2) * self.width, -1, dtype=np.int32)
         self.mark = np.zeros(m * n, dtype=np.uint8)
+        self.grown = np.empty(self.visited.size, dtype=np.intp)
+        self.chosen = np.empty(self.visited.size, dtype=np.int32)
 
 
 def signed_distance(phi, band=np.inf):
@@ -120,7 +124,7 @@ class _Located:
         """The :class:`_Redistanced` state: the band grown from the front (:func:`_redistance`).
 
         ``previous``: the state that phi was stepped from (as for :func:`_locate`); the state is
-        then written into phi itself: where the step ``changed`` it (a box) phi is first the
+        then written into phi itself: where the step ``changed`` it (boxes) phi is first the
         previous state's again, and beyond the previous band and the switched pixels that is
         ``+-band`` on the same side, so those are reset and the band grown.  Where the step
         changed only the band's pixels nothing is copied: O(band) rather than a copy of the image.
@@ -135,8 +139,8 @@ class _Located:
         base = None
         if previous is not None:
             base = self.phi
-            if isinstance(self.changed, tuple):  # a box: the previous state's phi there
-                np.copyto(base[self.changed], previous.phi[self.changed])
+            # the previous state's phi where the step changed it
+            _kernels.copy_boxes(previous.phi, base, _boxes(self.changed))
             reset = np.concatenate([previous.near_flat, self.switched])
             base.ravel()[reset] = np.where(positive.ravel()[reset], dtype(band), dtype(-band))
         elif overwrite:  # the segments hold the zero set: phi itself is no longer read
@@ -159,8 +163,9 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=No
     previous front and the pixels that changed side (a front pixel whose side and whose
     neighbours' sides are unchanged was a front pixel before), which gives the same front and
     cells as a search over the image at the cost of one pass instead of a dozen.  ``changed``:
-    where phi may differ from ``previous.phi``: a box (two slices), the flat indices of pixels,
-    or None (anywhere); the sides are read there only.
+    where phi may differ from ``previous.phi``: a box (two slices), boxes (R, 4) (rows: first
+    row, stop row, first column, stop column; they may overlap), the flat indices of pixels
+    (1-D), or None (anywhere); the sides are read there only.
     """
     switched = None
     if previous is None:
@@ -183,23 +188,33 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=No
 
 
 def _sides(phi, before, changed):
-    """``phi > 0`` and the flat indices of the pixels whose side differs from ``before``, reading
-    phi only where it ``changed`` (a box or flat indices; :func:`_locate`)."""
-    if not isinstance(changed, tuple):  # pixels: the band of a step (b)
+    """``phi > 0`` and the flat indices of the pixels whose side differs from ``before`` (in
+    increasing order), reading phi only where it ``changed`` (boxes or flat indices; :func:`_locate`)."""
+    if isinstance(changed, np.ndarray) and changed.ndim == 1:  # pixels: the band of a step (b)
         positive = before.copy()
         switched = np.empty(changed.size, dtype=np.intp)
         count = _kernels.sides_at(np.ascontiguousarray(phi).reshape(-1), before.reshape(-1).view(np.uint8),
                                   positive.reshape(-1).view(np.uint8),
                                   np.ascontiguousarray(changed, dtype=np.intp), switched)
         return positive, switched[:count]
-    rows, cols = changed
-    # beyond the box the sides are before's; one pass over the box
-    whole = rows.stop - rows.start == phi.shape[0] and cols.stop - cols.start == phi.shape[1]
-    positive = np.empty(phi.shape, dtype=bool) if whole else before.copy()
-    switched = np.empty((rows.stop - rows.start) * (cols.stop - cols.start), dtype=np.intp)
+    boxes = _boxes(changed)
+    # beyond the boxes the sides are before's; one pass over each box
+    area = int(((boxes[:, 1] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 2])).sum())
+    positive = np.empty(phi.shape, dtype=bool) if area == phi.size and len(boxes) == 1 else before.copy()
+    switched = np.empty(area, dtype=np.intp)
     count = _kernels.sides(np.ascontiguousarray(phi), np.ascontiguousarray(before).view(np.uint8),
-                           positive.view(np.uint8), rows.start, rows.stop, cols.start, cols.stop, switched)
-    return positive, switched[:count].copy()
+                           positive.view(np.uint8), boxes, switched)
+    # overlapping boxes find a pixel twice; a single box finds each once, in order
+    return positive, (switched[:count].copy() if len(boxes) == 1 else np.unique(switched[:count]))
+
+
+def _boxes(changed):
+    """The boxes (R, 4) of ``changed`` as :func:`_locate` takes it (a box, boxes), or none for flat
+    indices (the pixels of a step (b) are located and finished in place)."""
+    if isinstance(changed, tuple):
+        rows, cols = changed
+        return np.array([[rows.start, rows.stop, cols.start, cols.stop]], dtype=np.intp)
+    return changed if changed.ndim == 2 else np.zeros((0, 4), dtype=np.intp)
 
 
 def _front_and_cells(positive, seeds, mark):
@@ -340,9 +355,9 @@ def _propagate(positive, rows, cols, segments, nearest, band, sweeps=1, dtype=np
     # a pixel k rings away from the front pixels is at least k - 1 from Gamma
     max_rings = int(np.ceil(band)) + 1 if np.isfinite(band) else m + n
     start_r, start_c, dir_r, dir_c, inverse = segments.columns
-    out = np.empty(visited.size, dtype=np.intp)
+    out = scratch.grown
     out[: ring.size] = ring
-    count = _kernels.grow_band(visited.view(np.uint8), owner, out, np.empty(visited.size, np.int32),
+    count = _kernels.grow_band(visited.view(np.uint8), owner, out, scratch.chosen,
                                ring.size, steps, width, max_rings, sweeps, start_r, start_c, dir_r,
                                dir_c, inverse, np.ascontiguousarray(segments.links, dtype=np.intp))
     # every pixel keeps its side, at least _MIN_DISTANCE from Gamma: the sign pattern, and so the

@@ -209,8 +209,9 @@ class _Problem:
         band's pixels alone (O(band) instead of a DCT pair over the image), and otherwise S is
         solved on the band (:meth:`_band_smooth`) when that is cheaper than the DCT pair.
         ``force``: the constants from :meth:`force`.  Returns the stepped phi and where it may
-        differ from ``state.phi``: the band's pixels (flat indices), a box (two slices) or None
-        (anywhere), so that its sides are read there only (:meth:`locate`).
+        differ from ``state.phi``: the band's pixels (flat indices), a box (two slices), the boxes
+        of the tiles' writes (:class:`_Tiles`, ``rects``) or None (anywhere), so that its sides
+        are read there only (:meth:`locate`).
         """
         stepped, changed = self._step(state, force, tau, smooth_force)
         box = _bounds(changed, self.shape)
@@ -246,7 +247,7 @@ class _Problem:
                 held = self._coarse_held(state, form, tau)
                 stepped = self._tile_step(state, form, tau, tiles, held)
                 if stepped is not None:
-                    return stepped, tiles.box
+                    return stepped, tiles.rects
             if box is not None:
                 held = self._coarse_held(state, form, tau) if held is None else held
                 if not self._far_flips(held, box):
@@ -507,8 +508,9 @@ class _Tiles:
     the rectangles ``(tile, first row, stop row, first column, stop column, 0)`` of the cells and
     of the halo's parts that lie in cells not solved (its sides and corners, each in one
     neighbouring cell), for :func:`activecontour._kernels.tile_pieces`; ``widened`` the cells
-    widened by the halo (rows and columns, first and stop, per tile); ``box`` their bounding box
-    (two slices); ``pixels`` the tiles' total size.
+    widened by the halo (rows and columns, first and stop, per tile); ``rects`` the cells and the
+    halo's pieces, (R, 4) (first row, stop row, first column, stop column; pieces of two cells
+    may overlap): the only pixels a step on the tiles writes; ``pixels`` the tiles' total size.
     """
 
     def __init__(self, grid, cell_r, cell_c, core, side, reach, shape):
@@ -538,13 +540,7 @@ class _Tiles:
                                                    spans[1][dc][0][keep], spans[1][dc][1][keep],
                                                    0 * index[keep]]))
         self.halo_pieces = np.concatenate(pieces).astype(np.intp)
-        self.box = (slice(int(self.widened[0].min()), int(self.widened[1].max())),
-                    slice(int(self.widened[2].min()), int(self.widened[3].max())))
-
-
-def _area(box):
-    """The number of pixels of a box (two slices)."""
-    return (box[0].stop - box[0].start) * (box[1].stop - box[1].start)
+        self.rects = np.ascontiguousarray(np.concatenate([self.cells, self.halo_pieces])[:, 1:5])
 
 
 def _waves(size):
@@ -570,10 +566,19 @@ def _copy_outside(source, target, region, box=None):
         target[strip] = source[strip]
 
 
+def _area(box):
+    """The number of pixels of a box (two slices)."""
+    return (box[0].stop - box[0].start) * (box[1].stop - box[1].start)
+
+
 def _bounds(where, shape):
-    """The bounding box (two slices) of ``where``: flat indices of pixels or a box; None for None."""
+    """The bounding box (two slices) of ``where``: flat indices of pixels, a box or boxes (R, 4) as
+    :meth:`_Problem.step` returns them; None for None."""
     if where is None or isinstance(where, tuple):
         return where
+    if where.ndim == 2:
+        return (slice(int(where[:, 0].min()), int(where[:, 1].max())),
+                slice(int(where[:, 2].min()), int(where[:, 3].max())))
     if where.size == 0:
         return None
     n = shape[1]
