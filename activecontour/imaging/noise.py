@@ -44,8 +44,24 @@ def estimate_noise(values, where=None):
     for ch in range(values.shape[2]):
         plane = values[::step, ::step, ch] if step > 1 else values[:, :, ch]
         response = cv2.filter2D(np.ascontiguousarray(plane), cv2.CV_64F, _NOISE_MASK)[1:-1, 1:-1]
-        sigma[ch] = 1.4826 / 6.0 * float(np.median(np.abs(response if within is None else response[within])))
+        sigma[ch] = 1.4826 / 6.0 * _median(np.abs(response if within is None else response[within]))
     return sigma
+
+
+def _median(values):
+    """``np.median`` of a float array, the same value bit for bit, reordering ``values`` (a copy the
+    caller owns) in place: one partition at the upper middle and, for an even count, the largest
+    value below it (the lower middle), averaged as ``np.median`` averages them.  ``np.median``
+    partitions at both middles and the last position at once, which numpy does by a generic
+    introselect; one position takes its vectorised selection, ~10x faster on 512^2 values (the
+    noise is estimated on every ``mu="auto"`` run and by the objects' split by contrast)."""
+    values = values.reshape(-1)
+    middle = values.size // 2
+    values.partition(middle)
+    if np.isnan(values[middle:].max()):  # (a partition puts NaNs last; np.median answers NaN)
+        return float("nan")
+    upper = values[middle]
+    return float(upper) if values.size % 2 else float(np.mean([values[:middle].max(), upper]))
 
 
 def auto_mu(values, where=None):

@@ -68,9 +68,10 @@ def _warm_start(previous, problem):
     candidate = projected > 0
     count, pieces = cv2.connectedComponents(candidate.astype(np.uint8), connectivity=8)
     followed = np.zeros(count, dtype=bool)
-    followed[np.unique(pieces[previous.mask])] = True
+    followed[pieces[previous.mask]] = True
     speck = speck_area(previous.mu, float(np.mean(difference**2)))
-    new = mask_to_curves(candidate & ~followed[pieces], min_area=speck)
+    # (no new piece, the common frame: the mask of new pieces is empty, its curves none)
+    new = [] if followed[1:].all() else mask_to_curves(candidate & ~followed[pieces], min_area=speck)
     starts = [list(previous.contours) + new, mask_to_curves(candidate, min_area=speck)]
     model, params = (problem if gaussian else scoring).model()[0], scoring.working
     energies = [evaluate(model, *stack_curves(curves)[:2], params).energy if curves else np.inf
