@@ -60,7 +60,7 @@ import sys
 from ..messages import one_line
 from .errors import EXIT_INTERRUPTED, EXIT_USAGE, PROG, REPORTED_ERRORS
 
-__all__ = ["EXIT_INTERRUPTED", "EXIT_USAGE", "console_script", "main"]
+__all__ = ["EXIT_INTERRUPTED", "EXIT_USAGE", "console_script", "main", "reuse_freed_memory"]
 
 
 def main(argv=None):
@@ -102,12 +102,41 @@ def main(argv=None):
 NUMPY_ENVIRONMENT = {"NUMPY_MADVISE_HUGEPAGE": "0"}
 
 
+#: glibc's ``mallopt`` parameters (``malloc.h``) that :func:`reuse_freed_memory` sets.
+_M_TRIM_THRESHOLD, _M_MMAP_MAX = -1, -4
+
+
+def reuse_freed_memory():
+    """Have glibc's malloc keep the memory of freed arrays for the next ones (Linux; elsewhere
+    nothing happens).
+
+    By default every array over 32 MB is a fresh ``mmap`` returned to the kernel when freed, so
+    the next one faults in zeroed pages again: a run at 8192^2 allocates several GB so, one
+    image-sized temporary after another, and spent 2-3 s of system time in page faults against
+    4 s of its own work (1.2-1.9 s with this).  From the heap, without trimming it, a freed
+    array's pages serve the next allocation.  The peak memory is the same (+2 % at 8192^2: the
+    heap's holes); the process keeps it until it ends (a ``--jobs`` worker until the pool ends).
+    Numbers are unchanged: only where they are stored.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):  # not glibc's C library
+        return
+    mallopt(_M_MMAP_MAX, 0)
+    mallopt(_M_TRIM_THRESHOLD, 2**31 - 1)
+
+
 def console_script():
     """The ``activecontour`` executable: :func:`main` (with :data:`NUMPY_ENVIRONMENT`, set before
-    numpy is imported), and after Ctrl-C an exit without the interpreter's teardown of SciPy and
-    OpenCV, so that it answers at once."""
+    numpy is imported, and :func:`reuse_freed_memory`), and after Ctrl-C an exit without the
+    interpreter's teardown of SciPy and OpenCV, so that it answers at once."""
     for name, value in NUMPY_ENVIRONMENT.items():
         os.environ.setdefault(name, value)
+    reuse_freed_memory()
     status = main()
     if status == EXIT_INTERRUPTED:
         sys.stdout.flush()

@@ -283,11 +283,47 @@ def test_view_passes_the_settings_to_the_viewer(small, capsys, monkeypatch):
 def test_the_executable_turns_numpys_huge_pages_off_unless_told(monkeypatch):
     seen = []
     monkeypatch.setattr(cli, "main", lambda: seen.append(os.environ.get("NUMPY_MADVISE_HUGEPAGE")) or 0)
+    monkeypatch.setattr(cli, "reuse_freed_memory", lambda: None)  # not in the test process
     monkeypatch.delenv("NUMPY_MADVISE_HUGEPAGE", raising=False)
     assert cli.console_script() == 0
     monkeypatch.setenv("NUMPY_MADVISE_HUGEPAGE", "1")  # the caller's environment wins
     assert cli.console_script() == 0
     assert seen == ["0", "1"]
+
+
+_FAULTS = """
+import resource
+import numpy as np
+from app import cli
+
+def faults():  # the page faults of each of three 64 MB arrays, made and freed in turn
+    counts = []
+    for _ in range(3):
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        array = np.ones(64 << 20, dtype=np.uint8)
+        del array
+        counts.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+    return counts
+
+default = faults()
+cli.reuse_freed_memory()
+print(*default, *faults())
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc")
+def test_the_executable_reuses_the_memory_of_freed_arrays():
+    """After the first, a 64 MB array that replaces a freed one faults in no fresh pages."""
+    import resource
+
+    completed = subprocess.run([sys.executable, "-c", _FAULTS], capture_output=True, text=True, check=True,
+                               cwd=Path(__file__).resolve().parents[2], timeout=60,
+                               env={**os.environ, "NUMPY_MADVISE_HUGEPAGE": "0"})
+    counts = [int(count) for count in completed.stdout.split()]
+    pages = (64 << 20) // resource.getpagesize()
+    if min(counts[1:3]) < pages / 2:
+        pytest.skip("this malloc reuses freed arrays already")
+    assert max(counts[4:]) < pages / 100
 
 
 def test_installed_console_script(small, tmp_path):
