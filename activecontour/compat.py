@@ -226,13 +226,14 @@ def _checkerboard_start(values, mu):
     default start is (:func:`chan_vese` sets those options)."""
     from activecontour.backends.options import PolygonOptions
     from activecontour.geometry.curve import resample
-    from activecontour.initial import threshold_starts
+    from activecontour.geometry.raster import rasterize
+    from activecontour.initial import Start, threshold_starts
 
     if not _is_number(mu) or mu < 0:
         return None
     spacing = PolygonOptions().spacing
     curves = [resample(c, spacing) for c in threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]]
-    return curves or None
+    return Start(curves, rasterize(curves, values.shape[:2])) if curves else None
 
 
 def _is_number(value):
