@@ -221,18 +221,21 @@ def _segment_arguments(shape, mu, lambda1, lambda2, tol, max_num_iter, init_leve
 def _checkerboard_start(values, mu):
     """scikit-image's ``"checkerboard"`` here: the default start's threshold set, of the normalised
     image ``values`` (M, N, C) blurred by whichever of ``CHECKERBOARD_BLURS`` gives it the lowest
-    (6.38) (:func:`activecontour.initial.threshold_starts`), resampled at the polygon's spacing;
-    None for ``mu="auto"`` (segment's default start) or no threshold set.  It is flowed from as the
-    default start is (:func:`chan_vese` sets those options)."""
+    (6.38) (:func:`activecontour.initial.threshold_starts`), resampled at the polygon's spacing,
+    as an :class:`activecontour.initial.Start` (the outline of a region, oriented by nesting: the
+    flow takes it as it is, without rebuilding it as a user's curves); None for ``mu="auto"``
+    (segment's default start) or no threshold set.  It is flowed from as the default start is
+    (:func:`chan_vese` sets those options)."""
     from activecontour.backends.options import PolygonOptions
     from activecontour.geometry.curve import resample
-    from activecontour.initial import threshold_starts
+    from activecontour.geometry.raster import rasterize
+    from activecontour.initial import Start, threshold_starts
 
     if not _is_number(mu) or mu < 0:
         return None
     spacing = PolygonOptions().spacing
     curves = [resample(c, spacing) for c in threshold_starts(values, float(mu), blurs=CHECKERBOARD_BLURS)[0]]
-    return curves or None
+    return Start(curves, rasterize(curves, values.shape[:2])) if curves else None
 
 
 def _is_number(value):

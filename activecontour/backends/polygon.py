@@ -333,7 +333,7 @@ class _Flow:
         # Vertices on the image border that the force pushes out of the image cannot follow it:
         # leave those components out of the load and of the velocity (an active set), so that
         # f . V = -b^{-1}(f~, f~) < 0 stays a descent direction after clipping to the image.
-        held = ((points <= self.low) & (current.load > 0)) | ((points >= self.high) & (current.load < 0))
+        held = _held(points, current.load, self.low, self.high)
         load = np.where(held, 0.0, current.load)
         accelerated = self.memory.direction(geometry, load, held, self.velocity)
         if accelerated is not None:
@@ -353,7 +353,7 @@ class _Flow:
         dt = min(dt, _size_limit(geometry, self.edge_lengths(geometry), v))
         areas = self.areas(geometry)  # the iterate bounds a region: see repair
         for _ in range(_MAX_HALVINGS):
-            trial = np.clip(points + dt * v, self.low, self.high)
+            trial = _clipped(points + dt * v, self.low, self.high)
             predicted = np.sum(current.load * (trial - points))
             # clipping can run two pieces of curve along the same stretch of the border
             candidate = None
@@ -455,6 +455,31 @@ class _Movement:
 
     def clear(self):
         self.start, self.offsets, self.count, self.blocks = None, None, 0, []
+
+
+def _held(points, load, low, high):
+    """Which components of the (K, 2) vertices sit on the image border with the load pushing them
+    out: ``((points <= low) & (load > 0)) | ((points >= high) & (load < 0))`` for the (2,) bounds,
+    computed column by column (see :func:`_clipped`)."""
+    held = np.empty(points.shape, dtype=bool)
+    for axis in range(points.shape[1]):
+        p, f = points[:, axis], load[:, axis]
+        held[:, axis] = ((p <= low[axis]) & (f > 0)) | ((p >= high[axis]) & (f < 0))
+    return held
+
+
+def _clipped(points, low, high):
+    """``np.clip(points, low, high)`` for (K, 2) vertices and (2,) bounds, in place, column by column.
+
+    The same numbers; numpy broadcasts (2,) bounds over a (K, 2) array as an inner loop of length
+    2, which costs several times a scalar bound per column (0.42 ms against 0.05 ms at K = 18000,
+    scikit-image's brick; 0.05 against 0.01 ms at K = 4000): once per trial of every step, about
+    7 % of brick's flow.
+    """
+    for axis in range(points.shape[1]):
+        column = points[:, axis]
+        np.clip(column, low[axis], high[axis], out=column)
+    return points
 
 
 def _size_limit(geometry, edge_lengths, v):

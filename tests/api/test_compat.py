@@ -9,7 +9,7 @@ import skimage.segmentation
 import activecontour as ac
 from activecontour import compat
 from activecontour.compat import chan_vese
-from activecontour.geometry.curve import resample
+from activecontour.geometry.curve import resample, signed_area
 from activecontour.geometry.raster import mask_to_curves
 from activecontour.initial import DEFAULT_INIT_BLUR, _blurred, threshold_split, threshold_starts
 from activecontour.synthetic import add_noise, dice, disk_image
@@ -99,13 +99,33 @@ def test_checkerboard_takes_the_blur_whose_threshold_set_is_lowest():
     values = image[..., None] - image.min()
     values /= values.max()
     costs = [threshold_split(_blurred(values, b), values, 0.25)[2] for b in compat.CHECKERBOARD_BLURS]
-    start = compat._checkerboard_start(values, 0.25)
+    start = compat._checkerboard_start(values, 0.25).contours
     chosen = compat.CHECKERBOARD_BLURS[int(np.argmin(costs))]
     assert costs[0] > min(costs)  # the test means something: 1 px is not the best here
     expected = [resample(c, 1.0) for c in threshold_starts(values, 0.25, blurs=(chosen,))[0]]  # spacing
     assert len(start) == len(expected)
     for ours, theirs in zip(start, expected, strict=True):
         np.testing.assert_array_equal(ours, theirs)
+
+
+def test_checkerboard_start_is_taken_as_the_boundary_it_is(monkeypatch):
+    """The threshold set's outline is oriented by nesting and holds no crossing already: the flow
+    takes it as a result's contours (:class:`activecontour.initial.Start`), without rebuilding it
+    as a user's curves (region_boundary: about 3 % of a call on scikit-image's brick)."""
+    import activecontour.initial
+
+    image = np.zeros((64, 80))
+    image[8:56, 10:70] = 1.0
+    image[20:44, 26:54] = 0.0  # a hole: an outer boundary and a negatively oriented one
+
+    def rebuilt(curves):
+        raise AssertionError("the checkerboard start was rebuilt as a user's curves")
+
+    monkeypatch.setattr(activecontour.initial, "region_boundary", rebuilt)
+    start = compat._checkerboard_start(image[..., None], 0.25)
+    assert sorted(np.sign(signed_area(c)) for c in start.contours) == [-1.0, 1.0]
+    assert dice(start.mask, image > 0.5) > 0.98  # the inside of the contours
+    assert dice(chan_vese(image), image > 0.5) > 0.98
 
 
 @pytest.mark.parametrize("init_level_set", ["disk", "small disk"])

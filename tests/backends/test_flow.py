@@ -253,3 +253,23 @@ def test_lbfgs_direction_is_the_two_loop_product_of_the_dense_inverse_hessian():
     assert len(memory.pairs) == 4
     assert direction is not None and np.sum(force * direction) < 0
     np.testing.assert_allclose(direction, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+def test_border_clip_and_held_components_column_by_column():
+    """The line search's clip to the image domain and the held components (vertices on the border
+    pushed outward) are numpy's broadcast expressions, number for number, including vertices
+    exactly on the border and beyond it."""
+    from activecontour.backends.polygon import _clipped, _held
+
+    rng = np.random.default_rng(3)
+    low, high = np.array([-0.5, -0.5]), np.array([19.5, 29.5])
+    points = rng.uniform(-3.0, 33.0, size=(400, 2))
+    points[::7] = low
+    points[3::11] = high
+    points[5::13, 1] = high[1]
+    load = rng.normal(size=points.shape)
+    load[::17] = 0.0
+    expected = ((points <= low) & (load > 0)) | ((points >= high) & (load < 0))
+    np.testing.assert_array_equal(_held(points, load, low, high), expected)
+    assert expected.any() and not expected.all()
+    np.testing.assert_array_equal(_clipped(points.copy(), low, high), np.clip(points, low, high))
