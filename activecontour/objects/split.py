@@ -287,11 +287,16 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         if clump is not None and not clump[1]:
             result.extend(clump[0])
             continue
+        # a crowded clump of ellipses stands where more of its area is an object's ellipse than of
+        # the stages' parts (:func:`activecontour.objects.corners._ellipse_area`), and without
+        # them where all of it is (the stages' parts cannot explain more than the whole object)
+        explained = None if clump is None else _ellipse_area(clump[0], curves[0])
+        if explained is not None and explained == sum(signed_area(piece[0]) for piece in clump[0]):
+            result.extend(clump[0])
+            continue
         pieces = _staged_parts(curves, box, inside, depth, bent, concave, contrast, image, least, neck_ratio,
                                min_radius, labels.shape)
-        # a crowded clump of ellipses stands where more of its area is an object's ellipse than of
-        # the stages' parts (:func:`activecontour.objects.corners._ellipse_area`)
-        if clump is not None and _ellipse_area(clump[0], curves[0]) > _ellipse_area(pieces, curves[0]):
+        if explained is not None and explained > _ellipse_area(pieces, curves[0]):
             pieces = clump[0]
         result.extend(pieces)
     return result
