@@ -93,11 +93,39 @@ ARC_SIZE_RATIO = 0.25
 #: more of the outline unexplained (singles seeds 0-59: 0.39-0.55 explained; the clumps so
 #: split, 0.62-0.96: a narrow margin, at 0.65 the worst ellipse seed, 13, falls back to 0.28).
 ARC_HIDDEN_OUTLINE = 0.6
+#: A crowded clump -- more than ``ARC_TRIPLE_POINTS`` places where three parts meet: six to eight
+#: objects pressed together, or an object hidden among them (it owns no arc: an uncovered piece,
+#: :func:`_uncovered_parts`) -- is a clump of ellipses only where the ellipses overlap two by two
+#: (no pixel lies in three: ``ARC_TRIPLE`` is a star's arms, all reaching into its centre) and at
+#: most this many parts meet at one point.  Four parts at one point with few places of three is a
+#: star's centre where its arms' ellipses meet, and stays declined (singles seeds 100-159, 149
+#: and 153: four parts at one place, one or two places of three; the touching families' crowded
+#: clumps, seeds 0-79: three to seven places) ...
+ARC_CROWD_MEET = 4
+#: ... and each uncovered piece made an object is at most this many times the largest ellipse's
+#: cell: an object hidden in a clump shows less than its whole, and the clump's objects are of
+#: comparable size, while the body of a star whose arms were fitted by ellipses is two to three
+#: times each arm (singles seeds 60-99, 79 and 97: 2.1-2.9; the families' hidden objects, seeds
+#: 0-59: at most 1.1).  Such a clump is not decided by the arcs alone:
+#: :func:`activecontour.objects.split.split_touching` keeps it only where more of its area is an
+#: object's ellipse than of the stages' parts.  What this does not tell apart: a five-armed star
+#: whose fitted ellipses leave its centre and one arm uncovered, three places of three and the
+#: uncovered piece no larger than an arm (singles seed 144, cut into five; the one single of 960,
+#: seeds 0-159, that crowded clumps cut).
+ARC_HIDDEN_SIZE = 1.5
 
 
 def _arc_parts(curves, depth=None, extent=None, bent=None):
+    """The parts of an object as a clump of overlapping ellipses that the arcs decide alone
+    (:func:`_arc_clump`, not crowded), or None."""
+    clump = _arc_clump(curves, depth, extent, bent)
+    return None if clump is None or clump[1] else clump[0]
+
+
+def _arc_clump(curves, depth=None, extent=None, bent=None):
     """The parts of an object (outer boundary, then holes: a ring of objects around a gap) as a
-    clump of overlapping ellipses (lists of curves), or None when no such clump explains it.
+    clump of overlapping ellipses (lists of curves) and whether the clump is crowded, or None
+    when no such clump explains it.
     ``extent``: the label image's shape, whose edge cuts an object that leaves it; ``depth`` and
     ``bent``: the outline's :func:`_hull_depth` and :func:`_bent`, when they are known.
 
@@ -121,7 +149,11 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     ``ARC_SIZE_RATIO`` of the largest part, every border between two parts reaches the outline at
     corners only (of ``ARC_END_TURN``, within ``ARC_END_REACH``), no four parts meet and at most
     ``ARC_TRIPLE_POINTS`` places have three (``ARC_REACH``, :func:`_meet_at_corners`).  Otherwise
-    the necks and the corner cuts decide, as for an object without this stage.  Unlike a cut
+    the necks and the corner cuts decide, as for an object without this stage -- but for a
+    crowded clump (more than ``ARC_TRIPLE_POINTS`` places of three, at most ``ARC_CROWD_MEET``
+    parts at one point) whose ellipses overlap two by two and whose uncovered pieces are no
+    larger than ``ARC_HIDDEN_SIZE`` ellipses: it is returned as crowded, for the caller to weigh
+    against the stages below.  Unlike a cut
     between two corners, the grouping splits three objects pressed around one point (a trefoil
     has three corners, one per contact, and three arcs) and takes a corner whose partner was
     rounded away as the end of two arcs.
@@ -181,6 +213,7 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
         return None
     parts = np.zeros(inside.shape, dtype=np.int32)
     parts[tuple(points.T)] = np.argmin(depth_in, axis=0) + 1
+    cells = int(parts.max())  # (the ellipses' cells; the uncovered pieces' ids follow)
     if explained < ARC_COVER * len(outline) or np.count_nonzero(covered) < ARC_COVER * len(points):
         uncovered = np.zeros(inside.shape, dtype=bool)
         uncovered[tuple(points[covered == 0].T)] = True
@@ -190,13 +223,19 @@ def _arc_parts(curves, depth=None, extent=None, bent=None):
     outer = rasterize([outline - low], window)
     sizes = np.bincount(parts.ravel(), minlength=count + 1)[1:]
     ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
-    if (sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max())
-            or not _meet_at_corners(parts, outer, outline[ends] - low, count)):
+    if sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max()):
+        return None
+    if (meeting := _meeting(parts, outer, outline[ends] - low, count)) is None:
+        return None
+    most, triples = meeting
+    crowded = most >= 4 or triples > ARC_TRIPLE_POINTS
+    if crowded and (most > ARC_CROWD_MEET or triples <= ARC_TRIPLE_POINTS or np.any(covered >= 3)
+                    or sizes[cells:].max(initial=0) > ARC_HIDDEN_SIZE * sizes[:cells].max()):
         return None
     pieces = _cut(curves, parts, low)
     if len(pieces) != count or any(len(piece) != 1 for piece in pieces):
         return None  # a cell in pieces, or with a hole: no clump of ellipses
-    return pieces
+    return pieces, crowded
 
 
 def _uncovered_parts(parts, uncovered):
@@ -303,7 +342,16 @@ def _meet_at_corners(parts, inside, corners, count):
     """Whether the borders between the pixel parts reach the object's edge (``inside``: the
     pixels within its outer boundary) within ``ARC_END_REACH`` of a corner (window coordinates) only,
     no pixel has four parts within ``ARC_REACH`` and at most ``ARC_TRIPLE_POINTS`` places have
-    three."""
+    three (:func:`_meeting`)."""
+    meeting = _meeting(parts, inside, corners, count)
+    return meeting is not None and meeting[0] < 4 and meeting[1] <= ARC_TRIPLE_POINTS
+
+
+def _meeting(parts, inside, corners, count):
+    """None when a border between the pixel parts reaches the object's edge (``inside``) farther
+    than ``ARC_END_REACH`` from every corner (window coordinates); else the most parts within
+    ``ARC_REACH`` of one pixel (``count`` when under three parts) and the number of places (pieces
+    of pixels) where three parts or more are within it."""
     import scipy.ndimage
 
     edge = inside & ~scipy.ndimage.binary_erosion(inside)
@@ -315,14 +363,14 @@ def _meet_at_corners(parts, inside, corners, count):
     ends = np.argwhere(edge & border)
     if ends.size:
         if not len(corners):  # a border reaches the edge, and there is no corner for it to end at
-            return False
+            return None
         apart = np.hypot(*(ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         if apart.min(axis=1).max() > ARC_END_REACH:
-            return False
+            return None
     if count < 3:
-        return True
+        return count, 0
     reach = int(ARC_REACH)
     rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
     disk = rows**2 + cols**2 <= ARC_REACH**2
     near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8) for k in range(1, count + 1))
-    return bool(near.max() < 4 and scipy.ndimage.label(near >= 3)[1] <= ARC_TRIPLE_POINTS)
+    return int(near.max()), scipy.ndimage.label(near >= 3)[1]

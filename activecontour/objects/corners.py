@@ -440,6 +440,14 @@ def _cut_ellipse(part, outline):
                 and area >= CUT_SOLIDITY * hull_area(part))
 
 
+def _ellipse_area(pieces, outline):
+    """The area of the pieces (lists of curves) cut off an object (its ``outline``) that are an
+    object's ellipse (:func:`_cut_ellipse`; a piece with a hole is none): how much of the object
+    a split explains, by which two splits of it are weighed."""
+    return sum(signed_area(piece[0]) for piece in pieces
+               if len(piece) == 1 and _cut_ellipse(piece[0], outline))
+
+
 def _ellipse_cuts(part, outline, depth):
     """A piece cut off an object cut at its concave corners into pieces that are each an object's
     ellipse (:func:`_cut_ellipse`; a side that is not cut again, down to ``depth`` cuts deep):

@@ -23,7 +23,13 @@ whole clump; each lives in a module of its own (:mod:`activecontour.objects.arcs
    horse do not; elsewhere the three stages below decide as they did, and each piece they cut
    off goes through this stage on its own (:func:`_clump_parts`): a smaller clump, cut off at
    a neck, has its own outline explained by its arcs where the whole object's was not (an
-   object pressed inside it, or a contact rounded away, left part of it unexplained).
+   object pressed inside it, or a contact rounded away, left part of it unexplained).  A crowded
+   clump (six to eight objects pressed together, or one hidden among them: more places where
+   three parts meet than a star or a flower may have, its ellipses overlapping two by two,
+   ``ARC_CROWD_MEET``, ``ARC_HIDDEN_SIZE``) is weighed against the stages below instead: its
+   parts stand where each is an object's ellipse, or where more of the object's area is an
+   object's ellipse in them than in the stages' parts (:func:`activecontour.objects.corners.
+   _ellipse_area`), the model-based choice between two splits.
 1. **Necks** (:func:`_neck_parts`, pixels): the watershed of the distance to the outline (an
    inscribed-circle centre per part) whose parts are merged back while the neck between two is
    nearly as wide as the thinner part; a neck must be a waist (a concavity of the outline at both
@@ -102,6 +108,13 @@ the same, and the necks' parts kept where    0.50 / 0.92        0.77 / 0.94     
 they are ellipses of the outline, or cut
 into them (``_as_ellipses``)
   on seeds 20-59                            0.65 / 0.95        0.68 / 0.94      6 of 240
+the same, on the segmentation of b127298     0.50 / 0.92        0.77 / 0.94      6 of 120
+  on seeds 20-59                            0.65 / 0.95        0.68 / 0.94      4 of 240
+crowded clumps weighed against the stages   0.67 / 0.94        0.78 / 0.95      6 of 120
+below (``_arc_clump``, this module)
+  on seeds 20-59                            0.68 / 0.96        0.68 / 0.95      4 of 240
+  on seeds 60-79 (singles 60-159)           0.74 / 0.97        0.74 / 0.95      15 + 33 of 600
+  (the split until now there: 0.74 / 0.96, 0.74 / 0.94, 15 + 29 of 600)
 distance-transform-marker watershed of the  0.55 / 0.75        0.69 / 0.96      nearly all
 segmented mask (``min_distance=5``)
 corner cuts with ellipse fits alone (no     0.45-0.50 /        0.55-0.61 /      13-95
@@ -143,7 +156,14 @@ disks, two deeply overlapping blobs less than it), the necks keep all rods but o
 120, 6 of 240 singles cut, the objects of the touching families and of the DSB image unchanged);
 the rest are the corner stage's, at the bend of a rod (a one-sided cut from the inner corner
 across to the convex outer side: the same geometry as two rods overlapping end to end, which the
-rays across a rounded contact must cut) and a star's arms.
+rays across a rounded contact must cut) and a star's arms.  With crowded clumps weighed (seeds
+0-59), what is left at the worst seeds (ellipses 13, 27: 0.67, 0.68; disks 38, 0: 0.68, 0.78):
+contacts that the converged contour rounded below ``ARC_CORNER_TURN`` or ``MIN_WAIST_DEPTH``,
+where two deeply overlapping disks own one arc that one ellipse of aspect 1.5-2 fits (disks 38:
+four such pairs, the arc stage deciding three objects for four, two for three), a ring of objects
+around a gap whose cells hold a hole (ellipses 27), and clumps the border test
+(``ARC_END_REACH``) or the size test declines.  More arcs (``ARC_CORNER_TURN`` 10 or 7 instead of
+15) took the worst seeds down (ellipses 0.59, disks 0.56, the DSB image 0.790).
 """
 
 from __future__ import annotations
@@ -152,7 +172,7 @@ import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import signed_area
-from activecontour.objects.arcs import _arc_parts
+from activecontour.objects.arcs import _arc_clump
 from activecontour.objects.contrast import (
     CONTRAST_DEPTH,
     CONTRAST_FLOOR,
@@ -168,6 +188,7 @@ from activecontour.objects.corners import (
     _bent,
     _corner_parts,
     _cut,
+    _ellipse_area,
     _uncuttable,
 )
 from activecontour.objects.necks import NECK_RATIO, _boundary_distance, _may_have_necks, _neck_stage
@@ -233,6 +254,7 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
     list of list of ndarray
         The objects, split ones replaced by their parts (each an outer boundary then its holes).
     """
+    least = None  # the least contrast of a split by intensity, once an object asks for it
     if image is not None:
         # (a grey image in its own type: each object's box is read as float64, the whole image
         # only for the noise)
@@ -242,7 +264,6 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         # image a fraction of its range (shading is not two objects); the noise is estimated
         # only for an object whose blocks differ by more than that fraction
         floor = CONTRAST_FLOOR * (float(image.max()) - float(image.min()))
-        least = None
     result = []
     for k, curves in enumerate(objects):
         box = _box(curves[0], labels.shape)
@@ -269,43 +290,70 @@ def split_touching(objects, labels, image=None, *, neck_ratio=NECK_RATIO, min_ra
         # (the outline's curvature, which the arc and corner stages share: neither reads it for an
         # outline under twice the smallest part, :func:`_uncuttable`; on grass 115 of 423)
         bent = _bent(curves[0]) if concave and not _uncuttable(signed_area(curves[0]), False) else None
-        if concave and (clump := _arc_parts(curves, depth, labels.shape, bent)) is not None:
-            result.extend(clump)
+        clump = _arc_clump(curves, depth, labels.shape, bent) if concave else None
+        if clump is not None and not clump[1]:
+            result.extend(clump[0])
             continue
-        low = np.array([box[0].start - 1, box[1].start - 1])
-        # the outline's shape decides (holes filled, as scipy.ndimage.binary_fill_holes): the rim
-        # around a hole is no neck
-        window = np.pad(inside, 1)
-        _kernels.fill_holes(window.view(np.uint8))
-        contrast = contrast and _may_split_by_contrast(window, min_radius)
-        parts = necks = None  # the window as one part; the necks' parts a non-blob took back
-        if concave and (concavity := _may_have_necks(window, curves[0] - low, min_radius)) is not None:
-            parts, necks = _neck_stage(window, concavity, _boundary_distance(curves[:1], window, low),
-                                       neck_ratio, min_radius)
-        if contrast:
-            parts = _contrast_parts(window.astype(np.int32) if parts is None else parts,
-                                    np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
-        pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
-        if (necks is not None and not contrast and len(pieces) == 1 and not _around_a_hole(curves, necks, low)
-                and (ellipses := _as_ellipses(_cut(curves, necks, low), curves[0])) is not None):
-            result.extend(ellipses)
+        # a crowded clump of ellipses stands where more of its area is an object's ellipse than of
+        # the stages' parts (:func:`activecontour.objects.corners._ellipse_area`), and without
+        # them where all of it is (the stages' parts cannot explain more than the whole object)
+        explained = None if clump is None else _ellipse_area(clump[0], curves[0])
+        if explained is not None and explained == sum(signed_area(piece[0]) for piece in clump[0]):
+            result.extend(clump[0])
             continue
-        if concave:
-            # (an object its necks did not cut: its hull depth and curvature are known)
-            pieces = [cut for piece in pieces for cut in
-                      ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
-                          piece[0], *((depth, bent) if piece[0] is curves[0] else ()))])]
-        if len(pieces) > 1:
-            # a piece cut off may be a smaller clump, which its own arcs explain (a convex piece
-            # has no concave corner: one convex hull)
-            pieces = [part for piece in pieces for part in _clump_parts(piece, labels.shape)]
+        pieces = _staged_parts(curves, box, inside, depth, bent, concave, contrast, image, least, neck_ratio,
+                               min_radius, labels.shape)
+        if explained is not None and explained > _ellipse_area(pieces, curves[0]):
+            pieces = clump[0]
         result.extend(pieces)
     return result
 
 
+def _staged_parts(curves, box, inside, depth, bent, concave, contrast, image, least, neck_ratio, min_radius,
+                  extent):
+    """An object's parts by the necks, the contrast and the corners (stages 1 to 3 of the module
+    docstring), each piece cut off then split by its own arcs (:func:`_clump_parts`): the object
+    ``curves`` in the label image's ``box`` (``inside`` its pixels there), its outline's hull
+    ``depth`` and curvature ``bent``, whether it is ``concave`` and may split by ``contrast``
+    (with the ``image`` and its ``least`` contrast), as :func:`split_touching` found them."""
+    low = np.array([box[0].start - 1, box[1].start - 1])
+    # the outline's shape decides (holes filled, as scipy.ndimage.binary_fill_holes): the rim
+    # around a hole is no neck
+    window = np.pad(inside, 1)
+    _kernels.fill_holes(window.view(np.uint8))
+    contrast = contrast and _may_split_by_contrast(window, min_radius)
+    parts = necks = None  # the window as one part; the necks' parts a non-blob took back
+    if concave and (concavity := _may_have_necks(window, curves[0] - low, min_radius)) is not None:
+        parts, necks = _neck_stage(window, concavity, _boundary_distance(curves[:1], window, low),
+                                   neck_ratio, min_radius)
+    if contrast:
+        parts = _contrast_parts(window.astype(np.int32) if parts is None else parts,
+                                np.asarray(_window(image, box), dtype=np.float64), least, min_radius)
+    pieces = _cut(curves, parts, low) if parts is not None and parts.max() > 1 else [curves]
+    if (necks is not None and not contrast and len(pieces) == 1 and not _around_a_hole(curves, necks, low)
+            and (ellipses := _as_ellipses(_cut(curves, necks, low), curves[0])) is not None):
+        return ellipses
+    if concave:
+        # (an object its necks did not cut: its hull depth and curvature are known)
+        pieces = [cut for piece in pieces for cut in
+                  ([piece] if len(piece) > 1 else [[part] for part in _corner_parts(
+                      piece[0], *((depth, bent) if piece[0] is curves[0] else ()))])]
+    if len(pieces) > 1:
+        # a piece cut off may be a smaller clump, which its own arcs explain (a convex piece
+        # has no concave corner: one convex hull)
+        pieces = [part for piece in pieces for part in _clump_parts(piece, extent)]
+    return pieces
+
+
 def _clump_parts(curves, extent):
     """A piece that the necks, the contrast or the corners cut off an object, as the arc stage
-    splits it (:func:`_arc_parts`; the piece alone when it does not, or when its outline lies
-    within ``MIN_WAIST_DEPTH`` of its hull: a convex piece has no concave corner)."""
+    splits it (:func:`_arc_clump`; a crowded clump where more of its area is an object's ellipse
+    than of the piece, :func:`activecontour.objects.corners._ellipse_area`); the piece alone
+    when it does not, or when its outline lies within ``MIN_WAIST_DEPTH`` of its hull: a convex
+    piece has no concave corner."""
     depth = _hull_depth(curves[0])
-    return (depth.max() >= MIN_WAIST_DEPTH and _arc_parts(curves, depth, extent)) or [curves]
+    clump = _arc_clump(curves, depth, extent) if depth.max() >= MIN_WAIST_DEPTH else None
+    if clump is None or (clump[1] and _ellipse_area(clump[0], curves[0])
+                         <= _ellipse_area([curves], curves[0])):
+        return [curves]
+    return clump[0]

@@ -8,7 +8,14 @@ import shapely
 import activecontour as ac
 from activecontour import synthetic
 from activecontour.geometry.curve import orient
-from activecontour.objects.arcs import _arc_parts, _meet_at_corners, _uncovered_parts
+from activecontour.objects.arcs import (
+    ARC_REACH,
+    _arc_clump,
+    _arc_parts,
+    _meet_at_corners,
+    _meeting,
+    _uncovered_parts,
+)
 from activecontour.objects.contrast import _block_spread
 from activecontour.objects.corners import CUT_DEPTH, _concave_corners, _corner_parts, _ellipse_cuts
 from activecontour.objects.measure import label_image
@@ -278,6 +285,46 @@ def test_a_chain_of_three_disks_gives_the_middle_one_both_its_arcs():
     np.testing.assert_allclose(areas, expected, atol=2 * r)
 
 
+def test_seven_disks_around_a_hidden_one_are_seven_objects():
+    # six disks of radius 12 around a seventh, centres 1.85 r apart: each two neighbours overlap
+    # (1.85 r < 2 r) and no pixel lies in three of them (the centre of three mutually touching
+    # disks is 1.85 r / sqrt(3) > r from each); the middle disk owns no arc of the outline, and
+    # three parts meet at six places: a crowded clump, which the arcs alone do not decide
+    r = 12.0
+    apart = 1.85 * r
+    angles = np.arange(6) * np.pi / 3 + 0.2
+    centres = [(60.0, 60.0)] + [(60.0 + apart * np.cos(a), 60.0 + apart * np.sin(a)) for a in angles]
+    outline, parts, _ = _disks_parts(centres, r)
+    assert parts is None
+    clump = _arc_clump([outline])
+    assert clump is not None and clump[1]  # crowded
+    # split_touching weighs it against the necks and corners: every disk one object
+    objects = split_touching([[outline]], label_image([[outline]], (120, 120)))
+    polygons = [shapely.Polygon(curves[0]) for curves in objects]
+    held = np.array([[p.contains(shapely.Point(c)) for c in centres] for p in polygons])
+    assert held.shape == (7, 7) and (held.sum(axis=0) == 1).all() and (held.sum(axis=1) == 1).all()
+    # they tile the object, but for slivers of the cells' staircases (under a pixel each,
+    # :func:`activecontour.objects.corners._cut`) where twelve borders reach the hidden cell
+    assert sum(p.area for p in polygons) == pytest.approx(shapely.Polygon(outline).area, abs=2.0)
+
+
+def test_parts_meeting_are_counted_where_they_meet():
+    # four quadrants meet at the centre (four parts within ARC_REACH, one place with three or
+    # more); three columns meet nowhere three at a time
+    inside = np.zeros((40, 40), dtype=bool)
+    inside[2:38, 2:38] = True
+    rows, cols = np.indices(inside.shape)
+    quadrants = np.where(inside, 1 + (rows >= 20) + 2 * (cols >= 20), 0).astype(np.int32)
+    corners = np.array([[2.0, 19.5], [37.0, 19.5], [19.5, 2.0], [19.5, 37.0]])
+    assert _meeting(quadrants, inside, corners, 4) == (4, 1)
+    assert not _meet_at_corners(quadrants, inside, corners, 4)
+    columns = np.where(inside, 1 + (cols >= 14) + (cols >= 26), 0).astype(np.int32)
+    ends = np.array([[2.0, 13.5], [37.0, 13.5], [2.0, 25.5], [37.0, 25.5]])
+    assert 12 > 2 * ARC_REACH  # (the columns' borders farther apart than two reaches)
+    assert _meeting(columns, inside, ends, 3) == (2, 0)
+    assert _meet_at_corners(columns, inside, ends, 3)
+
+
 def test_a_clump_that_reaches_the_image_edge_is_left_to_the_necks_and_corners():
     # two disks overlapping by a sixth of the radius: a clump of two ellipses inside the image,
     # none where the image ends at its last column (an object there may be cut off by the edge,
@@ -303,7 +350,7 @@ def test_a_piece_cut_off_goes_through_the_arc_stage_unless_it_is_convex(monkeypa
     assert sorted(shapely.Polygon(p[0]).area for p in clump) == pytest.approx(
         sorted(shapely.Polygon(p[0]).area for p in parts), abs=1e-9)
     # a convex piece is itself, without the arc stage
-    monkeypatch.setattr(split, "_arc_parts", lambda *args: pytest.fail("a convex piece reached the arcs"))
+    monkeypatch.setattr(split, "_arc_clump", lambda *args: pytest.fail("a convex piece reached the arcs"))
     disk = _ellipse((60.0, 60.0), 20.0, 12.0, 0.3)
     assert split._clump_parts([disk], (200, 200)) == [[disk]]
 
