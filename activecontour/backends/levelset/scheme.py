@@ -67,6 +67,9 @@ class _Problem:
         # phi it equals outside a box, when that is known (see _copy_of)
         self._spare = []
         self._agreements = {}  # id(array): (array, phi, box): array equals phi outside box
+        # image-sized bool arrays (the sides of states dropped) to reuse, each with the sides it
+        # equals but at the pixels listed, when that is known (see _sides_like)
+        self._spare_sides = []
         self._box_buffer = None  # the smoothed step's box, reused while its size holds
         self._tile_buffer = None  # the smoothed step's tiles (_tile_step), reused while large enough
         self._coarse = None  # the far field's test grid (_coarse_tables)
@@ -89,6 +92,32 @@ class _Problem:
         if array is not None and array.shape == self.shape and array.dtype == np.float32 \
                 and len(self._spare) < 2:
             self._spare.append((array, None if entry is None else entry[1:]))
+
+    def _sides_like(self, before):
+        """An image-sized bool array equal to the sides ``before``: a recycled one set at the pixels
+        where it differs (those a step switched), else any recycled one or a new one, copied (a new
+        array faults in every page, a copy reads every pixel)."""
+        for index, (array, base, differ) in enumerate(self._spare_sides):
+            if base is before:
+                del self._spare_sides[index]
+                array.ravel()[differ] = before.ravel()[differ]
+                break
+        else:
+            if not self._spare_sides:
+                return before.copy()
+            array = self._spare_sides.pop()[0]
+            np.copyto(array, before)
+        # its contents change: every note that another array equals it but somewhere ends
+        self._spare_sides = [(other, None if base is array else base, differ)
+                             for other, base, differ in self._spare_sides]
+        return array
+
+    def recycle_sides(self, old, new, located):
+        """Hand back the sides of the state ``old``, which nothing refers to any more: they equal
+        those of the state ``new`` but at the pixels that ``located`` (the step between the two,
+        :meth:`locate`) switched."""
+        if isinstance(located, _Located) and len(self._spare_sides) < 2:
+            self._spare_sides.append((old.positive, new.positive, located.switched))
 
     def _agree(self, array, phi, box):
         """Note that ``array`` equals ``phi`` outside ``box`` (two slices) until either is written:
@@ -118,7 +147,8 @@ class _Problem:
         pixels written into ``stepped``: these alone fix the zero set of the reinitialised state,
         so :meth:`evaluate` scores it as it will be, and the band is grown (:meth:`finish`) only
         for a step that is accepted."""
-        located = _locate(stepped, self.band, np.float32, self.scratch, previous, changed)
+        located = _locate(stepped, self.band, np.float32, self.scratch, previous, changed,
+                          self._sides_like(previous.positive))
         if isinstance(located, _Located):
             located.front_distances(self.band)
         return located
