@@ -120,8 +120,9 @@ class _Problem:
             self._spare_sides.append((old.positive, new.positive, located.switched))
 
     def _agree(self, array, phi, box):
-        """Note that ``array`` equals ``phi`` outside ``box`` (two slices) until either is written:
-        a step that takes it back from ``phi`` copies that box only (:meth:`_copy_of`)."""
+        """Note that ``array`` equals ``phi`` outside ``box`` (two slices, or boxes (R, 4) as
+        :meth:`step` returns them) until either is written: a step that takes it back from ``phi``
+        copies there only (:meth:`_copy_of`)."""
         self._agreements[id(array)] = (array, phi, box)
 
     def _copy_of(self, phi, box=None):
@@ -164,8 +165,15 @@ class _Problem:
         # pixels next to it, :meth:`step`) and on its band
         changed = _bounds(located.changed, self.shape)
         if changed is not None and state.near_flat.size:
-            self._agree(previous.phi, state.phi,
-                        _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape)))
+            if _is_rects(located.changed):
+                # the tiles' writes: the new front lies within a pixel of them (the old one lies in
+                # their cells), the band within ceil(band) + 1 rings of the front; a ring of band
+                # on a large image: the rects, not their bounding box
+                self._agree(previous.phi, state.phi,
+                            _grown_rects(located.changed, self.shape, int(np.ceil(self.band)) + 2))
+            else:
+                self._agree(previous.phi, state.phi,
+                            _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape)))
         return state
 
     def evaluate(self, state):
@@ -245,7 +253,9 @@ class _Problem:
         """
         stepped, changed = self._step(state, force, tau, smooth_force)
         box = _bounds(changed, self.shape)
-        if box is not None:  # locating it writes the front's distances: one pixel beyond
+        if _is_rects(changed):  # locating it writes the front's distances: one pixel beyond
+            self._agree(stepped, state.phi, _grown_rects(changed, self.shape, 1))
+        elif box is not None:
             self._agree(stepped, state.phi, _grown(box, self.shape))
         return stepped, changed
 
@@ -580,7 +590,11 @@ def _waves(size):
 
 def _copy_outside(source, target, region, box=None):
     """Copy ``source`` into ``target`` over ``region`` (two slices) except ``box`` (None: all of
-    it): the rows of the region above and below the box, then its columns left and right of it."""
+    it): the rows of the region above and below the box, then its columns left and right of it.
+    A region of boxes (R, 4) is copied whole, ``box`` included."""
+    if _is_rects(region):
+        _kernels.copy_boxes(source, target, region)
+        return
     rows, cols = region
     if box is None:
         target[rows, cols] = source[rows, cols]
@@ -615,6 +629,19 @@ def _bounds(where, shape):
     cols = where % n
     rows = slice(int(where.min()) // n, int(where.max()) // n + 1)
     return rows, slice(int(cols.min()), int(cols.max()) + 1)
+
+
+def _is_rects(where):
+    """Whether ``where`` (as :func:`_bounds` takes it) is boxes (R, 4)."""
+    return isinstance(where, np.ndarray) and where.ndim == 2
+
+
+def _grown_rects(rects, shape, by):
+    """Boxes (R, 4) (first row, stop row, first column, stop column) widened by ``by`` pixels on
+    every side, cut to the image."""
+    m, n = shape
+    return np.column_stack([np.maximum(rects[:, 0] - by, 0), np.minimum(rects[:, 1] + by, m),
+                            np.maximum(rects[:, 2] - by, 0), np.minimum(rects[:, 3] + by, n)]).astype(np.intp)
 
 
 def _union(box, other):
