@@ -323,6 +323,66 @@ def test_closed_padding_is_the_edge_padding_with_a_negative_frame(shape):
     assert not np.signbit(padded[1:-1, 1:-1][phi > 0]).any() and (padded[frame] < 0).all()
 
 
+def _marching_squares_contours(phi):
+    """The zero set of phi by ``skimage.measure.find_contours`` on its box padded by
+    ``_closed_padding``, as level_set_contours documents it (the reference it must equal)."""
+    import skimage.measure
+
+    from activecontour.backends.levelset.zeroset import _closed_padding
+
+    positive = phi > 0
+    rows, cols = np.flatnonzero(positive.any(axis=1)), np.flatnonzero(positive.any(axis=0))
+    top, left = max(rows[0] - 1, 0), max(cols[0] - 1, 0)
+    padded = _closed_padding(phi[top: rows[-1] + 2, left: cols[-1] + 2])
+    curves = [c[::-1][:-1] for c in skimage.measure.find_contours(padded, 0.0)]  # "high": reversed
+    # level_curves: less the padding's pixel, repeated vertices and curves of no area dropped
+    curves = [c - 1.0 for c in curves]
+    curves = [c[np.any(c != np.roll(c, 1, axis=0), axis=1)] for c in curves]
+    return [c + (top, left) for c in curves if len(c) >= 3 and signed_area(c) != 0]
+
+
+@pytest.mark.parametrize("kind", ["noise32", "noise64", "disk", "border"])
+def test_contours_traced_from_the_sides_are_marching_squares_bit_for_bit(kind, monkeypatch):
+    # saddles, regions touching the border, float32 and float64: the curves traced from the sides
+    # and placed on their edges are find_contours's, every vertex equal, in its order; and
+    # find_contours does not run (its pass over every cell of the box is what this spares)
+    import skimage.measure
+
+    rng = np.random.default_rng(11)
+    references, phis = [], []
+    for _ in range(25):
+        m, n = rng.integers(3, 50, 2)
+        if kind.startswith("noise"):
+            phi = rng.normal(0.3, 1.0, (m, n)).astype(np.float32 if kind == "noise32" else np.float64)
+        else:
+            centre = (m * rng.random(), n * rng.random()) if kind == "disk" else (0.25, n / 2 + 0.1)
+            phi = np.clip(_circle_distance((m, n), centre, min(m, n) / 3 + 1.37), -4, 4).astype(np.float32)
+        if (phi > 0).any():
+            phis.append(phi)
+            references.append(_marching_squares_contours(phi))
+    monkeypatch.setattr(skimage.measure, "find_contours", None)
+    for phi, reference in zip(phis, references, strict=True):
+        contours = level_set_contours(phi)
+        assert len(contours) == len(reference)
+        for contour, expected in zip(contours, reference, strict=True):
+            assert contour.dtype == np.float64
+            np.testing.assert_array_equal(contour, expected)
+
+
+def test_contours_of_a_level_set_with_zeros_are_those_of_marching_squares():
+    # phi = 0 at pixels: crossings at grid points, which find_contours joins by equal points; the
+    # sides alone do not say how, so find_contours runs
+    rng = np.random.default_rng(12)
+    for _ in range(20):
+        phi = rng.normal(0.3, 1.0, tuple(rng.integers(3, 40, 2))).astype(np.float32)
+        phi[rng.random(phi.shape) < 0.15] = 0.0
+        if (phi > 0).any():
+            contours, reference = level_set_contours(phi), _marching_squares_contours(phi)
+            assert len(contours) == len(reference)
+            for contour, expected in zip(contours, reference, strict=True):
+                np.testing.assert_array_equal(contour, expected)
+
+
 def test_contour_of_a_region_touching_the_border_closes_on_the_domain_edge():
     shape = (30, 40)
     rr = np.indices(shape, dtype=np.float64)[0]
