@@ -265,6 +265,50 @@ def test_a_step_into_a_recycled_array_copies_phi_only_where_that_array_may_diffe
     np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
 
 
+def test_a_step_on_tiles_into_a_recycled_array_copies_phi_over_the_tiles_only():
+    # a rejected step on tiles leaves its array equal to phi outside the tiles' boxes (and a pixel
+    # beyond them): the next step copies phi there, not over the ring's bounding box, whose
+    # middle (the disk's interior, beyond every tile) is not copied over
+    problem, state, force, tau = _ring_problem(hole=False)
+    stepped, changed = problem.step(state, force, tau, True)
+    assert changed.ndim == 2  # on tiles
+    problem.recycle(stepped)
+    stepped[511, 511] = 123.0  # inside the ring's box, beyond the tiles
+    again, _ = problem.step(state, force, 0.5 * tau, True)
+    assert again is stepped and again[511, 511] == 123.0  # not copied over
+    again[511, 511] = state.phi[511, 511]
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
+
+
+def test_sides_of_steps_into_recycled_arrays_are_the_sides_of_phi():
+    # the sides of a located step are written into the sides of a state dropped before (a rejected
+    # step's, or the state before an accepted one), set where the two differ: they are phi > 0,
+    # and no array is made anew once two are in hand
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (58.0, 61.0))
+    steps = [(True, 1.0, False), (True, 1.0, True), (True, 2.0, False), (False, 0.02, True),
+             (False, 0.02, False), (True, 0.5, True), (True, 0.5, False), (True, 0.25, True)]
+    seen = {id(state.positive)}
+    for index, (smooth, scale, accept) in enumerate(steps):
+        stepped, changed = problem.step(state, force, scale * tau, smooth)
+        located = problem.locate(stepped, state, changed)
+        np.testing.assert_array_equal(located.positive, stepped > 0)
+        if index >= 1:
+            assert id(located.positive) in seen  # a recycled one
+        seen.add(id(located.positive))
+        if accept:
+            trial = problem.finish(located, state)
+            problem.recycle(state.phi)
+            problem.recycle_sides(state, trial, located)
+            state = trial
+            current = problem.evaluate(state)
+            force, _ = problem.force(current.c_in, current.c_out)
+        else:
+            problem.recycle(stepped)
+            problem.recycle_sides(located, state, located)
+        np.testing.assert_array_equal(state.positive, state.phi > 0)
+
+
 def test_steps_into_recycled_arrays_equal_steps_into_new_ones():
     # the driver's sequence (smoothed and unsmoothed steps, rejected and accepted, the arrays
     # handed back and taken again): every stepped array is the one a new problem makes, so the
