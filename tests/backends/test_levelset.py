@@ -281,6 +281,24 @@ def test_a_step_on_tiles_into_a_recycled_array_copies_phi_over_the_tiles_only():
     np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
 
 
+def test_the_coarse_force_is_made_once_per_constants_and_is_the_block_means_force():
+    # a step retried with a smaller tau (the same constants) reuses the coarse grid's force; new
+    # constants make it anew: f of the block means of the channels, their squares and the wall
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    form = problem.params.load_form(*force)
+    first = problem._coarse_force(form)
+    assert problem._coarse_force(problem.params.load_form(*force)) is first
+    means, squares, wall = problem._coarse_tables()
+    expected = (form.constant + form.linear[0] * means[0].astype(np.float64)
+                + form.square[0] * squares[0].astype(np.float64) + problem.params.mu * wall)
+    np.testing.assert_allclose(first, expected, rtol=1e-5, atol=1e-6)
+    other = problem.params.load_form(force[0] + 0.1, force[1])
+    assert problem._coarse_force(other) is not first
+    problem._coarse_forced = None  # the held step with the cached force is the one made anew
+    held = problem._coarse_held(state, form, tau)
+    np.testing.assert_array_equal(problem._coarse_held(state, form, tau), held)
+
+
 def test_sides_of_steps_into_recycled_arrays_are_the_sides_of_phi():
     # the sides of a located step are written into the sides of a state dropped before (a rejected
     # step's, or the state before an accepted one), set where the two differ: they are phi > 0,

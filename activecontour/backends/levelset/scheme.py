@@ -73,6 +73,7 @@ class _Problem:
         self._box_buffer = None  # the smoothed step's box, reused while its size holds
         self._tile_buffer = None  # the smoothed step's tiles (_tile_step), reused while large enough
         self._coarse = None  # the far field's test grid (_coarse_tables)
+        self._coarse_forced = None  # (form's constants, f on that grid) of the last step (_coarse_force)
 
     def take(self, like=None):
         """An image-sized float32 array to write into, and the box outside which it equals the
@@ -327,19 +328,30 @@ class _Problem:
         outside.  Far from Gamma phi is ``+-band`` and a block whose value comes within half the
         band of zero may flip (a hole opening without a seed): :meth:`_far_flips`."""
         k = _COARSE
-        means, squares, wall = self._coarse_tables()
-        coarse = np.empty(wall.shape, dtype=np.float32)
+        force = self._coarse_force(form)
+        coarse = np.empty(force.shape, dtype=np.float32)
         _kernels.block_means(state.phi, k, coarse)
+        coarse -= np.float32(tau) * force
+        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
+                              _waves(coarse.shape[1]))
+        # far blocks lie beyond the band: the side of the first pixel (phi > 0) is the block's
+        return np.where(state.positive[::k, ::k], coarse, -coarse)
+
+    def _coarse_force(self, form):
+        """f (6.41) of ``form`` on the coarse grid (:meth:`_coarse_tables`), float32; the last one
+        is kept: a step retried with a smaller tau (backtracking) has the same constants."""
+        key = (form.constant, tuple(form.linear), tuple(form.square))
+        if self._coarse_forced is not None and self._coarse_forced[0] == key:
+            return self._coarse_forced[1]
+        means, squares, wall = self._coarse_tables()
         force = wall * np.float32(self.params.mu)  # f's terms in the kernel's order, in float32
         force += np.float32(form.constant)
         for channel, (linear, square) in enumerate(zip(form.linear, form.square, strict=True)):
             force += np.float32(linear) * means[channel]
             if square != 0:
                 force += np.float32(square) * squares[channel]
-        coarse -= np.float32(tau) * force
-        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
-                              _waves(coarse.shape[1]))
-        return np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
+        self._coarse_forced = key, force
+        return force
 
     def _far_flips(self, held, box):
         """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
