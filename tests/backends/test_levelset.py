@@ -281,6 +281,24 @@ def test_a_step_on_tiles_into_a_recycled_array_copies_phi_over_the_tiles_only():
     np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
 
 
+def test_a_step_on_the_band_into_a_recycled_array_copies_phi_over_the_band_only():
+    # a rejected unsmoothed step leaves its array equal to phi but on the band's pixels and the
+    # front: the next step copies phi there, not over the band's bounding box, whose middle (the
+    # disk's interior, beyond the band) is not copied over
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    tau = min(tau, 0.2 / problem.params.mu)  # explicit on the band (tau mu <= 1/4)
+    stepped, changed = problem.step(state, force, tau, False)
+    assert changed.ndim == 1  # the band's pixels
+    problem.locate(stepped, state, changed)
+    problem.recycle(stepped)
+    stepped[60, 60] = 123.0  # inside the band's box, beyond the band
+    again, _ = problem.step(state, force, 0.5 * tau, False)
+    assert again is stepped and again[60, 60] == 123.0  # not copied over
+    again[60, 60] = state.phi[60, 60]
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, False)[0])
+
+
 def test_the_coarse_force_is_made_once_per_constants_and_is_the_block_means_force():
     # a step retried with a smaller tau (the same constants) reuses the coarse grid's force; new
     # constants make it anew: f of the block means of the channels, their squares and the wall

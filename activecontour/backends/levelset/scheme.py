@@ -121,7 +121,7 @@ class _Problem:
             self._spare_sides.append((old.positive, new.positive, located.switched))
 
     def _agree(self, array, phi, box):
-        """Note that ``array`` equals ``phi`` outside ``box`` (two slices, or boxes (R, 4) as
+        """Note that ``array`` equals ``phi`` outside ``box`` (two slices, boxes (R, 4) or pixels as
         :meth:`step` returns them) until either is written: a step that takes it back from ``phi``
         copies there only (:meth:`_copy_of`)."""
         self._agreements[id(array)] = (array, phi, box)
@@ -151,8 +151,12 @@ class _Problem:
         for a step that is accepted."""
         located = _locate(stepped, self.band, np.float32, self.scratch, previous, changed,
                           self._sides_like(previous.positive))
+        front = None
         if isinstance(located, _Located):
             located.front_distances(self.band)
+            front = located.front
+        if _is_pixels(changed):  # a step on the band's pixels: those and the front were written
+            self._agree(stepped, previous.phi, changed if front is None else np.concatenate([changed, front]))
         return located
 
     def finish(self, located, previous):
@@ -166,7 +170,10 @@ class _Problem:
         # pixels next to it, :meth:`step`) and on its band
         changed = _bounds(located.changed, self.shape)
         if changed is not None and state.near_flat.size:
-            if _is_rects(located.changed):
+            if _is_pixels(located.changed):
+                # a step on the band's pixels: the previous band is reset, the new one written
+                self._agree(previous.phi, state.phi, np.concatenate([previous.near_flat, state.near_flat]))
+            elif _is_rects(located.changed):
                 # the tiles' writes: the new front lies within a pixel of them (the old one lies in
                 # their cells), the band within ceil(band) + 1 rings of the front; a ring of band
                 # on a large image: the rects, not their bounding box
@@ -256,7 +263,7 @@ class _Problem:
         box = _bounds(changed, self.shape)
         if _is_rects(changed):  # locating it writes the front's distances: one pixel beyond
             self._agree(stepped, state.phi, _grown_rects(changed, self.shape, 1))
-        elif box is not None:
+        elif box is not None and not _is_pixels(changed):  # pixels: noted by locate (the front)
             self._agree(stepped, state.phi, _grown(box, self.shape))
         return stepped, changed
 
@@ -603,9 +610,12 @@ def _waves(size):
 def _copy_outside(source, target, region, box=None):
     """Copy ``source`` into ``target`` over ``region`` (two slices) except ``box`` (None: all of
     it): the rows of the region above and below the box, then its columns left and right of it.
-    A region of boxes (R, 4) is copied whole, ``box`` included."""
+    A region of boxes (R, 4), or of pixels (flat indices), is copied whole, ``box`` included."""
     if _is_rects(region):
         _kernels.copy_boxes(source, target, region)
+        return
+    if _is_pixels(region):
+        target.reshape(-1)[region] = source.reshape(-1)[region]
         return
     rows, cols = region
     if box is None:
@@ -646,6 +656,11 @@ def _bounds(where, shape):
 def _is_rects(where):
     """Whether ``where`` (as :func:`_bounds` takes it) is boxes (R, 4)."""
     return isinstance(where, np.ndarray) and where.ndim == 2
+
+
+def _is_pixels(where):
+    """Whether ``where`` (as :func:`_bounds` takes it) is pixels (flat indices)."""
+    return isinstance(where, np.ndarray) and where.ndim == 1
 
 
 def _grown_rects(rects, shape, by):
