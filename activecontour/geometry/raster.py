@@ -81,7 +81,7 @@ def _row_crossings(curves, m, n):
             np.where(r1[edge] > r0[edge], 1, -1).astype(np.int32))
 
 
-def mask_to_curves(mask, *, min_area=0.0):
+def mask_to_curves(mask, *, min_area=0.0, place=None):
     """Closed curves around the components (positive) and holes (negative) of a boolean mask.
 
     The curves are the 0.5 iso-lines of the mask padded by one pixel of False (marching squares:
@@ -92,6 +92,11 @@ def mask_to_curves(mask, *, min_area=0.0):
     curve, which makes outer boundaries positive and holes negative in our convention.  Curves
     with ``|area| <= min_area`` are dropped.  Only the mask's bounding box is traced (the same
     curves: a small object in a large image costs its box, not the image).
+
+    ``place``: a function of the vertices (K, 2), each the midpoint of a grid edge between a pixel
+    centre in the mask and one outside it (in the mask's coordinates), returning them moved along
+    their edges, before repeated vertices and small curves are dropped: the crossings of a field
+    whose sign the mask is (:func:`activecontour.backends.levelset.zeroset.level_set_contours`).
     """
     mask = np.asarray(mask, dtype=bool)
     rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
@@ -100,6 +105,8 @@ def mask_to_curves(mask, *, min_area=0.0):
     box = np.ascontiguousarray(mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1])
     points, offsets = _kernels.mask_contours(box.view(np.uint8))
     points = np.frombuffer(points, dtype=np.float64).reshape(-1, 2) + (rows[0], cols[0])
+    if place is not None:
+        points = place(points)
     return _closed_curves(points, np.frombuffer(offsets, dtype=np.intp), min_area)
 
 

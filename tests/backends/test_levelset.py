@@ -265,6 +265,86 @@ def test_a_step_into_a_recycled_array_copies_phi_only_where_that_array_may_diffe
     np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
 
 
+def test_a_step_on_tiles_into_a_recycled_array_copies_phi_over_the_tiles_only():
+    # a rejected step on tiles leaves its array equal to phi outside the tiles' boxes (and a pixel
+    # beyond them): the next step copies phi there, not over the ring's bounding box, whose
+    # middle (the disk's interior, beyond every tile) is not copied over
+    problem, state, force, tau = _ring_problem(hole=False)
+    stepped, changed = problem.step(state, force, tau, True)
+    assert changed.ndim == 2  # on tiles
+    problem.recycle(stepped)
+    stepped[511, 511] = 123.0  # inside the ring's box, beyond the tiles
+    again, _ = problem.step(state, force, 0.5 * tau, True)
+    assert again is stepped and again[511, 511] == 123.0  # not copied over
+    again[511, 511] = state.phi[511, 511]
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
+
+
+def test_a_step_on_the_band_into_a_recycled_array_copies_phi_over_the_band_only():
+    # a rejected unsmoothed step leaves its array equal to phi but on the band's pixels and the
+    # front: the next step copies phi there, not over the band's bounding box, whose middle (the
+    # disk's interior, beyond the band) is not copied over
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    tau = min(tau, 0.2 / problem.params.mu)  # explicit on the band (tau mu <= 1/4)
+    stepped, changed = problem.step(state, force, tau, False)
+    assert changed.ndim == 1  # the band's pixels
+    problem.locate(stepped, state, changed)
+    problem.recycle(stepped)
+    stepped[60, 60] = 123.0  # inside the band's box, beyond the band
+    again, _ = problem.step(state, force, 0.5 * tau, False)
+    assert again is stepped and again[60, 60] == 123.0  # not copied over
+    again[60, 60] = state.phi[60, 60]
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, False)[0])
+
+
+def test_the_coarse_force_is_made_once_per_constants_and_is_the_block_means_force():
+    # a step retried with a smaller tau (the same constants) reuses the coarse grid's force; new
+    # constants make it anew: f of the block means of the channels, their squares and the wall
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
+    form = problem.params.load_form(*force)
+    first = problem._coarse_force(form)
+    assert problem._coarse_force(problem.params.load_form(*force)) is first
+    means, squares, wall = problem._coarse_tables()
+    expected = (form.constant + form.linear[0] * means[0].astype(np.float64)
+                + form.square[0] * squares[0].astype(np.float64) + problem.params.mu * wall)
+    np.testing.assert_allclose(first, expected, rtol=1e-5, atol=1e-6)
+    other = problem.params.load_form(force[0] + 0.1, force[1])
+    assert problem._coarse_force(other) is not first
+    problem._coarse_forced = None  # the held step with the cached force is the one made anew
+    held = problem._coarse_held(state, form, tau)
+    np.testing.assert_array_equal(problem._coarse_held(state, form, tau), held)
+
+
+def test_sides_of_steps_into_recycled_arrays_are_the_sides_of_phi():
+    # the sides of a located step are written into the sides of a state dropped before (a rejected
+    # step's, or the state before an accepted one), set where the two differ: they are phi > 0,
+    # and no array is made anew once two are in hand
+    problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (58.0, 61.0))
+    steps = [(True, 1.0, False), (True, 1.0, True), (True, 2.0, False), (False, 0.02, True),
+             (False, 0.02, False), (True, 0.5, True), (True, 0.5, False), (True, 0.25, True)]
+    seen = {id(state.positive)}
+    for index, (smooth, scale, accept) in enumerate(steps):
+        stepped, changed = problem.step(state, force, scale * tau, smooth)
+        located = problem.locate(stepped, state, changed)
+        np.testing.assert_array_equal(located.positive, stepped > 0)
+        if index >= 1:
+            assert id(located.positive) in seen  # a recycled one
+        seen.add(id(located.positive))
+        if accept:
+            trial = problem.finish(located, state)
+            problem.recycle(state.phi)
+            problem.recycle_sides(state, trial, located)
+            state = trial
+            current = problem.evaluate(state)
+            force, _ = problem.force(current.c_in, current.c_out)
+        else:
+            problem.recycle(stepped)
+            problem.recycle_sides(located, state, located)
+        np.testing.assert_array_equal(state.positive, state.phi > 0)
+
+
 def test_steps_into_recycled_arrays_equal_steps_into_new_ones():
     # the driver's sequence (smoothed and unsmoothed steps, rejected and accepted, the arrays
     # handed back and taken again): every stepped array is the one a new problem makes, so the
@@ -321,6 +401,66 @@ def test_closed_padding_is_the_edge_padding_with_a_negative_frame(shape):
     assert padded.dtype == np.float64
     np.testing.assert_array_equal(padded, expected)
     assert not np.signbit(padded[1:-1, 1:-1][phi > 0]).any() and (padded[frame] < 0).all()
+
+
+def _marching_squares_contours(phi):
+    """The zero set of phi by ``skimage.measure.find_contours`` on its box padded by
+    ``_closed_padding``, as level_set_contours documents it (the reference it must equal)."""
+    import skimage.measure
+
+    from activecontour.backends.levelset.zeroset import _closed_padding
+
+    positive = phi > 0
+    rows, cols = np.flatnonzero(positive.any(axis=1)), np.flatnonzero(positive.any(axis=0))
+    top, left = max(rows[0] - 1, 0), max(cols[0] - 1, 0)
+    padded = _closed_padding(phi[top: rows[-1] + 2, left: cols[-1] + 2])
+    curves = [c[::-1][:-1] for c in skimage.measure.find_contours(padded, 0.0)]  # "high": reversed
+    # level_curves: less the padding's pixel, repeated vertices and curves of no area dropped
+    curves = [c - 1.0 for c in curves]
+    curves = [c[np.any(c != np.roll(c, 1, axis=0), axis=1)] for c in curves]
+    return [c + (top, left) for c in curves if len(c) >= 3 and signed_area(c) != 0]
+
+
+@pytest.mark.parametrize("kind", ["noise32", "noise64", "disk", "border"])
+def test_contours_traced_from_the_sides_are_marching_squares_bit_for_bit(kind, monkeypatch):
+    # saddles, regions touching the border, float32 and float64: the curves traced from the sides
+    # and placed on their edges are find_contours's, every vertex equal, in its order; and
+    # find_contours does not run (its pass over every cell of the box is what this spares)
+    import skimage.measure
+
+    rng = np.random.default_rng(11)
+    references, phis = [], []
+    for _ in range(25):
+        m, n = rng.integers(3, 50, 2)
+        if kind.startswith("noise"):
+            phi = rng.normal(0.3, 1.0, (m, n)).astype(np.float32 if kind == "noise32" else np.float64)
+        else:
+            centre = (m * rng.random(), n * rng.random()) if kind == "disk" else (0.25, n / 2 + 0.1)
+            phi = np.clip(_circle_distance((m, n), centre, min(m, n) / 3 + 1.37), -4, 4).astype(np.float32)
+        if (phi > 0).any():
+            phis.append(phi)
+            references.append(_marching_squares_contours(phi))
+    monkeypatch.setattr(skimage.measure, "find_contours", None)
+    for phi, reference in zip(phis, references, strict=True):
+        contours = level_set_contours(phi)
+        assert len(contours) == len(reference)
+        for contour, expected in zip(contours, reference, strict=True):
+            assert contour.dtype == np.float64
+            np.testing.assert_array_equal(contour, expected)
+
+
+def test_contours_of_a_level_set_with_zeros_are_those_of_marching_squares():
+    # phi = 0 at pixels: crossings at grid points, which find_contours joins by equal points; the
+    # sides alone do not say how, so find_contours runs
+    rng = np.random.default_rng(12)
+    for _ in range(20):
+        phi = rng.normal(0.3, 1.0, tuple(rng.integers(3, 40, 2))).astype(np.float32)
+        phi[rng.random(phi.shape) < 0.15] = 0.0
+        if (phi > 0).any():
+            contours, reference = level_set_contours(phi), _marching_squares_contours(phi)
+            assert len(contours) == len(reference)
+            for contour, expected in zip(contours, reference, strict=True):
+                np.testing.assert_array_equal(contour, expected)
 
 
 def test_contour_of_a_region_touching_the_border_closes_on_the_domain_edge():

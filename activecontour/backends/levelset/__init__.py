@@ -108,8 +108,10 @@ beyond it (one batched DCT pair), phi held beyond the cells, when the tiles cost
 the box or the image and neither the tiles' values around the cells nor the coarse grid's beyond
 them come within half the band of flipping.  A step (b) works on the band only (explicit, or
 conjugate gradients).  A step is written into a recycled array, which
-equals phi already but for the box of the step or finish that last wrote it (noted per array):
-phi is copied over that box only, not over the image.  The reinitialisation
+equals phi already but for the box of the step or finish that last wrote it (the tiles' boxes, or
+the band's pixels, for a step on tiles or on the band; noted per array): phi is copied there only,
+not over the image; the sides (phi > 0) of a step are written likewise into the sides of a state
+dropped before, set at the pixels that switched between the two.  The reinitialisation
 reads the sides only where the step changed phi (its box, the image, the cells and halo pieces
 a step on tiles wrote, or for a step (b) the band's pixels; the front is searched next to the
 previous one and the pixels that changed side) and, for an accepted step, is written into the

@@ -141,6 +141,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
             problem.recycle(stepped)
             if located.phi is not stepped:  # a state without a front
                 problem.recycle(located.phi)
+            problem.recycle_sides(located, state, located)
             step, tau, grow = 0.5 * step, 0.5 * tau, False
         else:
             if smooth_force and pending is not None and len(moves) == stage_start:
@@ -153,6 +154,7 @@ def segment_levelset(model, init, params, *, max_num_iter, tol, callback, option
             moves.append(_swept_area(state, trial, problem.scratch.mark)
                          / max(evaluation.length, current.length, 1.0))
             problem.recycle(state.phi)
+            problem.recycle_sides(state, trial, located)
             state, current = trial, evaluation
             energies.append(current.energy)
             streak = streak + 1 if attempt == 0 else 0

@@ -154,7 +154,7 @@ class _Located:
         return state
 
 
-def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=None):
+def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=None, sides=None):
     """The :class:`_Located` zero set of phi, or the final :class:`_Redistanced` state where phi has
     no front (all inside or all outside).
 
@@ -165,7 +165,8 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=No
     cells as a search over the image at the cost of one pass instead of a dozen.  ``changed``:
     where phi may differ from ``previous.phi``: a box (two slices), boxes (R, 4) (rows: first
     row, stop row, first column, stop column; they may overlap), the flat indices of pixels
-    (1-D), or None (anywhere); the sides are read there only.
+    (1-D), or None (anywhere); the sides are read there only.  ``sides``: a bool array equal to
+    ``previous.positive`` that the new sides are written into (else a copy of it is made).
     """
     switched = None
     if previous is None:
@@ -173,7 +174,7 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=No
         front = np.flatnonzero(_front_pixels(positive))
     else:
         changed = (slice(0, phi.shape[0]), slice(0, phi.shape[1])) if changed is None else changed
-        positive, switched = _sides(phi, previous.positive, changed)
+        positive, switched = _sides(phi, previous.positive, changed, sides)
         mark = np.zeros(phi.size, dtype=np.uint8) if scratch is None else scratch.mark
         front, cells = _front_and_cells(positive, np.concatenate([previous.front, switched]), mark)
     if front.size == 0 and positive.all():
@@ -187,11 +188,12 @@ def _locate(phi, band, dtype=np.float64, scratch=None, previous=None, changed=No
     return _Located(phi, positive, front, cells, segments, nearest, switched, changed)
 
 
-def _sides(phi, before, changed):
+def _sides(phi, before, changed, out=None):
     """``phi > 0`` and the flat indices of the pixels whose side differs from ``before`` (in
-    increasing order), reading phi only where it ``changed`` (boxes or flat indices; :func:`_locate`)."""
+    increasing order), reading phi only where it ``changed`` (boxes or flat indices; :func:`_locate`).
+    ``out``: an array equal to ``before`` that the sides are written into (else a copy of it)."""
     if isinstance(changed, np.ndarray) and changed.ndim == 1:  # pixels: the band of a step (b)
-        positive = before.copy()
+        positive = before.copy() if out is None else out
         switched = np.empty(changed.size, dtype=np.intp)
         count = _kernels.sides_at(np.ascontiguousarray(phi).reshape(-1), before.reshape(-1).view(np.uint8),
                                   positive.reshape(-1).view(np.uint8),
@@ -200,7 +202,12 @@ def _sides(phi, before, changed):
     boxes = _boxes(changed)
     # beyond the boxes the sides are before's; one pass over each box
     area = int(((boxes[:, 1] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 2])).sum())
-    positive = np.empty(phi.shape, dtype=bool) if area == phi.size and len(boxes) == 1 else before.copy()
+    if out is not None:
+        positive = out
+    elif area == phi.size and len(boxes) == 1:
+        positive = np.empty(phi.shape, dtype=bool)
+    else:
+        positive = before.copy()
     switched = np.empty(area, dtype=np.intp)
     count = _kernels.sides(np.ascontiguousarray(phi), np.ascontiguousarray(before).view(np.uint8),
                            positive.view(np.uint8), boxes, switched)

@@ -67,9 +67,13 @@ class _Problem:
         # phi it equals outside a box, when that is known (see _copy_of)
         self._spare = []
         self._agreements = {}  # id(array): (array, phi, box): array equals phi outside box
+        # image-sized bool arrays (the sides of states dropped) to reuse, each with the sides it
+        # equals but at the pixels listed, when that is known (see _sides_like)
+        self._spare_sides = []
         self._box_buffer = None  # the smoothed step's box, reused while its size holds
         self._tile_buffer = None  # the smoothed step's tiles (_tile_step), reused while large enough
         self._coarse = None  # the far field's test grid (_coarse_tables)
+        self._coarse_forced = None  # (form's constants, f on that grid) of the last step (_coarse_force)
 
     def take(self, like=None):
         """An image-sized float32 array to write into, and the box outside which it equals the
@@ -90,9 +94,36 @@ class _Problem:
                 and len(self._spare) < 2:
             self._spare.append((array, None if entry is None else entry[1:]))
 
+    def _sides_like(self, before):
+        """An image-sized bool array equal to the sides ``before``: a recycled one set at the pixels
+        where it differs (those a step switched), else any recycled one or a new one, copied (a new
+        array faults in every page, a copy reads every pixel)."""
+        for index, (array, base, differ) in enumerate(self._spare_sides):
+            if base is before:
+                del self._spare_sides[index]
+                array.ravel()[differ] = before.ravel()[differ]
+                break
+        else:
+            if not self._spare_sides:
+                return before.copy()
+            array = self._spare_sides.pop()[0]
+            np.copyto(array, before)
+        # its contents change: every note that another array equals it but somewhere ends
+        self._spare_sides = [(other, None if base is array else base, differ)
+                             for other, base, differ in self._spare_sides]
+        return array
+
+    def recycle_sides(self, old, new, located):
+        """Hand back the sides of the state ``old``, which nothing refers to any more: they equal
+        those of the state ``new`` but at the pixels that ``located`` (the step between the two,
+        :meth:`locate`) switched."""
+        if isinstance(located, _Located) and len(self._spare_sides) < 2:
+            self._spare_sides.append((old.positive, new.positive, located.switched))
+
     def _agree(self, array, phi, box):
-        """Note that ``array`` equals ``phi`` outside ``box`` (two slices) until either is written:
-        a step that takes it back from ``phi`` copies that box only (:meth:`_copy_of`)."""
+        """Note that ``array`` equals ``phi`` outside ``box`` (two slices, boxes (R, 4) or pixels as
+        :meth:`step` returns them) until either is written: a step that takes it back from ``phi``
+        copies there only (:meth:`_copy_of`)."""
         self._agreements[id(array)] = (array, phi, box)
 
     def _copy_of(self, phi, box=None):
@@ -118,9 +149,14 @@ class _Problem:
         pixels written into ``stepped``: these alone fix the zero set of the reinitialised state,
         so :meth:`evaluate` scores it as it will be, and the band is grown (:meth:`finish`) only
         for a step that is accepted."""
-        located = _locate(stepped, self.band, np.float32, self.scratch, previous, changed)
+        located = _locate(stepped, self.band, np.float32, self.scratch, previous, changed,
+                          self._sides_like(previous.positive))
+        front = None
         if isinstance(located, _Located):
             located.front_distances(self.band)
+            front = located.front
+        if _is_pixels(changed):  # a step on the band's pixels: those and the front were written
+            self._agree(stepped, previous.phi, changed if front is None else np.concatenate([changed, front]))
         return located
 
     def finish(self, located, previous):
@@ -134,8 +170,18 @@ class _Problem:
         # pixels next to it, :meth:`step`) and on its band
         changed = _bounds(located.changed, self.shape)
         if changed is not None and state.near_flat.size:
-            self._agree(previous.phi, state.phi,
-                        _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape)))
+            if _is_pixels(located.changed):
+                # a step on the band's pixels: the previous band is reset, the new one written
+                self._agree(previous.phi, state.phi, np.concatenate([previous.near_flat, state.near_flat]))
+            elif _is_rects(located.changed):
+                # the tiles' writes: the new front lies within a pixel of them (the old one lies in
+                # their cells), the band within ceil(band) + 1 rings of the front; a ring of band
+                # on a large image: the rects, not their bounding box
+                self._agree(previous.phi, state.phi,
+                            _grown_rects(located.changed, self.shape, int(np.ceil(self.band)) + 2))
+            else:
+                self._agree(previous.phi, state.phi,
+                            _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape)))
         return state
 
     def evaluate(self, state):
@@ -215,7 +261,9 @@ class _Problem:
         """
         stepped, changed = self._step(state, force, tau, smooth_force)
         box = _bounds(changed, self.shape)
-        if box is not None:  # locating it writes the front's distances: one pixel beyond
+        if _is_rects(changed):  # locating it writes the front's distances: one pixel beyond
+            self._agree(stepped, state.phi, _grown_rects(changed, self.shape, 1))
+        elif box is not None and not _is_pixels(changed):  # pixels: noted by locate (the front)
             self._agree(stepped, state.phi, _grown(box, self.shape))
         return stepped, changed
 
@@ -287,19 +335,30 @@ class _Problem:
         outside.  Far from Gamma phi is ``+-band`` and a block whose value comes within half the
         band of zero may flip (a hole opening without a seed): :meth:`_far_flips`."""
         k = _COARSE
-        means, squares, wall = self._coarse_tables()
-        coarse = np.empty(wall.shape, dtype=np.float32)
+        force = self._coarse_force(form)
+        coarse = np.empty(force.shape, dtype=np.float32)
         _kernels.block_means(state.phi, k, coarse)
+        coarse -= np.float32(tau) * force
+        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
+                              _waves(coarse.shape[1]))
+        # far blocks lie beyond the band: the side of the first pixel (phi > 0) is the block's
+        return np.where(state.positive[::k, ::k], coarse, -coarse)
+
+    def _coarse_force(self, form):
+        """f (6.41) of ``form`` on the coarse grid (:meth:`_coarse_tables`), float32; the last one
+        is kept: a step retried with a smaller tau (backtracking) has the same constants."""
+        key = (form.constant, tuple(form.linear), tuple(form.square))
+        if self._coarse_forced is not None and self._coarse_forced[0] == key:
+            return self._coarse_forced[1]
+        means, squares, wall = self._coarse_tables()
         force = wall * np.float32(self.params.mu)  # f's terms in the kernel's order, in float32
         force += np.float32(form.constant)
         for channel, (linear, square) in enumerate(zip(form.linear, form.square, strict=True)):
             force += np.float32(linear) * means[channel]
             if square != 0:
                 force += np.float32(square) * squares[channel]
-        coarse -= np.float32(tau) * force
-        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
-                              _waves(coarse.shape[1]))
-        return np.where(state.phi[::k, ::k] > 0, coarse, -coarse)  # far blocks lie beyond the band
+        self._coarse_forced = key, force
+        return force
 
     def _far_flips(self, held, box):
         """Whether step (a) may flip a pixel outside ``box``: there phi is ``+-band`` and the step
@@ -550,7 +609,14 @@ def _waves(size):
 
 def _copy_outside(source, target, region, box=None):
     """Copy ``source`` into ``target`` over ``region`` (two slices) except ``box`` (None: all of
-    it): the rows of the region above and below the box, then its columns left and right of it."""
+    it): the rows of the region above and below the box, then its columns left and right of it.
+    A region of boxes (R, 4), or of pixels (flat indices), is copied whole, ``box`` included."""
+    if _is_rects(region):
+        _kernels.copy_boxes(source, target, region)
+        return
+    if _is_pixels(region):
+        target.reshape(-1)[region] = source.reshape(-1)[region]
+        return
     rows, cols = region
     if box is None:
         target[rows, cols] = source[rows, cols]
@@ -585,6 +651,24 @@ def _bounds(where, shape):
     cols = where % n
     rows = slice(int(where.min()) // n, int(where.max()) // n + 1)
     return rows, slice(int(cols.min()), int(cols.max()) + 1)
+
+
+def _is_rects(where):
+    """Whether ``where`` (as :func:`_bounds` takes it) is boxes (R, 4)."""
+    return isinstance(where, np.ndarray) and where.ndim == 2
+
+
+def _is_pixels(where):
+    """Whether ``where`` (as :func:`_bounds` takes it) is pixels (flat indices)."""
+    return isinstance(where, np.ndarray) and where.ndim == 1
+
+
+def _grown_rects(rects, shape, by):
+    """Boxes (R, 4) (first row, stop row, first column, stop column) widened by ``by`` pixels on
+    every side, cut to the image."""
+    m, n = shape
+    return np.column_stack([np.maximum(rects[:, 0] - by, 0), np.minimum(rects[:, 1] + by, m),
+                            np.maximum(rects[:, 2] - by, 0), np.minimum(rects[:, 3] + by, n)]).astype(np.intp)
 
 
 def _union(box, other):

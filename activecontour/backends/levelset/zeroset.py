@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.geometry.raster import level_curves
+from activecontour.geometry.raster import level_curves, mask_to_curves
 
 
 def _cell_segments(phi, cells):
@@ -44,8 +44,15 @@ def level_set_contours(phi):
     domain edge, half a pixel outside the outermost pixel centres, so every curve is closed.
     With ``positive_orientation="high"`` outer boundaries have positive signed area and holes
     negative.  Each vertex is stored once.  Only the box around the inside (and one pixel more)
-    is traced: beyond it phi is negative and has no zero crossing, and the float64 copies that
-    marching squares makes stay the size of that box.
+    is traced: beyond it phi is negative and has no zero crossing.
+
+    The curves of marching squares are fixed by the sides of the pixels alone (which cells a curve
+    crosses, and how the crossings join) but for where each crossing lies on its grid edge: they
+    are traced from the sides (:func:`activecontour.geometry.raster.mask_to_curves`, compiled, no
+    float64 copy of the box) and each crossing then placed as ``find_contours`` places it, by the
+    same arithmetic (:func:`_crossings`): the same curves, bit for bit.  Where a crossing would not
+    lie strictly inside its edge (a zero or a NaN of phi), ``find_contours`` joins curves at equal
+    points, and it runs itself.
     """
     phi = np.asarray(phi)
     positive = phi > 0
@@ -54,8 +61,51 @@ def level_set_contours(phi):
         return []
     top, left = max(rows[0] - 1, 0), max(cols[0] - 1, 0)
     box = phi[top: rows[-1] + 2, left: cols[-1] + 2]
-    # the padding of a side of the box inside the image is -|phi| of negative pixels: phi itself
-    return [curve + (top, left) for curve in level_curves(_closed_padding(box), 0.0)]
+    try:
+        curves = mask_to_curves(positive[top: rows[-1] + 2, left: cols[-1] + 2],
+                                place=lambda midpoints: _crossings(box, midpoints))
+    except _Unplaced:
+        # the padding of a side of the box inside the image is -|phi| of negative pixels: phi itself
+        curves = level_curves(_closed_padding(box), 0.0)
+    return [curve + (top, left) for curve in curves]
+
+
+class _Unplaced(ValueError):
+    """A crossing of phi's zero set that does not lie strictly inside its grid edge (:func:`_crossings`)."""
+
+
+def _crossings(box, midpoints):
+    """The zero crossings of ``box`` padded by :func:`_closed_padding` on the grid edges whose
+    midpoints (box coordinates, (K, 2)) are given, in box coordinates: exactly the points of
+    ``skimage.measure.find_contours`` on the padded box less the padding's pixel, as
+    :func:`activecontour.geometry.raster.level_curves` returns them (``start + (0 - a) / (b - a)``
+    from the edge's upper or left end ``a`` to its other end ``b``, in padded coordinates, then
+    ``- 1``).  Raises :class:`_Unplaced` when a crossing does not lie strictly inside its edge."""
+    m, n = box.shape
+    row, col = midpoints[:, 0], midpoints[:, 1]
+    along = row == np.floor(row)  # a horizontal edge: the crossing moves along the row
+    first_r = (np.where(along, row, row - 0.5) + 1.0).astype(np.intp)  # padded coordinates
+    first_c = (np.where(along, col - 0.5, col) + 1.0).astype(np.intp)
+    a = _padded_values(box, first_r, first_c)
+    b = _padded_values(box, first_r + ~along, first_c + along)
+    start = np.where(along, first_c, first_r).astype(np.float64)
+    placed = start + (0.0 - a) / (b - a)
+    if not np.all((placed > start) & (placed < start + 1.0)):
+        raise _Unplaced
+    out = np.empty_like(midpoints)
+    out[:, 0] = np.where(along, first_r - 1.0, placed - 1.0)
+    out[:, 1] = np.where(along, placed - 1.0, first_c - 1.0)
+    return out
+
+
+def _padded_values(box, rows, cols):
+    """The values of :func:`_closed_padding` of ``box`` at padded (row, col) pixels, float64."""
+    m, n = box.shape
+    values = box[np.clip(rows - 1, 0, m - 1), np.clip(cols - 1, 0, n - 1)].astype(np.float64)
+    frame = (rows < 1) | (rows > m) | (cols < 1) | (cols > n)
+    values[frame] = -np.abs(values[frame])
+    values[values == 0] = -1e-300
+    return values
 
 
 def _closed_padding(phi):
