@@ -81,7 +81,6 @@ def _crossings(box, midpoints):
     :func:`activecontour.geometry.raster.level_curves` returns them (``start + (0 - a) / (b - a)``
     from the edge's upper or left end ``a`` to its other end ``b``, in padded coordinates, then
     ``- 1``).  Raises :class:`_Unplaced` when a crossing does not lie strictly inside its edge."""
-    m, n = box.shape
     row, col = midpoints[:, 0], midpoints[:, 1]
     along = row == np.floor(row)  # a horizontal edge: the crossing moves along the row
     first_r = (np.where(along, row, row - 0.5) + 1.0).astype(np.intp)  # padded coordinates
