@@ -3,7 +3,7 @@
 The concave corners cut the outline into arcs, the arcs are grouped into ellipses (a group joins
 while one ellipse fits it about as well as two, by the Bayesian information criterion), and every
 pixel goes to the ellipse it lies deepest in, the rule by which overlapping objects are drawn
-(:func:`_arc_parts`; what it must explain before it decides alone: the module docstring of
+(:func:`_arc_clump`; what it must explain before it decides alone: the module docstring of
 :mod:`activecontour.objects.split`).
 """
 
@@ -27,7 +27,7 @@ from activecontour.objects.shapes import (
 
 # ---- stage 2, first: the outline's arcs grouped into ellipses -----------------------------------
 
-#: :func:`_arc_parts` cuts the outline into arcs at concave stretches that turn by this many
+#: :func:`_arc_clump` cuts the outline into arcs at concave stretches that turn by this many
 #: degrees (and dip ``MIN_WAIST_DEPTH`` inside the hull): lower than ``CORNER_TURN``, since a
 #: stretch of noise only cuts an arc in two that the grouping joins again, while a contact whose
 #: corner the converged contour rounded below ``CORNER_TURN`` is still found.
@@ -113,13 +113,6 @@ ARC_CROWD_MEET = 4
 #: uncovered piece no larger than an arm (singles seed 144, cut into five; the one single of 960,
 #: seeds 0-159, that crowded clumps cut).
 ARC_HIDDEN_SIZE = 1.5
-
-
-def _arc_parts(curves, depth=None, extent=None, bent=None):
-    """The parts of an object as a clump of overlapping ellipses that the arcs decide alone
-    (:func:`_arc_clump`, not crowded), or None."""
-    clump = _arc_clump(curves, depth, extent, bent)
-    return None if clump is None or clump[1] else clump[0]
 
 
 def _arc_clump(curves, depth=None, extent=None, bent=None):
@@ -278,7 +271,7 @@ def _arcs(outline, corners):
 
 
 def _grouped_arcs(outline, arcs):
-    """The arcs joined into groups (:func:`_arc_parts`): a list of (arcs, fit, ellipse or None).
+    """The arcs joined into groups (:func:`_arc_clump`): a list of (arcs, fit, ellipse or None).
     The fits of all new pairs are solved together; a pair's ellipse is made and tested (a polygon
     intersection, the dearest test) only when its cost makes it the pair to join, and a single
     arc's only when it is left alone (the joining reads the fits).  A fit whose conic fails

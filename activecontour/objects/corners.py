@@ -233,7 +233,7 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN, bent=None):
     The curvature is the book's (3.45) in P1 weak form (:func:`activecontour.geometry.curve.
     curvature`), smoothed along the outline (:func:`_bent`, ``CORNER_SMOOTHING``).  A
     maximal stretch where it is negative is a corner when its turning ``-int kappa ds`` reaches
-    ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_parts`) and it dips
+    ``turn`` degrees (``CORNER_TURN``; ``ARC_CORNER_TURN`` for :func:`_arc_clump`) and it dips
     ``MIN_WAIST_DEPTH`` inside the convex hull (``depth``: :func:`_hull_depth`, measured here
     unless given, and only once a stretch turns enough); the corner is its vertex of most negative
     curvature.  ``bent``: the outline's :func:`_bent`, when it is known (the arc stage and the

@@ -10,7 +10,7 @@ whole clump; each lives in a module of its own (:mod:`activecontour.objects.arcs
 :mod:`~activecontour.objects.contrast`), and the shapes they judge parts by in
 :mod:`~activecontour.objects.shapes`; this module runs them per object (:func:`split_touching`):
 
-0. **Arcs grouped into ellipses** (:func:`_arc_parts`, the sub-pixel polygon, holes allowed):
+0. **Arcs grouped into ellipses** (:func:`_arc_clump`, the sub-pixel polygon, holes allowed):
    the concave corners cut the outline into arcs, the arcs are grouped into ellipses (a group
    joins while one ellipse fits it about as well as two, by the Bayesian information criterion)
    and every pixel goes to the ellipse it lies deepest in, the rule by which overlapping

@@ -11,7 +11,6 @@ from activecontour.geometry.curve import orient
 from activecontour.objects.arcs import (
     ARC_REACH,
     _arc_clump,
-    _arc_parts,
     _meet_at_corners,
     _meeting,
     _uncovered_parts,
@@ -241,6 +240,13 @@ def _resampled(outline, spacing=1.0):
     along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(closed, axis=0).T))])
     s = np.arange(0.0, along[-1], spacing)
     return np.column_stack([np.interp(s, along, closed[:, 0]), np.interp(s, along, closed[:, 1])])
+
+
+def _arc_parts(curves, extent=None):
+    """The parts of an object that the arc stage decides alone (:func:`_arc_clump`, a clump that is
+    not crowded), or None."""
+    clump = _arc_clump(curves, extent=extent)
+    return None if clump is None or clump[1] else clump[0]
 
 
 def _disks_parts(centres, radius):
