@@ -193,7 +193,7 @@ class _Flow:
                 keep[loop], uses, (areas, first, second) = False, uses_without, trial
                 length, energy = length - loop_length, candidate.energy
         removed = not keep.all()
-        network = network.subset(keep, nodes) if removed else network
+        network = network.without_loops(keep, nodes) if removed else network
         if not removed:
             return False
         current = self.evaluate(network, nodes)  # the same J, integrated afresh
