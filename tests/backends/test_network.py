@@ -324,6 +324,32 @@ def test_dropping_an_island_merges_it_into_the_region_around_it():
     assert network.without_island(network.nodes, loops[38]) is None
 
 
+def test_dropping_loops_carries_the_faces_and_pieces_over_as_found_afresh():
+    classes = np.zeros((20, 22), dtype=np.int32)
+    classes[3:12, 4:14] = 1
+    classes[6:8, 7:9] = 2  # an island inside region 1
+    classes[15:17, 3:5] = classes[14, 18] = 2  # two in the background
+    classes[16:19, 10:13] = 1
+    network = Network.of_classes(classes)
+    network.faces()
+    areas = network.closed_areas(network.nodes)[0]
+    loops = [network.loop_segments(k) for k in range(len(areas))]
+    for dropped in ([0], [len(loops) - 1], [0, 2]):
+        keep = np.ones(len(network.start), dtype=bool)
+        keep[np.concatenate([loops[k] for k in dropped])] = False
+        smaller = network.without_loops(keep, network.nodes)
+        assert smaller._faces is not None and smaller._pieces is not None  # carried, not found again
+        fresh = Network(network.nodes, network.start[keep], network.end[keep], network.inner[keep],
+                        network.outer[keep], network.shape)
+        for carried, found in zip(smaller.faces(), fresh.faces(), strict=True):
+            np.testing.assert_array_equal(carried, found)
+        carried, found = smaller.closed_areas(network.nodes)[0], fresh.closed_areas(network.nodes)[0]
+        np.testing.assert_array_equal(carried, found)
+        assert len(found) == len(loops) - len(dropped)
+        for k in range(len(found)):
+            np.testing.assert_array_equal(smaller.loop_segments(k), fresh.loop_segments(k))
+
+
 @pytest.mark.parametrize("backend", ["polygon", "levelset"])
 def test_a_region_pinched_at_a_junction_is_two_simple_curves(backend):
     # region 1 meets itself diagonally at the corner of region 2: its two squares touch at one

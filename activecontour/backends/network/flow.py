@@ -168,10 +168,9 @@ class _Flow:
         length, energy = self.current.length, self.current.energy
         keep = np.ones(len(network.start), dtype=bool)
         uses = np.bincount(np.concatenate([network.start, network.end]), minlength=len(nodes))
-        by_row = np.argsort(nodes[:, 0], kind="stable")
-        boxed = network.boxes_hold_nodes(nodes, candidates, uses > 0, by_row)
+        used, by_row, boxed = uses > 0, None, None
         # one at a time: a loop may hold another part until that is gone
-        for k, (loop, holds) in enumerate(zip(candidates, boxed, strict=True)):
+        for k, loop in enumerate(candidates):
             area, moment_1, moment_2 = (part[k + 1] for part in islands)
             sides = (network.inner[loop[0]], network.outer[loop[0]])
             inside, around = sides if area > 0 else sides[::-1]
@@ -185,13 +184,16 @@ class _Flow:
             if candidate.energy > energy:
                 continue
             # J first: most candidates stay because removing them would raise it
+            if boxed is None:  # the nodes by row and the loops' boxes, once one lowers J
+                by_row = np.argsort(nodes[:, 0])  # (equal rows in any order: a set of nodes is asked)
+                boxed = network.boxes_hold_nodes(nodes, candidates, used, by_row)
             uses_without = uses.copy()
             np.subtract.at(uses_without, np.concatenate([network.start[loop], network.end[loop]]), 1)
-            if not (holds and network.encloses(nodes, loop, uses_without, by_row)):
+            if not (boxed[k] and network.encloses(nodes, loop, uses_without, by_row)):
                 keep[loop], uses, (areas, first, second) = False, uses_without, trial
                 length, energy = length - loop_length, candidate.energy
         removed = not keep.all()
-        network = network.subset(keep, nodes) if removed else network
+        network = network.without_loops(keep, nodes) if removed else network
         if not removed:
             return False
         current = self.evaluate(network, nodes)  # the same J, integrated afresh

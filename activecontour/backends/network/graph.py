@@ -532,6 +532,32 @@ class Network:
         return Network(nodes, self.start[keep], self.end[keep], self.inner[keep], self.outer[keep],
                        self.shape).inheriting(self, np.flatnonzero(keep))
 
+    def without_loops(self, keep, nodes):
+        """:meth:`subset` where the segments left out are whole closed loops (:meth:`closed_loops`),
+        each enclosing no other part: its faces (:meth:`faces`) and interface pieces
+        (:meth:`closed_areas`) are then the others', in the same order (each numbered by its
+        smallest segment, and no other piece or face passes a loop's nodes), so they are carried
+        over, not found again."""
+        network = self.subset(keep, nodes)
+        position = np.cumsum(keep) - 1  # a kept segment's index in ``network``
+        if self._faces is not None:
+            face, segment, sign = self._faces
+            stays = keep[segment]
+            network._faces = (_renumbered(face, stays), position[segment[stays]], sign[stays])
+        if self._pieces is not None and self._pieces[0].size:
+            chosen, piece, _, closed, sign = self._pieces[:5]
+            stays = keep[chosen]
+            if stays.any():
+                kept = np.zeros(self._pieces[2], dtype=bool)
+                kept[piece[stays]] = True
+                piece = _renumbered(piece, stays)
+                count = int(kept.sum())
+                by_piece = np.argsort(piece, kind="stable")
+                network._pieces = (position[chosen[stays]], piece, count,
+                                   (np.cumsum(kept) - 1)[closed[kept[closed]]], sign[stays], by_piece,
+                                   np.searchsorted(piece[by_piece], np.arange(count + 1)))
+        return network
+
     def inheriting(self, network, position):
         """This network, to reuse ``network``'s orders of the free nodes (the H^1 system's band:
         :func:`activecontour.backends.network.h1.factorised`) and, at the same nodes, its
@@ -585,6 +611,14 @@ class Network:
         box_high = np.maximum(nodes[self.start[changed]], nodes[self.end[changed]]).max(axis=0)
         near = chosen[np.all((low <= box_high) & (high >= box_low), axis=1)]
         return not self.meet_among(nodes, near)
+
+
+def _renumbered(group, stays):
+    """The groups ``group`` (dense ids) of the entries ``stays``, numbered afresh 0, 1, ... in
+    their order: the groups left with no entry dropped."""
+    kept = np.zeros(int(group.max()) + 1 if group.size else 0, dtype=bool)
+    kept[group[stays]] = True
+    return (np.cumsum(kept) - 1)[group[stays]]
 
 
 def as_indices(array):
