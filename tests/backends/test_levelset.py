@@ -256,13 +256,19 @@ def test_a_step_into_a_recycled_array_copies_phi_only_where_that_array_may_diffe
     problem, state, force, tau = _smoothed_step_problem([(60.0, 60.0)], (60.0, 60.0))
     stepped, box = problem.step(state, force, tau, True)
     assert isinstance(box, tuple) and box[0].stop < 199 and box[1].stop < 199
+    _assert_recycled_step_leaves(problem, state, force, tau, True, stepped, (199, 199))  # beyond the box
+
+
+def _assert_recycled_step_leaves(problem, state, force, tau, smoothed, stepped, pixel):
+    """``stepped``, recycled, is the next step's array (with half ``tau``), which leaves ``pixel``
+    (where the array was noted equal to phi) as it was, and equals a fresh problem's step."""
     problem.recycle(stepped)
-    stepped[199, 199] = 123.0  # beyond the box: where the array was noted to equal phi
-    again, _ = problem.step(state, force, 0.5 * tau, True)
-    assert again is stepped and again[199, 199] == 123.0  # not copied over
-    again[199, 199] = state.phi[199, 199]
+    stepped[pixel] = 123.0
+    again, _ = problem.step(state, force, 0.5 * tau, smoothed)
+    assert again is stepped and again[pixel] == 123.0  # not copied over
+    again[pixel] = state.phi[pixel]
     fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
-    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
+    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, smoothed)[0])
 
 
 def test_a_step_on_tiles_into_a_recycled_array_copies_phi_over_the_tiles_only():
@@ -272,13 +278,7 @@ def test_a_step_on_tiles_into_a_recycled_array_copies_phi_over_the_tiles_only():
     problem, state, force, tau = _ring_problem(hole=False)
     stepped, changed = problem.step(state, force, tau, True)
     assert changed.ndim == 2  # on tiles
-    problem.recycle(stepped)
-    stepped[511, 511] = 123.0  # inside the ring's box, beyond the tiles
-    again, _ = problem.step(state, force, 0.5 * tau, True)
-    assert again is stepped and again[511, 511] == 123.0  # not copied over
-    again[511, 511] = state.phi[511, 511]
-    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
-    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, True)[0])
+    _assert_recycled_step_leaves(problem, state, force, tau, True, stepped, (511, 511))  # beyond the tiles
 
 
 def test_a_step_on_the_band_into_a_recycled_array_copies_phi_over_the_band_only():
@@ -290,13 +290,7 @@ def test_a_step_on_the_band_into_a_recycled_array_copies_phi_over_the_band_only(
     stepped, changed = problem.step(state, force, tau, False)
     assert changed.ndim == 1  # the band's pixels
     problem.locate(stepped, state, changed)
-    problem.recycle(stepped)
-    stepped[60, 60] = 123.0  # inside the band's box, beyond the band
-    again, _ = problem.step(state, force, 0.5 * tau, False)
-    assert again is stepped and again[60, 60] == 123.0  # not copied over
-    again[60, 60] = state.phi[60, 60]
-    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
-    np.testing.assert_array_equal(again, fresh.step(state, force, 0.5 * tau, False)[0])
+    _assert_recycled_step_leaves(problem, state, force, tau, False, stepped, (60, 60))  # beyond the band
 
 
 def test_the_coarse_force_is_made_once_per_constants_and_is_the_block_means_force():
