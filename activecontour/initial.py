@@ -144,9 +144,10 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
 
     Parameters
     ----------
-    smooth : ndarray (M, N, C)
-        The values whose threshold sets are scanned (the image smoothed against pixel noise).
-    values : ndarray (M, N, C), optional
+    smooth : ndarray (M, N, C) or _Rows
+        The values whose threshold sets are scanned (the image smoothed against pixel noise);
+        only the sampled rows are read.
+    values : ndarray (M, N, C) or _Rows, optional
         The intensities the fit terms read (the image itself); ``smooth`` when None.
     mu : float
         The length weight.
@@ -163,8 +164,8 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
     """
     values = smooth if values is None else values
     m, n, channels = smooth.shape
-    step = max(1, int(np.ceil(m * n / _SPLIT_SAMPLE)))
-    top, below = smooth[::step], smooth[1::step]  # every step-th row, and the rows below them
+    step = _scan_step(m, n)
+    top, below = _sampled_rows(smooth, step)
     fit = values[::step].reshape(-1, channels)
     squares = float(np.einsum("ij,ij->", fit, fit))  # the same for every split
     if channels == 1:
@@ -225,25 +226,64 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
     return best
 
 
-def _object_class(smooth, values=None, mu=0.0, split=None):
-    """The object class of the threshold split: a bool (M, N) mask and the contrast.
+def _scan_step(m, n):
+    """The scan of :func:`threshold_split` reads every this many-th row of an (m, n) image."""
+    return max(1, int(np.ceil(m * n / _SPLIT_SAMPLE)))
 
-    The pixels are split in two classes by :func:`threshold_split` (or by ``split``, a
-    ``(direction, threshold)``); the background is the class that covers most of the image
-    border.  The contrast is the squared distance of the class means of ``values`` (the mean
-    over channels, as the fit terms); 0 when there is one class.
-    """
+
+def _scan_rows(m, step):
+    """The rows the scan reads: every ``step``-th row and the rows below them, sorted."""
+    return np.arange(m) if step == 1 else np.union1d(np.arange(0, m, step), np.arange(1, m, step))
+
+
+def _sampled_rows(smooth, step):
+    """The scan's rows of ``smooth``: every ``step``-th row, and the rows below them, as (top,
+    below), fetched at once (a :class:`_Rows` makes each pair in one strip)."""
+    rows = smooth[_scan_rows(smooth.shape[0], step)]
+    return (rows, rows[1:]) if step == 1 else (rows[0::2], rows[1::2])
+
+
+def _object_class(smooth, values=None, mu=0.0):
+    """The object class of the threshold split of :func:`threshold_split`: a bool (M, N) mask and
+    the contrast (:func:`_classes`)."""
     values = smooth if values is None else values
-    direction, threshold = split if split is not None else threshold_split(smooth, values, mu)[:2]
+    direction, threshold = threshold_split(smooth, values, mu)[:2]
+    return _classes(_threshold_set(smooth, direction, threshold)[0], values)
+
+
+def _threshold_set(smooth, direction, threshold, step=None):
+    """``smooth @ direction >= threshold``, a bool (M, N) (None when ``threshold`` is not finite),
+    made a strip of rows at a time (a :class:`_Rows` is never made whole), and with ``step``
+    the sample ``smooth[::step, ::step]`` as (K, C) rows (else None)."""
     if not np.isfinite(threshold):
-        return np.zeros(smooth.shape[:2], dtype=bool), 0.0
-    if len(direction) == 1:  # gray: one comparison per pixel, no float temporary
-        label = smooth[:, :, 0] >= threshold
-    else:
-        label = smooth @ direction >= threshold
+        return None, None
+    m, n, channels = smooth.shape
+    label = np.empty((m, n), dtype=bool)
+    height = _STRIP_ROWS if step is None else max(1, _STRIP_ROWS // step) * step  # a multiple of step
+    samples = []
+    for top in range(0, m, height):
+        rows = _strip(smooth, top, min(m, top + height))
+        # gray: one comparison per pixel, no float temporary
+        np.greater_equal(rows[:, :, 0] if len(direction) == 1 else rows @ direction, threshold,
+                         out=label[top:top + len(rows)])
+        if step is not None:
+            samples.append(rows[::step, ::step].copy())
+    return label, (None if step is None else np.concatenate(samples).reshape(-1, channels))
+
+
+def _classes(label, values):
+    """The object class of a threshold set ``label`` (None: one class): a bool (M, N) mask and
+    the contrast.
+
+    The background is the class that covers most of the image border.  The contrast is the
+    squared distance of the class means of ``values`` (the mean over channels, as the fit
+    terms); 0 when there is one class.
+    """
+    if label is None:
+        return np.zeros(values.shape[:2], dtype=bool), 0.0
     count = np.count_nonzero(label)
     if count in (0, label.size):
-        return np.zeros(smooth.shape[:2], dtype=bool), 0.0
+        return np.zeros(values.shape[:2], dtype=bool), 0.0
     # the class means from sums over the label, without copying either class's pixels
     inside = np.array([values[:, :, ch].sum(where=label) for ch in range(values.shape[2])])
     total = values.sum(axis=(0, 1))
@@ -260,8 +300,8 @@ SCALE_AGREEMENT = 0.25
 
 
 def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=None):
-    """(direction, threshold) of the default start: the exact scan's, unless a coarser view
-    disagrees.
+    """The threshold set of the default start, a bool (M, N) (None for one class): the exact
+    scan's, unless a coarser view disagrees.
 
     The scan (:func:`threshold_split`) on the image blurred by ``DEFAULT_INIT_BLUR`` px can
     prefer the peaks of a fine texture (a 6 px grating inside an object) to the object: their
@@ -270,28 +310,97 @@ def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=No
     is gone.  When the two scans select shares of the pixels that differ by more than
     ``SCALE_AGREEMENT``, the coarse split is kept: its share of the pixels, taken on the finer
     image (a quantile along the coarse split's direction), so corners stay sharp.  Objects, small
-    ones too, are split alike at both scales.  ``split``: :func:`threshold_split` of ``smooth``
-    when the caller has it already (it is not scanned again).
+    ones too, are split alike at both scales.  ``smooth``: the blurred image (a :class:`_Rows`:
+    the fine split's threshold set and the sample of the shares are made in one pass over its
+    rows); ``split``: :func:`threshold_split` of ``smooth`` when the caller has it already (it
+    is not scanned again).
     """
     direction, threshold, _ = threshold_split(smooth, values, mu) if split is None else split
     m, n = values.shape[:2]
-    if min(m, n) < 32 or not np.isfinite(threshold):
-        return direction, threshold
+    step = max(1, int(np.sqrt(m * n / _SPLIT_SAMPLE)))
+    label, sample = _threshold_set(smooth, direction, threshold, step)
+    if min(m, n) < 32 or label is None:
+        return label
     half = _block_means(values)
-    coarse_smooth = _blurred(half, DEFAULT_INIT_BLUR if blur is None else blur)
+    # the rows of the coarse blur that its scan and its share read, made in one pass
+    coarse_rows = np.union1d(_scan_rows(half.shape[0], _scan_step(*half.shape[:2])),
+                             np.arange(0, half.shape[0], step))
+    coarse_smooth = _Kept(_blurred_rows(half, DEFAULT_INIT_BLUR if blur is None else blur), coarse_rows)
     coarse_direction, coarse_threshold, _ = threshold_split(coarse_smooth, half, mu / 2)
     if not np.isfinite(coarse_threshold):
-        return direction, threshold
-    step = max(1, int(np.sqrt(m * n / _SPLIT_SAMPLE)))
-    sample = smooth[::step, ::step].reshape(-1, smooth.shape[2])
+        return label
     fine_share = np.mean(sample @ direction >= threshold)
     coarse_share = np.mean(coarse_smooth[::step, ::step] @ coarse_direction >= coarse_threshold)
     if abs(fine_share - coarse_share) <= SCALE_AGREEMENT * max(fine_share, coarse_share):
-        return direction, threshold
-    return coarse_direction, float(np.quantile(sample @ coarse_direction, 1.0 - coarse_share))
+        return label
+    return _threshold_set(smooth, coarse_direction, float(np.quantile(sample @ coarse_direction,
+                                                                      1.0 - coarse_share)))[0]
+
+
+#: Rows of a :class:`_Rows` made at once (with a blur's margins): the default start never holds
+#: a whole blurred image.  At 8192^2 a float64 one is 512 MB of fresh memory, and on the 2-core
+#: machine the first touch of fresh memory cost 6x the blur's own arithmetic (1.27 s CPU, 1.2 s
+#: of it the kernel's, against 0.19 s into memory the process had); strips are reused memory.
+_STRIP_ROWS = 256
+
+
+class _Rows:
+    """An image (M, N, C) whose rows are made on demand, a strip at a time: the 2 x 2 block means
+    (:func:`_block_means`) or a blur (:func:`_blurred_rows`) of another.  ``rows[key]`` and
+    ``rows[key, columns]``, ``key`` a slice or sorted row indices, are exactly those rows of the
+    whole image, which is never held.
+
+    ``make(a, b)`` makes rows ``a`` to ``b - 1`` (possibly in memory it reuses: valid until the
+    next ``make``; ``rows[key]`` copies); ``reach`` is how far beyond them it reads (a blur's
+    margin): wanted rows closer than twice that are made in one strip.
+    """
+
+    def __init__(self, shape, make, reach=0):
+        self.shape, self.make, self.reach = tuple(shape), make, reach
+
+    def __getitem__(self, key):
+        rows, columns = key if isinstance(key, tuple) else (key, slice(None))
+        wanted = np.arange(self.shape[0])[rows]
+        if wanted.size == 0:
+            return np.empty((0, *self.shape[1:]))[:, columns]
+        # strips: runs of wanted rows with gaps up to 2 reach, spanning at most _STRIP_ROWS rows
+        breaks = (np.diff(wanted) > 2 * self.reach + 1) | (np.diff(wanted // _STRIP_ROWS) != 0)
+        parts = []
+        for piece in np.split(wanted, np.flatnonzero(breaks) + 1):
+            strip = self.make(piece[0], piece[-1] + 1)
+            parts.append(strip[piece - piece[0], columns])
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+class _Kept:
+    """Some rows of an image (an array or :class:`_Rows`), made once and served as its rows:
+    ``kept[key]``, ``kept[key, columns]`` as the image's (only the kept rows)."""
+
+    def __init__(self, image, rows):
+        self.shape, self.rows, self.held = image.shape, rows, image[rows]
+
+    def __getitem__(self, key):
+        rows, columns = key if isinstance(key, tuple) else (key, slice(None))
+        wanted = np.arange(self.shape[0])[rows]
+        where = np.minimum(np.searchsorted(self.rows, wanted), len(self.rows) - 1)
+        if not np.array_equal(self.rows[where], wanted):
+            raise IndexError("rows that were not kept")
+        return self.held[where, columns]
+
+
+def _strip(image, a, b):
+    """Rows ``a`` to ``b - 1`` of an array (a view) or of :class:`_Rows` (valid until its next strip)."""
+    return image.make(a, b) if isinstance(image, _Rows) else image[a:b]
 
 
 def _block_means(values):
+    """The image reduced by 2 x 2 block means, (M // 2, N // 2, C) (a last odd row or column
+    dropped), as :class:`_Rows`."""
+    shape = (values.shape[0] // 2, values.shape[1] // 2, values.shape[2])
+    return _Rows(shape, lambda a, b: _block_means_of(values[2 * a:2 * b]))
+
+
+def _block_means_of(values):
     """The image reduced by 2 x 2 block means, (M // 2, N // 2, C) (a last odd row or column
     dropped).  Gray: the four strided planes added as ``(a + b) + (c + d)``, the order numpy's
     mean over the blocks takes, without its reshaped temporaries (3x faster at 4096^2)."""
@@ -305,14 +414,39 @@ def _block_means(values):
     return total[:, :, np.newaxis]
 
 
-def _blurred(values, blur=None):
-    """The image blurred by ``blur`` px (``DEFAULT_INIT_BLUR`` by default), (M, N, C)."""
+def _blurred_rows(values, blur=None):
+    """:func:`_blurred` of ``values`` (an array or :class:`_Rows`), as :class:`_Rows`: each strip
+    is blurred with the rows of its kernel's reach around it, which gives exactly the rows of
+    the whole image's blur (OpenCV filters the rows of a strip as those of the whole image; the
+    reflected border is reached only at the image's own top and bottom)."""
+    blur = DEFAULT_INIT_BLUR if blur is None else blur
+    # OpenCV's kernel for a float image has round(8 blur + 1) | 1 taps: its reach is half that
+    reach, m = (int(np.rint(8.0 * blur + 1.0)) | 1) // 2, values.shape[0]
+
+    reused = []  # a gray strip's blur is written over the last one's
+
+    def make(a, b):
+        low, high = max(0, a - reach), min(m, b + reach)
+        return _blurred(_strip(values, low, high), blur, reused)[a - low:b - low]
+
+    return _Rows(values.shape, make, reach)
+
+
+def _blurred(values, blur=None, reused=None):
+    """The image blurred by ``blur`` px (``DEFAULT_INIT_BLUR`` by default), (M, N, C).
+
+    ``reused``: a list holding (or to hold) a buffer a gray image's blur is written into, when it
+    has the rows: the returned array is then a view of it."""
     import cv2  # not scipy.ndimage: it costs ~0.2 s to import on every cold start
 
     blur = DEFAULT_INIT_BLUR if blur is None else blur
+    m, n, channels = values.shape
+    if reused is not None and channels == 1 and not (reused and reused[0].shape[0] >= m):
+        reused[:] = [np.empty((m, n))]
+    out = reused[0][:m] if reused and channels == 1 else None
     # scipy.ndimage.gaussian_filter(values, (b, b, 0)): the same sampled kernel (4 sigma), reflected
-    planes = [cv2.GaussianBlur(np.ascontiguousarray(values[:, :, ch]), (0, 0), blur,
-                               borderType=cv2.BORDER_REFLECT) for ch in range(values.shape[2])]
+    planes = [cv2.GaussianBlur(np.ascontiguousarray(values[:, :, ch]), (0, 0), blur, dst=out,
+                               borderType=cv2.BORDER_REFLECT) for ch in range(channels)]
     return planes[0][:, :, np.newaxis] if len(planes) == 1 else np.stack(planes, axis=-1)
 
 
@@ -375,16 +509,15 @@ def threshold_mask(values, mu=0.0, inside="auto", *, blurs=None):
     ``blurs``: as :func:`threshold_starts`'.
     """
     blurs = (DEFAULT_INIT_BLUR,) if blurs is None else tuple(blurs)
-    blur, smooth, split = blurs[0], _blurred(values, blurs[0]), None
+    blur, smooth, split = blurs[0], _blurred_rows(values, blurs[0]), None
     if len(blurs) > 1:
         split = threshold_split(smooth, values, mu)
         for other in blurs[1:]:
-            candidate = _blurred(values, other)
+            candidate = _blurred_rows(values, other)
             other_split = threshold_split(candidate, values, mu)
             if other_split[2] < split[2]:
                 blur, smooth, split = other, candidate, other_split
-    split = _split_that_holds_at_twice_the_scale(values, smooth, mu, blur, split)
-    mask, contrast = _object_class(smooth, values, mu, split)
+    mask, contrast = _classes(_split_that_holds_at_twice_the_scale(values, smooth, mu, blur, split), values)
     if inside != "auto" and contrast > 0:
         brighter = np.mean(values[mask]) > np.mean(values[~mask])
         if brighter != (inside == "bright"):
