@@ -8,6 +8,7 @@ import numpy as np
 
 from activecontour.geometry.curve import as_curve, orient, signed_area
 from activecontour.geometry.raster import mask_to_curves
+from activecontour.imaging.strips import STRIP_ROWS, Kept, block_means, blurred_rows, strip
 
 __all__ = ["Start", "circle", "default_init", "grid", "initial_curves", "rectangle", "threshold_mask",
            "threshold_split", "threshold_starts"]
@@ -144,10 +145,10 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
 
     Parameters
     ----------
-    smooth : ndarray (M, N, C) or _Rows
+    smooth : ndarray (M, N, C) or strips.Rows
         The values whose threshold sets are scanned (the image smoothed against pixel noise);
         only the sampled rows are read.
-    values : ndarray (M, N, C) or _Rows, optional
+    values : ndarray (M, N, C) or strips.Rows, optional
         The intensities the fit terms read (the image itself); ``smooth`` when None.
     mu : float
         The length weight.
@@ -238,7 +239,7 @@ def _scan_rows(m, step):
 
 def _sampled_rows(smooth, step):
     """The scan's rows of ``smooth``: every ``step``-th row, and the rows below them, as (top,
-    below), fetched at once (a :class:`_Rows` makes each pair in one strip)."""
+    below), fetched at once (a :class:`~activecontour.imaging.strips.Rows` makes each pair in one strip)."""
     rows = smooth[_scan_rows(smooth.shape[0], step)]
     return (rows, rows[1:]) if step == 1 else (rows[0::2], rows[1::2])
 
@@ -253,16 +254,16 @@ def _object_class(smooth, values=None, mu=0.0):
 
 def _threshold_set(smooth, direction, threshold, step=None):
     """``smooth @ direction >= threshold``, a bool (M, N) (None when ``threshold`` is not finite),
-    made a strip of rows at a time (a :class:`_Rows` is never made whole), and with ``step``
-    the sample ``smooth[::step, ::step]`` as (K, C) rows (else None)."""
+    made a strip of rows at a time (a :class:`~activecontour.imaging.strips.Rows` is never made
+    whole), and with ``step`` the sample ``smooth[::step, ::step]`` as (K, C) rows (else None)."""
     if not np.isfinite(threshold):
         return None, None
     m, n, channels = smooth.shape
     label = np.empty((m, n), dtype=bool)
-    height = _STRIP_ROWS if step is None else max(1, _STRIP_ROWS // step) * step  # a multiple of step
+    height = STRIP_ROWS if step is None else max(1, STRIP_ROWS // step) * step  # a multiple of step
     samples = []
     for top in range(0, m, height):
-        rows = _strip(smooth, top, min(m, top + height))
+        rows = strip(smooth, top, min(m, top + height))
         # gray: one comparison per pixel, no float temporary
         np.greater_equal(rows[:, :, 0] if len(direction) == 1 else rows @ direction, threshold,
                          out=label[top:top + len(rows)])
@@ -310,10 +311,10 @@ def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=No
     is gone.  When the two scans select shares of the pixels that differ by more than
     ``SCALE_AGREEMENT``, the coarse split is kept: its share of the pixels, taken on the finer
     image (a quantile along the coarse split's direction), so corners stay sharp.  Objects, small
-    ones too, are split alike at both scales.  ``smooth``: the blurred image (a :class:`_Rows`:
-    the fine split's threshold set and the sample of the shares are made in one pass over its
-    rows); ``split``: :func:`threshold_split` of ``smooth`` when the caller has it already (it
-    is not scanned again).
+    ones too, are split alike at both scales.  ``smooth``: the blurred image (a
+    :class:`~activecontour.imaging.strips.Rows`: the fine split's threshold set and the sample of
+    the shares are made in one pass over its rows); ``split``: :func:`threshold_split` of
+    ``smooth`` when the caller has it already (it is not scanned again).
     """
     direction, threshold, _ = threshold_split(smooth, values, mu) if split is None else split
     m, n = values.shape[:2]
@@ -321,11 +322,11 @@ def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=No
     label, sample = _threshold_set(smooth, direction, threshold, step)
     if min(m, n) < 32 or label is None:
         return label
-    half = _block_means(values)
+    half = block_means(values)
     # the rows of the coarse blur that its scan and its share read, made in one pass
     coarse_rows = np.union1d(_scan_rows(half.shape[0], _scan_step(*half.shape[:2])),
                              np.arange(0, half.shape[0], step))
-    coarse_smooth = _Kept(_blurred_rows(half, DEFAULT_INIT_BLUR if blur is None else blur), coarse_rows)
+    coarse_smooth = Kept(blurred_rows(half, DEFAULT_INIT_BLUR if blur is None else blur), coarse_rows)
     coarse_direction, coarse_threshold, _ = threshold_split(coarse_smooth, half, mu / 2)
     if not np.isfinite(coarse_threshold):
         return label
@@ -335,119 +336,6 @@ def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=No
         return label
     return _threshold_set(smooth, coarse_direction, float(np.quantile(sample @ coarse_direction,
                                                                       1.0 - coarse_share)))[0]
-
-
-#: Rows of a :class:`_Rows` made at once (with a blur's margins): the default start never holds
-#: a whole blurred image.  At 8192^2 a float64 one is 512 MB of fresh memory, and on the 2-core
-#: machine the first touch of fresh memory cost 6x the blur's own arithmetic (1.27 s CPU, 1.2 s
-#: of it the kernel's, against 0.19 s into memory the process had); strips are reused memory.
-_STRIP_ROWS = 256
-
-
-class _Rows:
-    """An image (M, N, C) whose rows are made on demand, a strip at a time: the 2 x 2 block means
-    (:func:`_block_means`) or a blur (:func:`_blurred_rows`) of another.  ``rows[key]`` and
-    ``rows[key, columns]``, ``key`` a slice or sorted row indices, are exactly those rows of the
-    whole image, which is never held.
-
-    ``make(a, b)`` makes rows ``a`` to ``b - 1`` (possibly in memory it reuses: valid until the
-    next ``make``; ``rows[key]`` copies); ``reach`` is how far beyond them it reads (a blur's
-    margin): wanted rows closer than twice that are made in one strip.
-    """
-
-    def __init__(self, shape, make, reach=0):
-        self.shape, self.make, self.reach = tuple(shape), make, reach
-
-    def __getitem__(self, key):
-        rows, columns = key if isinstance(key, tuple) else (key, slice(None))
-        wanted = np.arange(self.shape[0])[rows]
-        if wanted.size == 0:
-            return np.empty((0, *self.shape[1:]))[:, columns]
-        # strips: runs of wanted rows with gaps up to 2 reach, spanning at most _STRIP_ROWS rows
-        breaks = (np.diff(wanted) > 2 * self.reach + 1) | (np.diff(wanted // _STRIP_ROWS) != 0)
-        parts = []
-        for piece in np.split(wanted, np.flatnonzero(breaks) + 1):
-            strip = self.make(piece[0], piece[-1] + 1)
-            parts.append(strip[piece - piece[0], columns])
-        return parts[0] if len(parts) == 1 else np.concatenate(parts)
-
-
-class _Kept:
-    """Some rows of an image (an array or :class:`_Rows`), made once and served as its rows:
-    ``kept[key]``, ``kept[key, columns]`` as the image's (only the kept rows)."""
-
-    def __init__(self, image, rows):
-        self.shape, self.rows, self.held = image.shape, rows, image[rows]
-
-    def __getitem__(self, key):
-        rows, columns = key if isinstance(key, tuple) else (key, slice(None))
-        wanted = np.arange(self.shape[0])[rows]
-        where = np.minimum(np.searchsorted(self.rows, wanted), len(self.rows) - 1)
-        if not np.array_equal(self.rows[where], wanted):
-            raise IndexError("rows that were not kept")
-        return self.held[where, columns]
-
-
-def _strip(image, a, b):
-    """Rows ``a`` to ``b - 1`` of an array (a view) or of :class:`_Rows` (valid until its next strip)."""
-    return image.make(a, b) if isinstance(image, _Rows) else image[a:b]
-
-
-def _block_means(values):
-    """The image reduced by 2 x 2 block means, (M // 2, N // 2, C) (a last odd row or column
-    dropped), as :class:`_Rows`."""
-    shape = (values.shape[0] // 2, values.shape[1] // 2, values.shape[2])
-    return _Rows(shape, lambda a, b: _block_means_of(values[2 * a:2 * b]))
-
-
-def _block_means_of(values):
-    """The image reduced by 2 x 2 block means, (M // 2, N // 2, C) (a last odd row or column
-    dropped).  Gray: the four strided planes added as ``(a + b) + (c + d)``, the order numpy's
-    mean over the blocks takes, without its reshaped temporaries (3x faster at 4096^2)."""
-    m, n = values.shape[0] // 2 * 2, values.shape[1] // 2 * 2
-    if values.shape[2] != 1:
-        return values[:m, :n].reshape(m // 2, 2, n // 2, 2, -1).mean(axis=(1, 3))
-    plane = values[:m, :n, 0]
-    total = plane[0::2, 0::2] + plane[0::2, 1::2]
-    total += plane[1::2, 0::2] + plane[1::2, 1::2]
-    total *= 0.25
-    return total[:, :, np.newaxis]
-
-
-def _blurred_rows(values, blur=None):
-    """:func:`_blurred` of ``values`` (an array or :class:`_Rows`), as :class:`_Rows`: each strip
-    is blurred with the rows of its kernel's reach around it, which gives exactly the rows of
-    the whole image's blur (OpenCV filters the rows of a strip as those of the whole image; the
-    reflected border is reached only at the image's own top and bottom)."""
-    blur = DEFAULT_INIT_BLUR if blur is None else blur
-    # OpenCV's kernel for a float image has round(8 blur + 1) | 1 taps: its reach is half that
-    reach, m = (int(np.rint(8.0 * blur + 1.0)) | 1) // 2, values.shape[0]
-
-    reused = []  # a gray strip's blur is written over the last one's
-
-    def make(a, b):
-        low, high = max(0, a - reach), min(m, b + reach)
-        return _blurred(_strip(values, low, high), blur, reused)[a - low:b - low]
-
-    return _Rows(values.shape, make, reach)
-
-
-def _blurred(values, blur=None, reused=None):
-    """The image blurred by ``blur`` px (``DEFAULT_INIT_BLUR`` by default), (M, N, C).
-
-    ``reused``: a list holding (or to hold) a buffer a gray image's blur is written into, when it
-    has the rows: the returned array is then a view of it."""
-    import cv2  # not scipy.ndimage: it costs ~0.2 s to import on every cold start
-
-    blur = DEFAULT_INIT_BLUR if blur is None else blur
-    m, n, channels = values.shape
-    if reused is not None and channels == 1 and not (reused and reused[0].shape[0] >= m):
-        reused[:] = [np.empty((m, n))]
-    out = reused[0][:m] if reused and channels == 1 else None
-    # scipy.ndimage.gaussian_filter(values, (b, b, 0)): the same sampled kernel (4 sigma), reflected
-    planes = [cv2.GaussianBlur(np.ascontiguousarray(values[:, :, ch]), (0, 0), blur, dst=out,
-                               borderType=cv2.BORDER_REFLECT) for ch in range(channels)]
-    return planes[0][:, :, np.newaxis] if len(planes) == 1 else np.stack(planes, axis=-1)
 
 
 #: Width (pixels) of the Gaussian that takes the pixel noise off the image before the threshold of
@@ -509,11 +397,11 @@ def threshold_mask(values, mu=0.0, inside="auto", *, blurs=None):
     ``blurs``: as :func:`threshold_starts`'.
     """
     blurs = (DEFAULT_INIT_BLUR,) if blurs is None else tuple(blurs)
-    blur, smooth, split = blurs[0], _blurred_rows(values, blurs[0]), None
+    blur, smooth, split = blurs[0], blurred_rows(values, blurs[0]), None
     if len(blurs) > 1:
         split = threshold_split(smooth, values, mu)
         for other in blurs[1:]:
-            candidate = _blurred_rows(values, other)
+            candidate = blurred_rows(values, other)
             other_split = threshold_split(candidate, values, mu)
             if other_split[2] < split[2]:
                 blur, smooth, split = other, candidate, other_split

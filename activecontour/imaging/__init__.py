@@ -5,4 +5,5 @@ frame       the working frame the flow computes in
 tables      the bilinear image and its row-antiderivative tables (Green's theorem)
 noise       the noise level and the default mu it implies
 roi         the image domain D restricted to a box, a mask or a neighbourhood of the init
+strips      block means and blurs made a strip of rows at a time, exactly as the whole image's
 """

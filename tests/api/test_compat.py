@@ -11,7 +11,8 @@ from activecontour import compat
 from activecontour.compat import chan_vese
 from activecontour.geometry.curve import resample, signed_area
 from activecontour.geometry.raster import mask_to_curves
-from activecontour.initial import DEFAULT_INIT_BLUR, _blurred, threshold_split, threshold_starts
+from activecontour.imaging.strips import blurred
+from activecontour.initial import DEFAULT_INIT_BLUR, threshold_split, threshold_starts
 from activecontour.synthetic import add_noise, dice, disk_image
 
 
@@ -98,7 +99,7 @@ def test_checkerboard_takes_the_blur_whose_threshold_set_is_lowest():
     image += 0.3 * np.where(np.random.default_rng(5).random(image.shape) > 0.5, 1.0, -1.0)
     values = image[..., None] - image.min()
     values /= values.max()
-    costs = [threshold_split(_blurred(values, b), values, 0.25)[2] for b in compat.CHECKERBOARD_BLURS]
+    costs = [threshold_split(blurred(values, b), values, 0.25)[2] for b in compat.CHECKERBOARD_BLURS]
     start = compat._checkerboard_start(values, 0.25).contours
     chosen = compat.CHECKERBOARD_BLURS[int(np.argmin(costs))]
     assert costs[0] > min(costs)  # the test means something: 1 px is not the best here

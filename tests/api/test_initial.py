@@ -121,27 +121,6 @@ def test_threshold_mask_scans_each_blur_once(monkeypatch):
     assert calls.count((32, 32, 1)) == 1  # the block means' scan
 
 
-@pytest.mark.parametrize("channels", [1, 3])
-@pytest.mark.parametrize("blur", [1.0, 2.5])
-def test_rows_made_by_strips_are_the_rows_of_the_whole_images_blur(channels, blur):
-    """The default start blurs an image a strip of rows at a time (with its kernel's reach
-    around): every way of asking for rows gives exactly those of the whole image's blur, of the
-    image and of its 2 x 2 block means."""
-    from activecontour.initial import _STRIP_ROWS, _block_means, _block_means_of, _blurred, _blurred_rows
-
-    rng = np.random.default_rng(channels)
-    values = rng.random((2 * _STRIP_ROWS + 75, 97, channels))
-    keys = [slice(None), slice(3, 40), slice(None, None, 7), slice(1, None, 64),
-            np.array([0, 1, 2, 200, 201, 290, 600]), (slice(None, None, 5), slice(None, None, 3))]
-    for rows, whole in ((_blurred_rows(values, blur), _blurred(values, blur)),
-                        (_blurred_rows(_block_means(values), blur), _blurred(_block_means_of(values), blur))):
-        assert rows.shape == whole.shape
-        for key in keys:
-            if isinstance(key, np.ndarray):
-                key = key[key < whole.shape[0]]
-            assert np.array_equal(rows[key], whole[key])
-
-
 def test_the_default_start_holds_no_whole_blurred_image():
     """The default start holds its threshold set (1 byte per pixel) and sampled rows, never a
     float64 blur of the whole image (8 bytes per pixel): an image with 2 Mpx more peaks at less
