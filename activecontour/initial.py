@@ -145,10 +145,10 @@ def threshold_split(smooth, values=None, mu=0.0, bins=SPLIT_BINS):
 
     Parameters
     ----------
-    smooth : ndarray (M, N, C) or strips.Rows
+    smooth : ndarray (M, N, C), or rows made on demand (:mod:`activecontour.imaging.strips`)
         The values whose threshold sets are scanned (the image smoothed against pixel noise);
         only the sampled rows are read.
-    values : ndarray (M, N, C) or strips.Rows, optional
+    values : ndarray (M, N, C), or rows made on demand, optional
         The intensities the fit terms read (the image itself); ``smooth`` when None.
     mu : float
         The length weight.
@@ -296,11 +296,11 @@ def _classes(label, values):
 
 #: The default start's split must hold at twice the scale: when the share of the pixels above
 #: the threshold differs by more than this fraction between the image and its 2 x 2 block means,
-#: the split is a fine texture's, not the objects' (see :func:`_split_that_holds_at_twice_the_scale`).
+#: the split is a fine texture's, not the objects' (see :func:`_set_that_holds_at_twice_the_scale`).
 SCALE_AGREEMENT = 0.25
 
 
-def _split_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=None):
+def _set_that_holds_at_twice_the_scale(values, smooth, mu, blur=None, split=None):
     """The threshold set of the default start, a bool (M, N) (None for one class): the exact
     scan's, unless a coarser view disagrees.
 
@@ -405,7 +405,7 @@ def threshold_mask(values, mu=0.0, inside="auto", *, blurs=None):
             other_split = threshold_split(candidate, values, mu)
             if other_split[2] < split[2]:
                 blur, smooth, split = other, candidate, other_split
-    mask, contrast = _classes(_split_that_holds_at_twice_the_scale(values, smooth, mu, blur, split), values)
+    mask, contrast = _classes(_set_that_holds_at_twice_the_scale(values, smooth, mu, blur, split), values)
     if inside != "auto" and contrast > 0:
         brighter = np.mean(values[mask]) > np.mean(values[~mask])
         if brighter != (inside == "bright"):
