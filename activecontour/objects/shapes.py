@@ -253,12 +253,15 @@ def _clearly_not_arc_ellipses(conics, found, residuals, counts):
     return found & (too_long | too_small | too_rough)
 
 
-def _ellipse_polygon(ellipse, count=48):
-    """An ellipse (centre, semi-axes, axes as columns) as a polygon of ``count`` vertices (count, 2)."""
+#: The unit circle's vertices of :func:`_ellipse_polygon`: its cosines and sines, taken once.
+_CIRCLE = (lambda angle: (np.cos(angle), np.sin(angle)))(np.linspace(0, 2 * np.pi, 48, endpoint=False))
+
+
+def _ellipse_polygon(ellipse):
+    """An ellipse (centre, semi-axes, axes as columns) as a polygon of 48 vertices (48, 2)."""
     centre, semi_axes, axes = ellipse
-    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
-    return np.ascontiguousarray(centre + np.column_stack([semi_axes[0] * np.cos(angle),
-                                                          semi_axes[1] * np.sin(angle)]) @ axes.T)
+    cos, sin = _CIRCLE
+    return np.ascontiguousarray(centre + np.column_stack([semi_axes[0] * cos, semi_axes[1] * sin]) @ axes.T)
 
 
 def _outside(shape, outline):
