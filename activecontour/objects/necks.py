@@ -156,7 +156,10 @@ def _neck_stage(region, concavity, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32), None
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+    # each part's largest distance (scipy.ndimage.maximum's, without its sort: every part holds
+    # its marker, and the window's frame is part 0)
+    peak = np.full(count + 1, -np.inf)
+    np.maximum.at(peak, parts.ravel(), distance.ravel())
     # at most one part as thick as an object: every neck has a thinner side too small to be one,
     # so every pair merges (:meth:`_PartGraph.merit`) and a region of one 4-connected piece,
     # which the watershed covers, is one part
