@@ -9,6 +9,8 @@ pixel goes to the ellipse it lies deepest in, the rule by which overlapping obje
 
 from __future__ import annotations
 
+from itertools import combinations
+
 import numpy as np
 
 from activecontour import _kernels
@@ -213,7 +215,7 @@ def _arc_clump(curves, depth=None, extent=None, bent=None):
         if not _uncovered_parts(parts, uncovered):
             return None
     count = int(parts.max())
-    outer = rasterize([outline - low], window)
+    outer = inside if len(curves) == 1 else rasterize([outline - low], window)  # (without holes)
     sizes = np.bincount(parts.ravel(), minlength=count + 1)[1:]
     ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
     if sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max()):
@@ -293,7 +295,7 @@ def _grouped_arcs(outline, arcs):
     groups = [(group, *entry) for group, entry in zip(singles, fitted(singles), strict=True)]
     joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
     while len(groups) > 1:
-        pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
+        pairs = list(combinations(range(len(groups)), 2))  # (np.triu_indices' order, as ints)
         new = [(groups[i][0], groups[j][0]) for i, j in pairs if (groups[i][0], groups[j][0]) not in joined]
         joined.update(zip(new, fitted([a + b for a, b in new]), strict=True))
         options = []
