@@ -640,3 +640,37 @@ def test_an_outline_under_twice_the_smallest_part_is_split_without_its_curvature
     monkeypatch.setattr(split, "_bent", unread)
     (kept,), = split.split_touching([[outline]], labels)
     np.testing.assert_array_equal(kept, outline)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_meeting_counts_are_those_of_each_part_dilated_over_the_whole_window(seed):
+    # _meeting dilates each part on its own box grown by ARC_REACH: the counts of parts within
+    # reach must be those of the whole-window dilations (parts touching the window's edge too)
+    import activecontour.objects.arcs as arcs
+
+    rng = np.random.default_rng(seed)
+    reach = int(arcs.ARC_REACH)
+    rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    disk = rows**2 + cols**2 <= arcs.ARC_REACH**2
+    for _ in range(10):
+        m, n = rng.integers(12, 60, 2)
+        count = int(rng.integers(3, 9))
+        # cells of random centres over a random blob, so parts meet in threes here and there
+        centres = rng.uniform(0, (m, n), (count, 2))
+        grid = np.indices((m, n)).transpose(1, 2, 0)
+        parts = np.argmin(((grid[:, :, None, :] - centres) ** 2).sum(axis=3), axis=2).astype(np.int32) + 1
+        inside = scipy.ndimage.gaussian_filter(rng.random((m, n)), 3) > 0.45
+        parts[~inside] = 0
+        present = np.unique(parts[parts > 0])
+        lookup = np.zeros(count + 2, dtype=np.int32)
+        lookup[present] = np.arange(1, present.size + 1)
+        parts = lookup[parts]
+        count = int(parts.max())
+        if count < 3:
+            continue
+        near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8)
+                   for k in range(1, count + 1))
+        # every pixel a corner: no border is turned down for where it ends
+        corners_ = np.argwhere(inside)
+        assert arcs._meeting(parts, inside, corners_, count) == (int(near.max()),
+                                                                 scipy.ndimage.label(near >= 3)[1])
