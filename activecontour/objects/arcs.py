@@ -16,7 +16,7 @@ import numpy as np
 from activecontour import _kernels
 from activecontour.geometry.curve import edge_lengths, signed_area
 from activecontour.geometry.raster import rasterize
-from activecontour.objects.corners import _bent, _concave_corners, _cut
+from activecontour.objects.corners import _bent, _corner_turns, _cut
 from activecontour.objects.shapes import (
     MIN_SPLIT_RADIUS,
     _arc_ellipse,
@@ -168,7 +168,9 @@ def _arc_clump(curves, depth=None, extent=None, bent=None):
                                or (outline.max(axis=0) >= np.subtract(extent, 0.5)).any()):
         return None
     bent = _bent(outline) if bent is None else bent
-    corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN, bent)
+    # (the corners, and of them those that turn more for the borders' ends, in one pass)
+    found, turning = _corner_turns(outline, depth, min(ARC_CORNER_TURN, ARC_END_TURN), bent)
+    corners = found[~(turning < ARC_CORNER_TURN)]
     if len(corners) < 2:
         return None
     arcs = _arcs(outline, corners)
@@ -217,7 +219,7 @@ def _arc_clump(curves, depth=None, extent=None, bent=None):
     count = int(parts.max())
     outer = inside if len(curves) == 1 else rasterize([outline - low], window)  # (without holes)
     sizes = np.bincount(parts.ravel(), minlength=count + 1)[1:]
-    ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
+    ends = found[~(turning < ARC_END_TURN)]
     if sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max()):
         return None
     if (meeting := _meeting(parts, outer, outline[ends] - low, count)) is None:
