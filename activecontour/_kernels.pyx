@@ -11,8 +11,8 @@ One implementation of each loop; the Python modules that own the mathematics cal
   :mod:`activecontour.backends.network` (a network's segments that meet);
 * :func:`mask_contours` -- :mod:`activecontour.raster` (the outlines of a mask);
 * :func:`sampled_distance` -- :mod:`activecontour.objects.split` (the distance to an object's
-  boundary at its pixel centres, from a finer raster), :func:`near_distance` (the distance
-  transform up to a few pixels, for the split's tests against a radius), :func:`distance_peaks`
+  boundary at its pixel centres, from a finer raster), :func:`near_reaches` (whether the
+  distance transform reaches a radius of a few pixels, for the split's tests against it), :func:`distance_peaks`
   (an object's distance transform and its pieces of peaks: the first test for necks),
   :func:`fill_holes` (an object's window without holes),
   :func:`ellipse_moments`, :func:`conic_residuals`, :func:`convex_clip_area`, :func:`segment_inside`, :func:`cut_ratios` (the corner stage's
@@ -2680,45 +2680,50 @@ def normal_part(const double[:, ::1] nodes, double[:, ::1] velocity, const Py_ss
 
 # ==== split2 (issue 23 item 2): the split's cheap exact tests ====================================
 
-def near_distance(const unsigned char[:, ::1] mask, long long cap, long long[:, ::1] out):
-    """The squared Euclidean distance transform of a mask, up to ``cap``: ``out[i, j]`` is
-    ``min(D, cap)`` for D the squared distance from pixel (i, j) to the nearest pixel where
-    ``mask`` is 0 (0 there; pixels beyond the array's edge do not count, as in
-    ``scipy.ndimage.distance_transform_edt``, whose values are ``sqrt(D)``), and ``cap`` where
-    the mask has no 0.
+def near_reaches(const unsigned char[:, ::1] mask, long long least, unsigned char[:, ::1] out):
+    """Whether the squared Euclidean distance transform of a mask reaches ``least``: ``out[i, j]``
+    is 1 where D >= least, for D the squared distance from pixel (i, j) to the nearest pixel
+    where ``mask`` is 0 (pixels beyond the array's edge do not count, as in
+    ``scipy.ndimage.distance_transform_edt``, whose values are ``sqrt(D)``; a mask without a 0
+    reaches every ``least``), else 0.
 
-    Only rows within ``sqrt(cap)`` of a pixel can hold a 0 nearer than ``cap``: per row, the
-    distance h along it to the nearest 0 (two passes, capped), then per pixel the least
-    ``dy^2 + h^2`` over those rows.  O(pixels x sqrt(cap)): for small radii (a few pixels)."""
+    Only rows within ``sqrt(least)`` of a pixel can hold a 0 nearer than that: per row, the
+    distance h along it to the nearest 0 (two passes, capped), then per pixel whether some
+    ``dy^2 + h^2`` over those rows is below ``least`` (the first one found ends the search).
+    O(pixels x sqrt(least)): for small radii (a few pixels)."""
     cdef Py_ssize_t m = mask.shape[0], n = mask.shape[1], i, j, d, reach = 0
-    cdef long long best, value, h
-    cdef long long *along
-    while (reach + 1) * (reach + 1) <= cap:
+    cdef long long h
+    cdef unsigned char reached
+    cdef int *along
+    if least <= 0:
+        out[:, :] = 1
+        return
+    while (reach + 1) * (reach + 1) < least:
         reach += 1
-    along = <long long *> malloc(max(m * n, 1) * sizeof(long long))
+    along = <int *> malloc(max(m * n, 1) * sizeof(int))
     if along == NULL:
         raise MemoryError()
     with nogil:
         for i in range(m):
-            h = reach + 1  # no 0 within reach: h^2 > cap
+            h = reach + 1  # no 0 within reach: h^2 >= least
             for j in range(n):
                 h = 0 if mask[i, j] == 0 else (h + 1 if h <= reach else reach + 1)
-                along[i * n + j] = h
+                along[i * n + j] = <int> h
             h = reach + 1
             for j in range(n - 1, -1, -1):
                 h = 0 if mask[i, j] == 0 else (h + 1 if h <= reach else reach + 1)
                 if h < along[i * n + j]:
-                    along[i * n + j] = h
+                    along[i * n + j] = <int> h
         for i in range(m):
             for j in range(n):
-                best = cap
+                reached = 1
                 for d in range(-reach, reach + 1):
                     if 0 <= i + d < m:
                         h = along[(i + d) * n + j]
-                        value = d * d + h * h
-                        if value < best:
-                            best = value
-                out[i, j] = best
+                        if d * d + h * h < least:
+                            reached = 0
+                            break
+                out[i, j] = reached
     free(along)
 
 

@@ -9,12 +9,14 @@ pixel goes to the ellipse it lies deepest in, the rule by which overlapping obje
 
 from __future__ import annotations
 
+from itertools import combinations
+
 import numpy as np
 
 from activecontour import _kernels
 from activecontour.geometry.curve import edge_lengths, signed_area
 from activecontour.geometry.raster import rasterize
-from activecontour.objects.corners import _bent, _concave_corners, _cut
+from activecontour.objects.corners import _bent, _corner_turns, _cut
 from activecontour.objects.shapes import (
     MIN_SPLIT_RADIUS,
     _arc_ellipse,
@@ -166,7 +168,9 @@ def _arc_clump(curves, depth=None, extent=None, bent=None):
                                or (outline.max(axis=0) >= np.subtract(extent, 0.5)).any()):
         return None
     bent = _bent(outline) if bent is None else bent
-    corners, _, _ = _concave_corners(outline, depth, ARC_CORNER_TURN, bent)
+    # (the corners, and of them those that turn more for the borders' ends, in one pass)
+    found, turning = _corner_turns(outline, depth, min(ARC_CORNER_TURN, ARC_END_TURN), bent)
+    corners = found[~(turning < ARC_CORNER_TURN)]
     if len(corners) < 2:
         return None
     arcs = _arcs(outline, corners)
@@ -213,9 +217,9 @@ def _arc_clump(curves, depth=None, extent=None, bent=None):
         if not _uncovered_parts(parts, uncovered):
             return None
     count = int(parts.max())
-    outer = rasterize([outline - low], window)
+    outer = inside if len(curves) == 1 else rasterize([outline - low], window)  # (without holes)
     sizes = np.bincount(parts.ravel(), minlength=count + 1)[1:]
-    ends = _concave_corners(outline, depth, ARC_END_TURN, bent)[0]  # (of the corners, those that turn more)
+    ends = found[~(turning < ARC_END_TURN)]
     if sizes.min() < max(np.pi * MIN_SPLIT_RADIUS**2, ARC_SIZE_RATIO * sizes.max()):
         return None
     if (meeting := _meeting(parts, outer, outline[ends] - low, count)) is None:
@@ -293,7 +297,7 @@ def _grouped_arcs(outline, arcs):
     groups = [(group, *entry) for group, entry in zip(singles, fitted(singles), strict=True)]
     joined = {}  # pair of groups: the union's fit, then its ellipse once asked (False: none)
     while len(groups) > 1:
-        pairs = list(zip(*np.triu_indices(len(groups), 1), strict=True))
+        pairs = list(combinations(range(len(groups)), 2))  # (np.triu_indices' order, as ints)
         new = [(groups[i][0], groups[j][0]) for i, j in pairs if (groups[i][0], groups[j][0]) not in joined]
         joined.update(zip(new, fitted([a + b for a, b in new]), strict=True))
         options = []
@@ -365,5 +369,12 @@ def _meeting(parts, inside, corners, count):
     reach = int(ARC_REACH)
     rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
     disk = rows**2 + cols**2 <= ARC_REACH**2
-    near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8) for k in range(1, count + 1))
+    # each part dilated on its box grown by the reach: nothing of it lies outside, so the window's
+    # dilation is that box's and zero beyond it (the work grows with the parts' boxes, not with
+    # the window times the parts)
+    near = np.zeros(parts.shape, dtype=np.int8)
+    for k, box in enumerate(scipy.ndimage.find_objects(parts, count), start=1):
+        if box is not None:
+            grown = tuple(slice(max(b.start - reach, 0), b.stop + reach) for b in box)
+            near[grown] += scipy.ndimage.binary_dilation(parts[grown] == k, disk)
     return int(near.max()), scipy.ndimage.label(near >= 3)[1]

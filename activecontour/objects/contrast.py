@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from activecontour.objects.shapes import _is_blob, _near_distance
+from activecontour.objects.shapes import _is_blob, _reaches
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
 #: (pixels; normalised to the object, so the background does not darken its rim) ...
@@ -81,7 +81,7 @@ def _may_split_by_contrast(region, min_radius):
     ``min_radius``^2 pixels (:func:`_contrast_split`'s least part).  On grass, 172 of the 395
     objects tried by contrast have no two."""
     return bool(np.count_nonzero(region) > 2 * np.pi * min_radius ** 2
-                and np.count_nonzero(_near_distance(region, min_radius) >= min_radius) >= 2)
+                and np.count_nonzero(_reaches(region, min_radius)) >= 2)
 
 
 def _contrast_parts(parts, values, least, min_radius):
@@ -136,7 +136,7 @@ def _inscribed_radius_reaches(labels, label, box, radius):
     """Whether the largest distance from a pixel of ``labels == label`` (within ``box``) to one
     outside is at least ``radius``."""
     grown = tuple(slice(max(b.start - 1, 0), b.stop + 1) for b in box)
-    return bool(_near_distance(labels[grown] == label, radius).max() >= radius)
+    return bool(_reaches(labels[grown] == label, radius).any())
 
 
 def _contrast_split(mask, values, least, smallest):
@@ -165,8 +165,8 @@ def _contrast_split(mask, values, least, smallest):
         return None  # (Otsu of values that hardly differ can put them all on one side)
     bright = _without_small(scipy.ndimage.binary_fill_holes((smooth > threshold) & mask), smallest) & mask
     # (no bright core: every pixel is far from one)
-    away = (_near_distance(mask, CONTRAST_RIM) > CONTRAST_RIM) & (
-        (_near_distance(~bright, CONTRAST_RIM) > CONTRAST_RIM) if bright.any() else True)
+    away = _reaches(mask, CONTRAST_RIM, strict=True) & (
+        _reaches(~bright, CONTRAST_RIM, strict=True) if bright.any() else True)
     dim = _without_small(mask & ~bright & away, smallest / 2)
     bright_cores, n_bright = scipy.ndimage.label(bright)
     dim_cores, n_dim = scipy.ndimage.label(dim)

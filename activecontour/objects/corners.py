@@ -239,22 +239,35 @@ def _concave_corners(outline, depth=None, turn=CORNER_TURN, bent=None):
     curvature.  ``bent``: the outline's :func:`_bent`, when it is known (the arc stage and the
     corner stage look at the same outline).
     """
-    kappa, normals, ds = _bent(outline) if bent is None else bent
+    kappa, normals, _ = bent = _bent(outline) if bent is None else bent
+    corners, turning = _corner_turns(outline, depth, turn, bent)
+    return corners[~(turning < turn)], kappa, normals
+
+
+def _corner_turns(outline, depth, least, bent):
+    """The corners of :func:`_concave_corners` for every turn of ``least`` degrees or more at once
+    (the arc stage asks for two): the sorted vertices of the stretches that turn by ``least`` or
+    more and dip ``MIN_WAIST_DEPTH`` inside the hull, and each one's turning in degrees.  Those
+    of ``turn`` degrees are the ones whose turning is not below it (the two tests are and-ed)."""
+    kappa, normals, ds = bent
     concave = kappa < 0
     if concave.all() or not concave.any():
-        return np.zeros(0, dtype=int), kappa, normals
+        return np.zeros(0, dtype=int), np.zeros(0)
     # the stretches of negative curvature, starting the count at a vertex that is not in one
     order = np.roll(np.arange(len(outline)), -int(np.argmin(concave)))
     steps = np.diff(np.r_[0, concave[order].astype(int), 0])
-    corners = []
+    corners, turns = [], []
     for start, stop in zip(np.flatnonzero(steps == 1), np.flatnonzero(steps == -1), strict=True):
         stretch = order[start:stop]
-        if np.degrees(-np.sum(kappa[stretch] * ds[stretch])) < turn:
+        turning = np.degrees(-np.sum(kappa[stretch] * ds[stretch]))
+        if turning < least:
             continue
         depth = _hull_depth(outline) if depth is None else depth
         if depth[stretch].max() >= MIN_WAIST_DEPTH:
             corners.append(stretch[np.argmin(kappa[stretch])])
-    return np.sort(np.array(corners, dtype=int)), kappa, normals
+            turns.append(turning)
+    order = np.argsort(np.array(corners, dtype=int), kind="stable")
+    return np.array(corners, dtype=int)[order], np.array(turns, dtype=np.float64)[order]
 
 
 def _cyclic_gaussian(values, sigma):

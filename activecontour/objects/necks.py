@@ -18,7 +18,7 @@ import numpy as np
 from activecontour import _kernels
 from activecontour.geometry.hull import hull_vertices
 from activecontour.geometry.raster import rasterize, sorted_crossings
-from activecontour.objects.shapes import MIN_WAIST_DEPTH, _blob_shape, _concavity, _near_distance
+from activecontour.objects.shapes import MIN_WAIST_DEPTH, _blob_shape, _concavity, _reaches
 
 #: Two parts of an object are split apart when the half-width of the neck between them is below
 #: this fraction of the smaller part's largest inscribed radius.  Two disks overlapping by a third
@@ -111,7 +111,7 @@ def _thinner_than(region, outline, min_radius):
     if fine & (fine - 1):  # not a power of two: no exact bound
         return False
     inside = rasterize([outline], region.shape)
-    return _near_distance(inside, min_radius)[region].max() < min_radius
+    return not _reaches(inside, min_radius)[region].any()
 
 
 def _boundary_distance(curves, region, low):
@@ -156,7 +156,10 @@ def _neck_stage(region, concavity, distance, neck_ratio, min_radius):
     if count <= 1:
         return region.astype(np.int32), None
     parts = skimage.segmentation.watershed(-distance, markers, mask=region)
-    peak = np.asarray(scipy.ndimage.maximum(distance, parts, np.arange(count + 1)))
+    # each part's largest distance (scipy.ndimage.maximum's, without its sort: every part holds
+    # its marker, and the window's frame is part 0)
+    peak = np.full(count + 1, -np.inf)
+    np.maximum.at(peak, parts.ravel(), distance.ravel())
     # at most one part as thick as an object: every neck has a thinner side too small to be one,
     # so every pair merges (:meth:`_PartGraph.merit`) and a region of one 4-connected piece,
     # which the watershed covers, is one part

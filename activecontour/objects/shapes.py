@@ -6,7 +6,7 @@ of Fitzgibbon, Pilu and Fisher in the stable form of Halir and Flusser, with res
 distances in pixels (:func:`_stacked_ellipse_fits`: many point sets in one compiled pass), judged
 against an object (:func:`_explained`, :func:`_arc_ellipse`: its residual, aspect and how much of
 it lies outside, :func:`_outside`) or all at once in closed form (:func:`_clearly_not_arc_ellipses`);
-the distance transform up to a few pixels (:func:`_near_distance`).  Every stage uses them.
+where the distance transform reaches a radius of a few pixels (:func:`_reaches`).  Every stage uses them.
 """
 
 from __future__ import annotations
@@ -36,19 +36,20 @@ def _hull_depth(outline):
     return np.abs(cross) / np.maximum(np.hypot(edge[:, 0], edge[:, 1]), 1e-12)
 
 
-def _near_distance(mask, radius):
-    """The distance transform of a bool mask with a False pixel (``scipy.ndimage.
-    distance_transform_edt``'s values: from each pixel to the nearest False one) where it is at
-    most ``radius``, and a value above ``radius`` elsewhere: every comparison with ``radius``
-    comes out as on the transform, at a cost of the pixels times ``radius``
-    (:func:`activecontour._kernels.near_distance`, the squared distances as integers up to a cap
-    whose square root exceeds ``radius``, then the transform's own square root)."""
-    cap = int(radius * radius) + 1
-    while np.sqrt(cap) <= radius:  # (a radius whose square rounds down)
-        cap += 1
-    squared = np.empty(mask.shape, dtype=np.int64)
-    _kernels.near_distance(np.ascontiguousarray(mask, dtype=np.uint8), cap, squared)
-    return np.sqrt(squared)
+def _reaches(mask, radius, strict=False):
+    """Where the distance transform of a bool mask with a False pixel (``scipy.ndimage.
+    distance_transform_edt``'s values: from each pixel to the nearest False one) is at least
+    ``radius`` (above it, ``strict``): a bool array, at a cost of the pixels times ``radius``.
+
+    The transform is the square root of an integer D, correctly rounded, so it grows with D: it
+    passes ``radius`` exactly where D is at least the least integer whose square root does
+    (:func:`activecontour._kernels.near_reaches`, which looks no farther than that)."""
+    least = max(int(radius * radius) - 2, 0)
+    while not (np.sqrt(least) > radius if strict else np.sqrt(least) >= radius):
+        least += 1
+    out = np.empty(mask.shape, dtype=np.uint8)
+    _kernels.near_reaches(np.ascontiguousarray(mask, dtype=np.uint8), least, out)
+    return out.view(bool)
 
 
 #: A part of a split object must be blob-like: at least this solid (area / convex hull area) ...
@@ -253,12 +254,15 @@ def _clearly_not_arc_ellipses(conics, found, residuals, counts):
     return found & (too_long | too_small | too_rough)
 
 
-def _ellipse_polygon(ellipse, count=48):
-    """An ellipse (centre, semi-axes, axes as columns) as a polygon of ``count`` vertices (count, 2)."""
+#: The unit circle's vertices of :func:`_ellipse_polygon`: its cosines and sines, taken once.
+_CIRCLE = (lambda angle: (np.cos(angle), np.sin(angle)))(np.linspace(0, 2 * np.pi, 48, endpoint=False))
+
+
+def _ellipse_polygon(ellipse):
+    """An ellipse (centre, semi-axes, axes as columns) as a polygon of 48 vertices (48, 2)."""
     centre, semi_axes, axes = ellipse
-    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
-    return np.ascontiguousarray(centre + np.column_stack([semi_axes[0] * np.cos(angle),
-                                                          semi_axes[1] * np.sin(angle)]) @ axes.T)
+    cos, sin = _CIRCLE
+    return np.ascontiguousarray(centre + np.column_stack([semi_axes[0] * cos, semi_axes[1] * sin]) @ axes.T)
 
 
 def _outside(shape, outline):

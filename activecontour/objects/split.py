@@ -74,8 +74,9 @@ contrast split in an object whose box holds fewer pixels than two smallest parts
 assigned to cores when the cores' areas already make a piece too small
 (:func:`_a_piece_too_small`).  The boundary distance computes the fine raster's distance
 transform at the pixel centres only (:func:`activecontour._kernels.sampled_distance`); a
-distance compared with a radius of a few pixels is the squared transform up to that radius
-(:func:`_near_distance`); the ellipse fits' sums and residuals and the chord-inside test of the
+distance compared with a radius of a few pixels is the squared transform against the least
+integer that passes it (:func:`activecontour.objects.shapes._reaches`); the ellipse fits' sums
+and residuals and the chord-inside test of the
 cut search are compiled, and a search's fits share one stacked pass of the sums, one of the
 residuals and one eigenproblem (:func:`_stacked_ellipse_fits`); how much of an ellipse lies
 outside the object is one compiled clip of the outline by the ellipse's polygon

@@ -176,25 +176,26 @@ def test_the_sampled_distance_kernel_is_the_distance_transform_read_every_step_p
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_the_near_distance_kernel_is_the_squared_distance_transform_up_to_its_cap(seed):
+def test_the_near_reaches_kernel_is_the_squared_distance_transform_against_each_least(seed):
     from activecontour import _kernels
 
     rng = np.random.default_rng(seed)
     for _ in range(30):
         m, n = rng.integers(1, 45, 2)
-        # blobs with holes and specks; a mask without a False pixel has every value at the cap
+        # blobs with holes and specks; a mask without a False pixel reaches every least
         smooth = scipy.ndimage.gaussian_filter(rng.random((m, n)), rng.uniform(0.5, 4))
         inside = smooth > np.quantile(smooth, rng.uniform(0.0, 0.6))
-        cap = int(rng.integers(0, 70))
-        out = np.empty((m, n), dtype=np.int64)
-        _kernels.near_distance(inside.astype(np.uint8), cap, out)
         if inside.all():
-            assert np.all(out == cap)
-            continue
-        # the definition: squared offsets to the feature transform's nearest False pixel
-        _, nearest = scipy.ndimage.distance_transform_edt(inside, return_indices=True)
-        squared = np.sum((nearest - np.indices(inside.shape)) ** 2, axis=0)
-        np.testing.assert_array_equal(out, np.minimum(squared, cap))
+            squared = np.full((m, n), np.iinfo(np.int64).max)
+        else:
+            # the definition: squared offsets to the feature transform's nearest False pixel
+            _, nearest = scipy.ndimage.distance_transform_edt(inside, return_indices=True)
+            squared = np.sum((nearest - np.indices(inside.shape)) ** 2, axis=0)
+        # every least up to 70: together they give the squared transform up to 70
+        for least in range(-1, 71):
+            out = np.empty((m, n), dtype=np.uint8)
+            _kernels.near_reaches(inside.astype(np.uint8), least, out)
+            np.testing.assert_array_equal(out.view(bool), squared >= least)
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -267,17 +268,16 @@ def test_the_fill_holes_kernel_fills_as_scipy_on_the_framed_mask(seed):
     assert filled >= 5  # holes were drawn
 
 
-@pytest.mark.parametrize("radius", [0.0, 1.0, np.sqrt(2), 2.5, 3.0, 4.0, np.sqrt(17)])
-def test_the_near_distance_compares_with_its_radius_as_the_distance_transform(radius):
+@pytest.mark.parametrize("radius", [0.0, 1.0, np.sqrt(2), 2.5, 3.0, 4.0, np.sqrt(17), np.nextafter(3.0, 4.0),
+                                    np.nextafter(np.sqrt(5), 0.0)])
+def test_reaches_compares_with_its_radius_as_the_distance_transform(radius):
     rng = np.random.default_rng(int(10 * radius))
     for _ in range(20):
         inside = scipy.ndimage.gaussian_filter(rng.random((40, 50)), rng.uniform(1, 5)) > 0.48
         inside[0, 0] = False
         transform = scipy.ndimage.distance_transform_edt(inside)
-        near = shapes._near_distance(inside, radius)
-        np.testing.assert_array_equal(near > radius, transform > radius)
-        np.testing.assert_array_equal(near >= radius, transform >= radius)
-        np.testing.assert_array_equal(near[transform <= radius], transform[transform <= radius])
+        np.testing.assert_array_equal(shapes._reaches(inside, radius, strict=True), transform > radius)
+        np.testing.assert_array_equal(shapes._reaches(inside, radius), transform >= radius)
 
 
 def test_a_piece_too_small_is_told_right_from_the_cores_alone():
@@ -640,3 +640,37 @@ def test_an_outline_under_twice_the_smallest_part_is_split_without_its_curvature
     monkeypatch.setattr(split, "_bent", unread)
     (kept,), = split.split_touching([[outline]], labels)
     np.testing.assert_array_equal(kept, outline)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_meeting_counts_are_those_of_each_part_dilated_over_the_whole_window(seed):
+    # _meeting dilates each part on its own box grown by ARC_REACH: the counts of parts within
+    # reach must be those of the whole-window dilations (parts touching the window's edge too)
+    import activecontour.objects.arcs as arcs
+
+    rng = np.random.default_rng(seed)
+    reach = int(arcs.ARC_REACH)
+    rows, cols = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    disk = rows**2 + cols**2 <= arcs.ARC_REACH**2
+    for _ in range(10):
+        m, n = rng.integers(12, 60, 2)
+        count = int(rng.integers(3, 9))
+        # cells of random centres over a random blob, so parts meet in threes here and there
+        centres = rng.uniform(0, (m, n), (count, 2))
+        grid = np.indices((m, n)).transpose(1, 2, 0)
+        parts = np.argmin(((grid[:, :, None, :] - centres) ** 2).sum(axis=3), axis=2).astype(np.int32) + 1
+        inside = scipy.ndimage.gaussian_filter(rng.random((m, n)), 3) > 0.45
+        parts[~inside] = 0
+        present = np.unique(parts[parts > 0])
+        lookup = np.zeros(count + 2, dtype=np.int32)
+        lookup[present] = np.arange(1, present.size + 1)
+        parts = lookup[parts]
+        count = int(parts.max())
+        if count < 3:
+            continue
+        near = sum(scipy.ndimage.binary_dilation(parts == k, disk).astype(np.int8)
+                   for k in range(1, count + 1))
+        # every pixel a corner: no border is turned down for where it ends
+        corners_ = np.argwhere(inside)
+        assert arcs._meeting(parts, inside, corners_, count) == (int(near.max()),
+                                                                 scipy.ndimage.label(near >= 3)[1])
