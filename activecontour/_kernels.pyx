@@ -2097,29 +2097,64 @@ cdef inline double _density(const double[:, ::1] values, Py_ssize_t p, double co
     return f
 
 
-def block_means(const float[:, ::1] a, Py_ssize_t k, float[:, ::1] out):
+def block_means(const float[:, ::1] a, Py_ssize_t k, float[:, ::1] out, const Py_ssize_t[:, ::1] boxes=None,
+                const unsigned char[:, ::1] sides=None, float[:, ::1] signs=None):
     """``out[I, J]`` = the mean of ``a`` over the block of rows ``k I .. k I + k - 1`` and columns
     ``k J .. k J + k - 1`` (cut at the edge), in one pass: the level set's coarse grid
-    (:meth:`activecontour.backends.levelset.scheme._Problem._far_flips`)."""
-    cdef Py_ssize_t m = a.shape[0], n = a.shape[1], block, i, j, bi, bj
+    (:meth:`activecontour.backends.levelset.scheme._Problem._far_flips`).
+
+    ``boxes`` (R, 4) (first row, stop row, first column, stop column): only the blocks that meet
+    a box are made, the others keep their values (those of an array that differs from ``a`` in
+    the boxes only); each block's sums are the same in the same order either way, so the same
+    numbers.  ``sides`` (bool of ``a``'s shape, as uint8) and ``signs`` (``out``'s shape): +1
+    where the first pixel of the block is on the inside (``sides`` true), else -1, for the same
+    blocks."""
+    cdef Py_ssize_t m = a.shape[0], n = a.shape[1], b, first, stop
+    if out.shape[0] != (m + k - 1) // k or out.shape[1] != (n + k - 1) // k:
+        raise ValueError("block_means: out is not the shape of the blocks")
+    if (sides is None) != (signs is None):
+        raise ValueError("block_means: sides and signs come together")
+    if sides is not None and (sides.shape[0] != m or sides.shape[1] != n
+                              or signs.shape[0] != out.shape[0] or signs.shape[1] != out.shape[1]):
+        raise ValueError("block_means: sides or signs of the wrong shape")
+    if boxes is None:
+        for first in range(0, out.shape[0], _POLL_ROWS):  # block rows, polling for Ctrl-C
+            stop = min(first + _POLL_ROWS, out.shape[0])
+            with nogil:
+                _block_means_in(a, k, out, sides, signs, first, stop, 0, out.shape[1])
+            PyErr_CheckSignals()
+        return
+    for b in range(boxes.shape[0]):
+        if boxes[b, 0] < 0 or boxes[b, 2] < 0 or boxes[b, 1] > m or boxes[b, 3] > n:
+            raise ValueError("block_means: a box lies outside the image")
+        if boxes[b, 1] > boxes[b, 0] and boxes[b, 3] > boxes[b, 2]:
+            with nogil:
+                _block_means_in(a, k, out, sides, signs, boxes[b, 0] // k, (boxes[b, 1] + k - 1) // k,
+                                boxes[b, 2] // k, (boxes[b, 3] + k - 1) // k)
+
+
+cdef void _block_means_in(const float[:, ::1] a, Py_ssize_t k, float[:, ::1] out,
+                          const unsigned char[:, ::1] sides, float[:, ::1] signs, Py_ssize_t first_row,
+                          Py_ssize_t stop_row, Py_ssize_t first_col, Py_ssize_t stop_col) noexcept nogil:
+    """:func:`block_means` of the blocks ``first_row:stop_row, first_col:stop_col``: each block's
+    rows summed in order, each row's pixels in order, then divided by its pixel count."""
+    cdef Py_ssize_t m = a.shape[0], n = a.shape[1], i, j, bi, bj
     cdef float rows_in, cols_in, total
-    out[:, :] = 0
-    for block in range(0, m, _POLL_ROWS):
-        with nogil:
-            for i in range(block, min(block + _POLL_ROWS, m)):
-                bi = i // k
-                for bj in range(out.shape[1]):
-                    total = 0
-                    for j in range(k * bj, min(k * bj + k, n)):
-                        total += a[i, j]
-                    out[bi, bj] += total
-        PyErr_CheckSignals()
-    with nogil:
-        for bi in range(out.shape[0]):
-            rows_in = <float> (min(k * bi + k, m) - k * bi)
-            for bj in range(out.shape[1]):
-                cols_in = <float> (min(k * bj + k, n) - k * bj)
-                out[bi, bj] /= rows_in * cols_in
+    for bi in range(first_row, stop_row):
+        for bj in range(first_col, stop_col):
+            out[bi, bj] = 0
+        for i in range(k * bi, min(k * bi + k, m)):
+            for bj in range(first_col, stop_col):
+                total = 0
+                for j in range(k * bj, min(k * bj + k, n)):
+                    total += a[i, j]
+                out[bi, bj] += total
+        rows_in = <float> (min(k * bi + k, m) - k * bi)
+        for bj in range(first_col, stop_col):
+            cols_in = <float> (min(k * bj + k, n) - k * bj)
+            out[bi, bj] /= rows_in * cols_in
+            if signs is not None:
+                signs[bi, bj] = 1 if sides[k * bi, k * bj] else -1
 
 
 def block_moments(const double[:, :, ::1] values, Py_ssize_t k, float[:, :, ::1] means,

@@ -21,7 +21,7 @@ from activecontour.backends.levelset import (
     signed_distance,
 )
 from activecontour.backends.levelset.redistancing import _redistance
-from activecontour.backends.levelset.scheme import _Problem, _swept_area
+from activecontour.backends.levelset.scheme import _Problem, _swept_area, _waves
 from activecontour.geometry.curve import signed_area
 from activecontour.imaging.normalize import normalize_image
 from activecontour.imaging.tables import ImageModel
@@ -309,6 +309,43 @@ def test_the_coarse_force_is_made_once_per_constants_and_is_the_block_means_forc
     problem._coarse_forced = None  # the held step with the cached force is the one made anew
     held = problem._coarse_held(state, form, tau)
     np.testing.assert_array_equal(problem._coarse_held(state, form, tau), held)
+
+
+def test_the_coarse_grid_of_an_accepted_step_remakes_the_blocks_its_tiles_changed_only(monkeypatch):
+    # the block means of a state's phi are kept for its retried steps and carried to the state an
+    # accepted step on tiles makes: only the blocks meeting the boxes where the two states differ
+    # are made again, and the held step is bit for bit a fresh problem's
+    problem, state, force, tau = _ring_problem(hole=False)
+    form = problem.params.load_form(*force)
+    made = []
+    block_means = _kernels.block_means
+
+    def counted(a, k, out, boxes=None, *rest):  # the number of blocks made
+        met = np.ones(out.shape, dtype=bool) if boxes is None else np.zeros(out.shape, dtype=bool)
+        for top, bottom, left, right in [] if boxes is None else boxes:
+            met[top // k: -(-bottom // k), left // k: -(-right // k)] = True
+        made.append(np.count_nonzero(met))
+        return block_means(a, k, out, boxes, *rest)
+
+    monkeypatch.setattr(_kernels, "block_means", counted)
+    stepped, changed = problem.step(state, force, tau, True)
+    assert changed.ndim == 2 and made == [256 * 256]  # on tiles; all blocks of the first state
+    problem.step(state, force, 0.5 * tau, True)  # a retry from the same state: nothing made
+    assert made == [256 * 256]
+    trial = problem.finish(problem.locate(stepped, state, changed), state)
+    current = problem.evaluate(trial)
+    force, scale = problem.force(current.c_in, current.c_out)
+    form = problem.params.load_form(*force)
+    held = problem._coarse_held(trial, form, tau)
+    assert len(made) == 2 and made[1] < 0.5 * 256 * 256  # the ring's blocks, not the disk's inside
+    fresh = _Problem(problem.model, problem.params, DEFAULT_OPTIONS)
+    np.testing.assert_array_equal(held, fresh._coarse_held(trial, form, tau))
+    # the held step is S of the block means less tau f, signed by the side of each block
+    means = np.empty(held.shape, dtype=np.float32)
+    block_means(trial.phi, 4, means)
+    expected = fresh._smooth(means - np.float32(tau) * fresh._coarse_force(form),
+                             tau * problem.params.mu / 16, _waves(held.shape[0]), _waves(held.shape[1]))
+    np.testing.assert_array_equal(held, np.where(trial.positive[::4, ::4], expected, -expected))
 
 
 def test_sides_of_steps_into_recycled_arrays_are_the_sides_of_phi():

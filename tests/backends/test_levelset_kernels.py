@@ -234,6 +234,33 @@ def test_block_means_are_the_means_of_the_blocks_cut_at_the_edge(shape, k):
     np.testing.assert_allclose(out, expected, rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.parametrize("shape, k", [((12, 8), 4), ((13, 10), 4), ((5, 7), 3)])
+def test_block_means_in_boxes_remake_the_blocks_they_meet_and_keep_the_others(shape, k):
+    # blocks made anew of an array that differs from the one the means were made of only in the
+    # boxes: the same numbers as all blocks made anew, bit for bit; the signs are the sides of the
+    # blocks' first pixels
+    rng = np.random.default_rng(21)
+    before = rng.normal(size=shape).astype(np.float32)
+    after = before.copy()
+    boxes = np.array([[1, 3, 0, 2], [shape[0] - 2, shape[0], shape[1] - 3, shape[1]]], dtype=np.intp)
+    for top, bottom, left, right in boxes:
+        after[top:bottom, left:right] = rng.normal(size=(bottom - top, right - left))
+    size = (-(-shape[0] // k), -(-shape[1] // k))
+    means, signs = np.empty(size, dtype=np.float32), np.empty(size, dtype=np.float32)
+    _kernels.block_means(before, k, means, None, (before > 0).view(np.uint8), signs)
+    fresh, fresh_signs = np.empty_like(means), np.empty_like(signs)
+    _kernels.block_means(after, k, fresh, None, (after > 0).view(np.uint8), fresh_signs)
+    assert not np.array_equal(means, fresh)
+    _kernels.block_means(after, k, means, boxes, (after > 0).view(np.uint8), signs)
+    np.testing.assert_array_equal(means, fresh)
+    np.testing.assert_array_equal(signs, np.where(after[::k, ::k] > 0, 1.0, -1.0))
+    # blocks no box meets are not read: an array that differs there leaves them as they were
+    elsewhere = after.copy()
+    elsewhere[-1, 0] += 5.0  # a block of the last row and first column: no box meets it
+    _kernels.block_means(elsewhere, k, means, boxes, (elsewhere > 0).view(np.uint8), signs)
+    np.testing.assert_array_equal(means, fresh)
+
+
 @pytest.mark.parametrize("shape, k", [((12, 8, 1), 4), ((13, 10, 3), 4), ((5, 7, 2), 3)])
 def test_block_moments_are_the_block_means_of_each_channel_and_its_square(shape, k):
     values = np.random.default_rng(20).normal(size=shape)

@@ -6,7 +6,7 @@ import numpy as np
 import scipy.fft
 
 from activecontour import _kernels
-from activecontour.backends.levelset.redistancing import _locate, _Located, _redistance, _Scratch
+from activecontour.backends.levelset.redistancing import _boxes, _locate, _Located, _redistance, _Scratch
 from activecontour.backends.levelset.zeroset import _change_cells, _edge_soup
 from activecontour.energy import evaluate
 
@@ -74,6 +74,7 @@ class _Problem:
         self._tile_buffer = None  # the smoothed step's tiles (_tile_step), reused while large enough
         self._coarse = None  # the far field's test grid (_coarse_tables)
         self._coarse_forced = None  # (form's constants, f on that grid) of the last step (_coarse_force)
+        self._coarse_phi = None  # the block means and signs of a state's phi on that grid (_coarse_state)
 
     def take(self, like=None):
         """An image-sized float32 array to write into, and the box outside which it equals the
@@ -169,6 +170,7 @@ class _Problem:
         # the state differs from the previous one only where the step changed phi (and the front
         # pixels next to it, :meth:`step`) and on its band
         changed = _bounds(located.changed, self.shape)
+        region = None  # where the state may differ from the previous one, as boxes (R, 4)
         if changed is not None and state.near_flat.size:
             if _is_pixels(located.changed):
                 # a step on the band's pixels: the previous band is reset, the new one written
@@ -177,11 +179,13 @@ class _Problem:
                 # the tiles' writes: the new front lies within a pixel of them (the old one lies in
                 # their cells), the band within ceil(band) + 1 rings of the front; a ring of band
                 # on a large image: the rects, not their bounding box
-                self._agree(previous.phi, state.phi,
-                            _grown_rects(located.changed, self.shape, int(np.ceil(self.band)) + 2))
+                region = _grown_rects(located.changed, self.shape, int(np.ceil(self.band)) + 2)
+                self._agree(previous.phi, state.phi, region)
             else:
-                self._agree(previous.phi, state.phi,
-                            _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape)))
+                box = _union(_grown(changed, self.shape), _bounds(state.near_flat, self.shape))
+                region = _boxes(box)
+                self._agree(previous.phi, state.phi, box)
+        self._carry_coarse(previous, state, region)
         return state
 
     def evaluate(self, state):
@@ -336,13 +340,46 @@ class _Problem:
         band of zero may flip (a hole opening without a seed): :meth:`_far_flips`."""
         k = _COARSE
         force = self._coarse_force(form)
-        coarse = np.empty(force.shape, dtype=np.float32)
-        _kernels.block_means(state.phi, k, coarse)
-        coarse -= np.float32(tau) * force
-        coarse = self._smooth(coarse, tau * self.params.mu / (k * k), _waves(coarse.shape[0]),
-                              _waves(coarse.shape[1]))
+        means, signs = self._coarse_state(state, force.shape)
+        coarse = self._smooth(means - np.float32(tau) * force, tau * self.params.mu / (k * k),
+                              _waves(force.shape[0]), _waves(force.shape[1]))
         # far blocks lie beyond the band: the side of the first pixel (phi > 0) is the block's
-        return np.where(state.positive[::k, ::k], coarse, -coarse)
+        coarse *= signs
+        return coarse
+
+    def _coarse_state(self, state, shape):
+        """The block means of ``state.phi`` on the coarse grid (:meth:`_coarse_held`, of ``shape``)
+        and the side of each block's first pixel (+1 inside, -1 outside), float32.
+
+        Kept for the state (a step retried with a smaller tau, a recheck's tries) and carried to
+        the next one: a state finished from it (:meth:`finish`) differs from it only in the
+        boxes noted there, and only the blocks that meet them are made again, each by the same
+        sums in the same order (:func:`activecontour._kernels.block_means`): the same numbers as
+        made anew, for a fraction of a pass over the image (a disk at 4096^2: its ring of
+        tiles)."""
+        entry = self._coarse_phi
+        sides = state.positive.view(np.uint8)
+        if entry is None or entry[0] is not state:
+            means, signs = np.empty(shape, dtype=np.float32), np.empty(shape, dtype=np.float32)
+            _kernels.block_means(state.phi, _COARSE, means, None, sides, signs)
+            self._coarse_phi = entry = [state, means, signs, []]
+        elif entry[3]:
+            _kernels.block_means(state.phi, _COARSE, entry[1], np.concatenate(entry[3]), sides, entry[2])
+            entry[3] = []
+        return entry[1], entry[2]
+
+    def _carry_coarse(self, previous, state, region):
+        """Note that ``state`` differs from ``previous`` only in ``region`` (boxes (R, 4), or None:
+        not known): the coarse grid's block means of ``previous`` (:meth:`_coarse_state`) become
+        those of ``state`` once the blocks meeting the region are made again."""
+        entry = self._coarse_phi
+        if entry is None or entry[0] is not previous:
+            return
+        if region is None:
+            self._coarse_phi = None
+        else:
+            entry[0] = state
+            entry[3].append(region)
 
     def _coarse_force(self, form):
         """f (6.41) of ``form`` on the coarse grid (:meth:`_coarse_tables`), float32; the last one
