@@ -786,3 +786,26 @@ def test_a_sliver_along_the_edge_goes_to_the_region_around_it():
     assert [len(curves) for curves in map(found.region_curves, np.eye(3, dtype=bool))] == [1, 0, 1]
     assert evaluate_partition(model, found.boundary(), params, 3).energy == pytest.approx(
         evaluate_partition(model, expected.boundary(), params, 3).energy, rel=1e-12)
+
+
+def test_a_loop_turned_inside_out_is_caught_where_no_interfaces_meet():
+    # an island of region 1 in region 0, a triangle: walked with region 1 on its inner side it is
+    # an island; walked the other way round with the same sides it is a region 1 everywhere around
+    # a hole of region 0 that region 0's own boundary does not hold: no two interfaces meet, but
+    # the regions are not where its sides say
+    tl, bl, br, tr, a, b, c = range(7)
+    points = [*_CORNERS, (1.0, 2.0), (2.5, 2.0), (1.5, 3.5)]
+    edge = [(tl, bl, 0, -1), (bl, br, 0, -1), (br, tr, 0, -1), (tr, tl, 0, -1)]
+    island = _hand_network(points, edge + [(a, b, 1, 0), (b, c, 1, 0), (c, a, 1, 0)], (4, 6))
+    model, params = _setup(np.random.default_rng(15).random((4, 6)), 0.3)
+    assert evaluate_partition(model, island.boundary(), params, 2).areas[1] == pytest.approx(1.125)
+    inside_out = _hand_network(points, edge + [(b, a, 1, 0), (c, b, 1, 0), (a, c, 1, 0)], (4, 6))
+    inside_out.inheriting(island, np.arange(7))
+    assert evaluate_partition(model, inside_out.boundary(), params, 2).areas[1] == pytest.approx(-1.125)
+    assert inside_out.simple_after(island, island.nodes)
+    assert not inside_out.sides_hold_after(island, island.nodes)
+    same = _hand_network(points, edge + [(a, b, 1, 0), (b, c, 1, 0), (c, a, 1, 0)], (4, 6))
+    assert same.inheriting(island, np.arange(7)).sides_hold_after(island, island.nodes)
+    # with the sides swapped too it is the island again, walked the other way
+    swapped = _hand_network(points, edge + [(b, a, 0, 1), (c, b, 0, 1), (a, c, 0, 1)], (4, 6))
+    assert swapped.inheriting(island, np.arange(7)).sides_hold_after(island, island.nodes)

@@ -86,9 +86,10 @@ def _without_slivers(network, nodes):
     would be a degenerate contour of both, which no result may hold.  A loop's interface segments
     all have the same two sides, so leaving them out merges the sliver (about 1e-12 px^2) into the
     region around it and takes its length out of the length term; a loop along the image's edge
-    (an interface lying on the edge's segment) gives its edge segments to that region."""
+    (an interface lying on the edge's segment) gives its edge segments to that region, and one
+    between two regions (a run of segments along each) leaves one run between them."""
     keep = np.ones(len(network.start), dtype=bool)
-    inner = network.inner.copy()
+    inner, outer = network.inner.copy(), network.outer.copy()
     n_regions = int(max(network.inner.max(), network.outer.max())) + 1
     for region in range(n_regions):
         forward = np.flatnonzero((network.inner == region) & (network.outer != region))
@@ -106,16 +107,21 @@ def _without_slivers(network, nodes):
         perimeter = np.add.reduceat(np.hypot(*(b - a).T), firsts)
         for loop in np.flatnonzero(area <= _SLIVER * np.maximum(1.0, perimeter) ** 2):
             members = segments[order[offsets[loop]:offsets[loop + 1]]]
-            sides = members[network.interface[members]]
-            around = np.unique(np.where(network.inner[sides] == region, network.outer[sides],
-                                        network.inner[sides]))
+            on_edge = ~network.interface[members]
+            other = np.where(network.inner[members] == region, network.outer[members], network.inner[members])
+            around = np.unique(other[~on_edge])
             if around.size == 1:
-                keep[sides] = False
-                inner[members[~network.interface[members]]] = around[0]
+                keep[members[~on_edge]] = False
+                inner[members[on_edge]] = around[0]
+            elif around.size == 2 and not on_edge.any() and np.count_nonzero(other != np.roll(other, 1)) == 2:
+                # two runs, one along each region: the first run stays, between the two
+                kept, gone = members[other == around[0]], members[other == around[1]]
+                keep[gone] = False
+                inner[kept] = np.where(inner[kept] == region, around[1], inner[kept])
+                outer[kept] = np.where(outer[kept] == region, around[1], outer[kept])
     if keep.all():
         return network
-    return Network(nodes, network.start[keep], network.end[keep], inner[keep], network.outer[keep],
-                   network.shape)
+    return Network(nodes, network.start[keep], network.end[keep], inner[keep], outer[keep], network.shape)
 
 
 class _Flow:
@@ -236,7 +242,7 @@ class _Flow:
                         lambda: network.collapsed(near[lengths < _TINY], nodes)):
             candidate = changed()
             if (candidate is not None and candidate[0].simple_after(network, nodes)
-                    and self.replace(*candidate, ends)):
+                    and candidate[0].sides_hold_after(network, nodes) and self.replace(*candidate, ends)):
                 return True
         return self.drop_islands(ends)
 
@@ -255,7 +261,8 @@ class _Flow:
             candidate = network.border_merged(tiny, nodes, into_start)
             if candidate is None:
                 return False
-            if candidate[0].simple_after(network, nodes) and self.replace(*candidate, ends):
+            if (candidate[0].simple_after(network, nodes) and candidate[0].sides_hold_after(network, nodes)
+                    and self.replace(*candidate, ends)):
                 return True
         return False
 

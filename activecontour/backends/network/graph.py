@@ -22,6 +22,8 @@ from activecontour.geometry.partition import (
 
 #: No crossing parameters: the network asks for pairs only (:func:`activecontour._kernels.segments_meet`).
 _NO_WHERE = np.empty((0, 2))
+#: A probe's distance off a segment, relative to the largest coordinate (:meth:`Network.sides_hold_after`).
+_PROBE = 1e-9
 
 
 class Network:
@@ -690,6 +692,37 @@ class Network:
         box_high = np.maximum(nodes[self.start[changed]], nodes[self.end[changed]]).max(axis=0)
         near = chosen[np.all((low <= box_high) & (high >= box_low), axis=1)]
         return not self.meet_among(nodes, near)
+
+
+    def sides_hold_after(self, parent, nodes):
+        """Whether each interface segment this network changed from ``parent`` (a local change:
+        :meth:`inheriting`; every one where it was not made so) has its regions where it says:
+        a probe just off its midpoint on either side lies within that region's boundary (winding
+        number 1).  A change that makes no two interfaces meet (:meth:`simple_after`) can still
+        leave a small loop turned inside out (the sides of a spike joined the other way, its tip
+        folded back), whose regions' boundaries then wind 2 or -1 times around it."""
+        chosen = np.flatnonzero(self.interface)
+        origin = self._origin_of(parent, chosen)
+        changed = chosen if origin is None else chosen[(origin < 0) | ~parent.interface[origin]]
+        if changed.size == 0:
+            return True
+        a, b = nodes.take(self.start[changed], axis=0), nodes.take(self.end[changed], axis=0)
+        step = b - a
+        normal = np.stack([step[:, 1], -step[:, 0]], axis=1) / np.linalg.norm(step, axis=1)[:, None]
+        middle, offset = 0.5 * (a + b), _PROBE * max(1.0, float(np.abs(nodes).max())) * normal
+        probes = np.concatenate([middle - offset, middle + offset])
+        regions = np.concatenate([self.inner[changed], self.outer[changed]])
+        points = np.ascontiguousarray(nodes, dtype=np.float64)
+        for region in np.unique(regions):
+            forward, backward = self.inner == region, self.outer == region
+            start = np.concatenate([self.start[forward], self.end[backward]])
+            end = np.concatenate([self.end[forward], self.start[backward]])
+            mine = np.ascontiguousarray(probes[regions == region])
+            winding = np.empty(len(mine), dtype=np.int64)
+            _kernels.winding_banded(points, as_indices(start), as_indices(end), mine, winding)
+            if np.any(winding != 1):
+                return False
+        return True
 
 
 def _renumbered(group, stays):
