@@ -653,3 +653,159 @@ def test_a_trial_is_tested_for_crossings_in_full_once(monkeypatch):
     crop = skimage.data.camera()[230:263, 199:240]
     ac.segment(crop, n_regions=3, separate=False)
     assert tested and len(set(tested)) == len(tested)
+
+
+def _hand_network(points, segments, shape):
+    """A network from its nodes and ``(start, end, inner, outer)`` rows."""
+    start, end, inner, outer = (np.array(column, dtype=np.intp) for column in zip(*segments, strict=True))
+    return Network(np.array(points, dtype=np.float64), start, end, inner, outer, shape)
+
+
+def _shoelace(points):
+    points = np.asarray(points, dtype=np.float64)
+    following = np.roll(points, -1, axis=0)
+    return 0.5 * abs(np.sum(points[:, 0] * following[:, 1] - following[:, 0] * points[:, 1]))
+
+
+# a 4 x 6 image: its corners, the ends on the top edge of a region 1 below it (v, u, its border
+# segment from v to u), a node below them (x) and one on the bottom edge under it (y)
+_CORNERS = [(-0.5, -0.5), (3.5, -0.5), (3.5, 5.5), (-0.5, 5.5)]
+_V, _U, _X, _Y = (-0.5, 3.0), (-0.5, 2.0), (1.0, 2.5), (3.5, 2.5)
+
+
+@pytest.mark.parametrize("into_start", [True, False])
+@pytest.mark.parametrize("right", [0, 2])
+def test_two_junctions_meeting_on_the_border_take_the_triangle_between_them_away(into_start, right):
+    # region 1 a triangle (v, u, x) on the top edge, region 0 left of it and ``right`` right of it
+    # (0: one region around it; 2: a third region, x a junction with an interface down to y):
+    # merging v and u leaves the triangle's two sides joining the same two nodes, so it goes and
+    # the interface from the merged node to x separates the regions on their other sides
+    tl, bl, br, tr, v, u, x, y = range(8)
+    points = [_CORNERS[0], _CORNERS[1], _CORNERS[2], _CORNERS[3], _V, _U, _X, _Y]
+    border = [(tl, bl, 0, -1), (bl, y, 0, -1), (y, br, right, -1), (br, tr, right, -1), (tr, v, right, -1),
+              (v, u, 1, -1), (u, tl, 0, -1)]
+    sides = [(u, x, 1, 0), (x, v, 1, right)] + ([(x, y, 2, 0)] if right else [])
+    network = _hand_network(points, border + sides, (4, 6))
+    image = np.random.default_rng(11).random((4, 6))
+    model, params = _setup(image, 0.3)
+    merged, nodes = network.border_merged([5], network.nodes, into_start)
+    kept = v if into_start else u
+    # the expected partition, built directly: region 1 gone, the top edge from tr to tl through the
+    # kept node, the interface from it down to y between 0 and ``right`` (none where that is 0)
+    edge = [(tl, bl, 0, -1), (bl, y, 0, -1), (y, br, right, -1), (br, tr, right, -1), (tr, kept, right, -1),
+            (kept, tl, 0, -1)]
+    expected = _hand_network(points, edge + ([(kept, x, 2, 0), (x, y, 2, 0)] if right else []), (4, 6))
+    assert merged.simple(nodes) and merged.faces()[0].size
+    found = evaluate_partition(model, merged.boundary(nodes), params, 3)
+    truth = evaluate_partition(model, expected.boundary(), params, 3)
+    assert found.energy == pytest.approx(truth.energy, rel=1e-12)
+    left = _shoelace([points[tl], points[bl], points[y], points[x], points[kept]]) if right else 24.0
+    np.testing.assert_allclose(found.areas, [left, 0.0, 24.0 - left], atol=1e-12)
+    assert np.count_nonzero(merged.interface) == (2 if right else 0)
+
+
+def test_two_junctions_merged_on_the_border_leave_the_region_between_them_meeting_it_at_a_point():
+    # region 1 a quadrilateral (v, u, a, b) on the top edge of a region 0: merging v into u moves
+    # the interface's end at v onto u, and the region (now the triangle u, a, b) meets the edge at u
+    tl, bl, br, tr, v, u, a, b = range(8)
+    points = [*_CORNERS, _V, _U, (1.0, 2.0), (1.0, 3.0)]
+    network = _hand_network(points, [(tl, bl, 0, -1), (bl, br, 0, -1), (br, tr, 0, -1), (tr, v, 0, -1),
+                                     (v, u, 1, -1), (u, tl, 0, -1), (u, a, 1, 0), (a, b, 1, 0), (b, v, 1, 0)],
+                            (4, 6))
+    image = np.random.default_rng(12).random((4, 6))
+    model, params = _setup(image, 0.3)
+    merged, nodes = network.border_merged([4], network.nodes, False)
+    moved = network.nodes.copy()
+    moved[v] = moved[u]  # the same partition: the border segment between them of no length
+    found = evaluate_partition(model, merged.boundary(nodes), params, 3)
+    assert found.energy == pytest.approx(evaluate_partition(model, network.boundary(moved), params, 3).energy,
+                                         rel=1e-12)
+    np.testing.assert_allclose(found.areas[1], _shoelace([points[u], points[a], points[b]]), rtol=1e-12)
+    assert merged.simple(nodes) and len(merged.start) == len(network.start) - 1
+    (curve,) = merged.region_curves(np.arange(3) == 1)
+    assert len(curve) == 3
+    # an interface that joins the two junctions directly is not merged (it would close on itself)
+    direct = _hand_network(points, [(tl, bl, 0, -1), (bl, br, 0, -1), (br, tr, 0, -1), (tr, v, 0, -1),
+                                    (v, u, 1, -1), (u, tl, 0, -1), (u, v, 1, 0)], (4, 6))
+    assert direct.border_merged([4], direct.nodes) is None
+
+
+def test_a_junction_on_the_border_merges_the_vertex_it_has_reached():
+    # an interface from u on the top edge down to y, regions 0 left and 2 right; the top edge has a
+    # vertex h 0.02 px left of u: merged, the edge's segment from u goes on to the corner, J the same
+    tl, bl, br, tr, u, y, h = range(7)
+    points = [*_CORNERS, _U, (3.5, 2.0), (-0.5, 1.98)]
+    network = _hand_network(points, [(tl, bl, 0, -1), (bl, y, 0, -1), (y, br, 2, -1), (br, tr, 2, -1),
+                                     (tr, u, 2, -1), (u, h, 0, -1), (h, tl, 0, -1), (u, y, 2, 0)], (4, 6))
+    image = np.random.default_rng(13).random((4, 6))
+    model, params = _setup(image, 0.3)
+    merged, nodes = network.border_merged([5], network.nodes)
+    assert len(merged.start) == len(network.start) - 1
+    assert h not in np.concatenate([merged.start, merged.end])
+    assert merged.simple(nodes) and merged.faces()[0].size
+    assert evaluate_partition(model, merged.boundary(nodes), params, 3).energy == pytest.approx(
+        evaluate_partition(model, network.boundary(), params, 3).energy, rel=1e-12)
+
+
+def test_junctions_slide_along_the_edge_past_its_vertices():
+    # three vertical bands, their interfaces started 2.3 px away from the image's edges: their ends
+    # on the top and bottom edges slide past the edge's vertices (one every pixel) to where the
+    # bands meet, and the interfaces go all the way there
+    from activecontour.backends.network.flow import _Flow
+
+    edges = (5.3, 10.6)
+    image, _ = _antialiased((12, 16), lambda r, c: (c > edges[0]).astype(int) + (c > edges[1]).astype(int),
+                            [0.1, 0.9, 0.5])
+    model, params = _setup(image, 1e-3)
+    start = np.zeros((12, 16), dtype=np.int32)
+    start[:, 3:] = 1
+    start[:, 13:] = 2
+    flow = _Flow(Network.of_classes(start), model, params, 3, [])
+    assert flow.run(500, 5e-4, None, 0)[0] == 0
+    network, nodes = flow.network, flow.nodes
+    for k, edge in enumerate(edges):
+        on = np.flatnonzero(network.interface & (network.inner == k + 1))
+        columns = nodes[np.concatenate([network.start[on], network.end[on]]), 1]
+        assert np.all(np.abs(columns - edge) < 0.1)
+
+
+def test_a_sliver_along_the_edge_goes_to_the_region_around_it():
+    # region 1 a sliver between the top edge's segment from v to u and an interface along it with
+    # region 2 below (regions 0 and 2 either side of an interface from u down to y): the sliver's
+    # edge segment goes to region 2, its interface goes, and the partition is region 2's
+    from activecontour.backends.network.flow import _without_slivers
+
+    tl, bl, br, tr, v, u, y = range(7)
+    points = [*_CORNERS, _V, _U, (3.5, 2.0)]
+    top = [(tl, bl, 0, -1), (bl, y, 0, -1), (y, br, 2, -1), (br, tr, 2, -1), (tr, v, 2, -1)]
+    network = _hand_network(points, top + [(v, u, 1, -1), (u, tl, 0, -1), (u, v, 1, 2), (u, y, 2, 0)], (4, 6))
+    expected = _hand_network(points, top + [(v, u, 2, -1), (u, tl, 0, -1), (u, y, 2, 0)], (4, 6))
+    image = np.random.default_rng(14).random((4, 6))
+    model, params = _setup(image, 0.3)
+    found = _without_slivers(network, network.nodes)
+    assert [len(curves) for curves in map(found.region_curves, np.eye(3, dtype=bool))] == [1, 0, 1]
+    assert evaluate_partition(model, found.boundary(), params, 3).energy == pytest.approx(
+        evaluate_partition(model, expected.boundary(), params, 3).energy, rel=1e-12)
+
+
+def test_a_loop_turned_inside_out_is_caught_where_no_interfaces_meet():
+    # an island of region 1 in region 0, a triangle: walked with region 1 on its inner side it is
+    # an island; walked the other way round with the same sides it is a region 1 everywhere around
+    # a hole of region 0 that region 0's own boundary does not hold: no two interfaces meet, but
+    # the regions are not where its sides say
+    tl, bl, br, tr, a, b, c = range(7)
+    points = [*_CORNERS, (1.0, 2.0), (2.5, 2.0), (1.5, 3.5)]
+    edge = [(tl, bl, 0, -1), (bl, br, 0, -1), (br, tr, 0, -1), (tr, tl, 0, -1)]
+    island = _hand_network(points, edge + [(a, b, 1, 0), (b, c, 1, 0), (c, a, 1, 0)], (4, 6))
+    model, params = _setup(np.random.default_rng(15).random((4, 6)), 0.3)
+    assert evaluate_partition(model, island.boundary(), params, 2).areas[1] == pytest.approx(1.125)
+    inside_out = _hand_network(points, edge + [(b, a, 1, 0), (c, b, 1, 0), (a, c, 1, 0)], (4, 6))
+    inside_out.inheriting(island, np.arange(7))
+    assert evaluate_partition(model, inside_out.boundary(), params, 2).areas[1] == pytest.approx(-1.125)
+    assert inside_out.simple_after(island, island.nodes)
+    assert not inside_out.sides_hold_after(island, island.nodes)
+    same = _hand_network(points, edge + [(a, b, 1, 0), (b, c, 1, 0), (c, a, 1, 0)], (4, 6))
+    assert same.inheriting(island, np.arange(7)).sides_hold_after(island, island.nodes)
+    # with the sides swapped too it is the island again, walked the other way
+    swapped = _hand_network(points, edge + [(b, a, 0, 1), (c, b, 0, 1), (a, c, 0, 1)], (4, 6))
+    assert swapped.inheriting(island, np.arange(7)).sides_hold_after(island, island.nodes)

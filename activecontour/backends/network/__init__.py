@@ -41,7 +41,12 @@ polygon backend's N-region result is the label field's topology with the polygon
 changed where the flow pinches it: a step held back because two interface segments would meet
 (:meth:`_Flow.resolve`) joins them the other way when they bound the same two regions (a neck
 or a finger's sides cut, a spike's tip dropped), or collapses a vanishing segment there, or drops
-the closed loops through them; each is kept only if J does not rise.  A pinch between three
+the closed loops through them; each is kept only if J does not rise, no two interfaces meet and
+every changed segment has its regions where it says.  A junction sliding along the image's edge
+slides on: the edge's segment it shrinks (every pixel has a vertex on the edge) is merged away
+when it is shorter than a step can shrink it, and two junctions that meet there become one (a
+triangle of region left between them goes), else the shrinking segment would cap every step and
+the flow would stop as if converged.  A pinch between three
 regions (a region thinning between two others, whose cut would make two junctions) is not
 resolved: two steps in a row held back by such a pinch end the flow with status 5, a stall, not
 convergence.

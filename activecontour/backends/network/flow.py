@@ -83,10 +83,13 @@ _SLIVER = 1e-9
 def _without_slivers(network, nodes):
     """The network without the loops of region boundary that enclose no area (``_SLIVER``): three
     nearly collinear nodes that the last step left between two regions, through a pinch node,
-    would be a degenerate contour of both, which no result may hold.  A loop's segments all have
-    the same two sides, so leaving them out merges the sliver (about 1e-12 px^2) into the region
-    around it and takes its length out of the length term."""
+    would be a degenerate contour of both, which no result may hold.  A loop's interface segments
+    all have the same two sides, so leaving them out merges the sliver (about 1e-12 px^2) into the
+    region around it and takes its length out of the length term; a loop along the image's edge
+    (an interface lying on the edge's segment) gives its edge segments to that region, and one
+    between two regions (a run of segments along each) leaves one run between them."""
     keep = np.ones(len(network.start), dtype=bool)
+    inner, outer = network.inner.copy(), network.outer.copy()
     n_regions = int(max(network.inner.max(), network.outer.max())) + 1
     for region in range(n_regions):
         forward = np.flatnonzero((network.inner == region) & (network.outer != region))
@@ -102,9 +105,23 @@ def _without_slivers(network, nodes):
         firsts = offsets[:-1]
         area = 0.5 * np.abs(np.add.reduceat(a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1], firsts))
         perimeter = np.add.reduceat(np.hypot(*(b - a).T), firsts)
-        sliver = np.repeat(area <= _SLIVER * np.maximum(1.0, perimeter) ** 2, np.diff(offsets))
-        keep[segments[order[sliver]]] = False
-    return network if keep.all() else network.subset(keep, nodes)
+        for loop in np.flatnonzero(area <= _SLIVER * np.maximum(1.0, perimeter) ** 2):
+            members = segments[order[offsets[loop]:offsets[loop + 1]]]
+            on_edge = ~network.interface[members]
+            other = np.where(network.inner[members] == region, network.outer[members], network.inner[members])
+            around = np.unique(other[~on_edge])
+            if around.size == 1:
+                keep[members[~on_edge]] = False
+                inner[members[on_edge]] = around[0]
+            elif around.size == 2 and not on_edge.any() and np.count_nonzero(other != np.roll(other, 1)) == 2:
+                # two runs, one along each region: the first run stays, between the two
+                kept, gone = members[other == around[0]], members[other == around[1]]
+                keep[gone] = False
+                inner[kept] = np.where(inner[kept] == region, around[1], inner[kept])
+                outer[kept] = np.where(outer[kept] == region, around[1], outer[kept])
+    if keep.all():
+        return network
+    return Network(nodes, network.start[keep], network.end[keep], inner[keep], outer[keep], network.shape)
 
 
 class _Flow:
@@ -225,9 +242,29 @@ class _Flow:
                         lambda: network.collapsed(near[lengths < _TINY], nodes)):
             candidate = changed()
             if (candidate is not None and candidate[0].simple_after(network, nodes)
-                    and self.replace(*candidate, ends)):
+                    and candidate[0].sides_hold_after(network, nodes) and self.replace(*candidate, ends)):
                 return True
         return self.drop_islands(ends)
+
+    def slide_on(self):
+        """Merge the ends of the border segments shorter than ``_TINY`` px
+        (:meth:`Network.border_merged`): a junction sliding along the image's edge has met a
+        vertex of the edge or another junction, and the shrinking segment between them would
+        cap every later step.  Each merge of two junctions is tried into either end; kept only if
+        the network stays simple and J does not rise.  Returns whether the network changed."""
+        network, nodes = self.network, self.nodes
+        chosen = np.flatnonzero(~network.interface)
+        step = nodes.take(network.end[chosen], axis=0) - nodes.take(network.start[chosen], axis=0)
+        tiny = chosen[np.linalg.norm(step, axis=1) < _TINY]
+        ends = np.unique(np.concatenate([network.start[tiny], network.end[tiny]]))
+        for into_start in (True, False):
+            candidate = network.border_merged(tiny, nodes, into_start)
+            if candidate is None:
+                return False
+            if (candidate[0].simple_after(network, nodes) and candidate[0].sides_hold_after(network, nodes)
+                    and self.replace(*candidate, ends)):
+                return True
+        return False
 
     def replace(self, network, nodes, ends):
         """Take ``network`` at ``nodes``, the closed loops through ``ends`` dropped where that
@@ -304,6 +341,8 @@ class _Flow:
             n_iter += 1
             self.energies.append(candidate.energy)
             if crossings and self.resolve(*crossings[-1][1:]):
+                factors, dt_next, held = None, None, 0
+            elif not crossings and 2 * dt > steps.reverse and self.slide_on():
                 factors, dt_next, held = None, None, 0
             else:
                 held = held + 1 if crossings else 0

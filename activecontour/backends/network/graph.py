@@ -22,6 +22,8 @@ from activecontour.geometry.partition import (
 
 #: No crossing parameters: the network asks for pairs only (:func:`activecontour._kernels.segments_meet`).
 _NO_WHERE = np.empty((0, 2))
+#: A probe's distance off a segment, relative to the largest coordinate (:meth:`Network.sides_hold_after`).
+_PROBE = 1e-9
 
 
 class Network:
@@ -404,6 +406,85 @@ class Network:
                           self.outer[keep], self.shape)
         return network.inheriting(self, np.flatnonzero(keep)), nodes
 
+    def border_merged(self, segments, nodes, into_start=True):
+        """The network without the border segments ``segments`` (on the image's edge, shorter than
+        a step can shrink them), the two ends of each made one node, so that a junction sliding
+        along the edge slides on:
+
+        * an end that is a mere vertex of one straight edge (on no interface, at no corner of the
+          image) goes into the other end: the edge's other segment there goes on to it, so the
+          edge keeps its place and J its value (the two segments were collinear);
+        * two junctions (interfaces meeting the edge at both ends) become one, at the segment's
+          start (``into_start``) or its end: the region that touched the edge between them now
+          meets it at a point.  Where that region was a triangle, the two interface segments
+          from the junctions to its third node now join the same two nodes (a 2-gon, no area):
+          the region goes, one segment stays with the regions on their other sides, none where
+          those are the same region.
+
+        A segment is skipped where it shares a node with an earlier one, or where its ends are
+        joined otherwise too (an interface between them, or more than one common neighbour).
+        Returns ``(network, nodes)``, or None when no segment is left."""
+        m, n = self.shape
+        uses = np.bincount(np.concatenate([self.start, self.end]), minlength=len(nodes))
+        on_rows = (nodes[:, 0] == -0.5) | (nodes[:, 0] == m - 0.5)
+        on_cols = (nodes[:, 1] == -0.5) | (nodes[:, 1] == n - 0.5)
+        moving = self.free[0] | self.free[1]
+        vertex = (uses == 2) & ~moving & (on_rows != on_cols)
+        inner, outer = self.inner.copy(), self.outer.copy()
+        target, keep, used = np.arange(len(nodes)), np.ones(len(self.start), dtype=bool), set()
+        for s in segments:
+            u, v = int(self.start[s]), int(self.end[s])
+            if self.outer[s] >= 0 or {u, v} & used:
+                continue
+            if vertex[u] or vertex[v]:
+                gone, kept = (u, v) if vertex[u] else (v, u)
+                dropped = []
+            elif moving[u] and moving[v]:
+                gone, kept = (v, u) if into_start else (u, v)
+                dropped = self._two_gon(s, keep, inner, outer)
+                if dropped is None:
+                    continue
+            else:
+                continue
+            used |= {u, v}
+            target[gone], keep[s] = kept, False
+            keep[dropped] = False
+        if keep.all():
+            return None
+        network = Network(nodes, target[self.start[keep]], target[self.end[keep]], inner[keep], outer[keep],
+                          self.shape)
+        return network.inheriting(self, np.flatnonzero(keep)), nodes
+
+    def _two_gon(self, s, keep, inner, outer):
+        """For :meth:`border_merged` of the junctions at the ends of border segment ``s``: the
+        interface segments to drop where the junctions have one common neighbour (the region
+        ``inner[s]`` between them a triangle), the kept one's sides renamed in ``inner``,
+        ``outer``; none where they have no common neighbour; None where the merge is refused
+        (an interface joins the two junctions, or they have more than one common neighbour)."""
+        u, v, region = self.start[s], self.end[s], self.inner[s]
+        at_u = np.flatnonzero(self.interface & keep & ((self.start == u) | (self.end == u)))
+        at_v = np.flatnonzero(self.interface & keep & ((self.start == v) | (self.end == v)))
+        from_u = np.where(self.start[at_u] == u, self.end[at_u], self.start[at_u])
+        from_v = np.where(self.start[at_v] == v, self.end[at_v], self.start[at_v])
+        common = np.intersect1d(from_u, from_v)
+        if v in from_u or common.size > 1:
+            return None
+        if common.size == 0:
+            return []
+        e, f = at_u[from_u == common[0]][0], at_v[from_v == common[0]][0]
+        if region not in (inner[e], outer[e]) or region not in (inner[f], outer[f]):
+            return None
+        # the regions on the triangle's two sides away from it
+        other_e = outer[e] if inner[e] == region else inner[e]
+        other_f = outer[f] if inner[f] == region else inner[f]
+        if other_e == other_f:
+            return [e, f]
+        if inner[e] == region:
+            inner[e] = other_f
+        else:
+            outer[e] = other_f
+        return [f]
+
     def crossing_nodes(self, nodes):
         """The nodes of interface segments that cross another one (for the islands to drop)."""
         import shapely
@@ -611,6 +692,37 @@ class Network:
         box_high = np.maximum(nodes[self.start[changed]], nodes[self.end[changed]]).max(axis=0)
         near = chosen[np.all((low <= box_high) & (high >= box_low), axis=1)]
         return not self.meet_among(nodes, near)
+
+
+    def sides_hold_after(self, parent, nodes):
+        """Whether each interface segment this network changed from ``parent`` (a local change:
+        :meth:`inheriting`; every one where it was not made so) has its regions where it says:
+        a probe just off its midpoint on either side lies within that region's boundary (winding
+        number 1).  A change that makes no two interfaces meet (:meth:`simple_after`) can still
+        leave a small loop turned inside out (the sides of a spike joined the other way, its tip
+        folded back), whose regions' boundaries then wind 2 or -1 times around it."""
+        chosen = np.flatnonzero(self.interface)
+        origin = self._origin_of(parent, chosen)
+        changed = chosen if origin is None else chosen[(origin < 0) | ~parent.interface[origin]]
+        if changed.size == 0:
+            return True
+        a, b = nodes.take(self.start[changed], axis=0), nodes.take(self.end[changed], axis=0)
+        step = b - a
+        normal = np.stack([step[:, 1], -step[:, 0]], axis=1) / np.linalg.norm(step, axis=1)[:, None]
+        middle, offset = 0.5 * (a + b), _PROBE * max(1.0, float(np.abs(nodes).max())) * normal
+        probes = np.concatenate([middle - offset, middle + offset])
+        regions = np.concatenate([self.inner[changed], self.outer[changed]])
+        points = np.ascontiguousarray(nodes, dtype=np.float64)
+        for region in np.unique(regions):
+            forward, backward = self.inner == region, self.outer == region
+            start = np.concatenate([self.start[forward], self.end[backward]])
+            end = np.concatenate([self.end[forward], self.start[backward]])
+            mine = np.ascontiguousarray(probes[regions == region])
+            winding = np.empty(len(mine), dtype=np.int64)
+            _kernels.winding_banded(points, as_indices(start), as_indices(end), mine, winding)
+            if np.any(winding != 1):
+                return False
+        return True
 
 
 def _renumbered(group, stays):
