@@ -674,3 +674,70 @@ def test_the_meeting_counts_are_those_of_each_part_dilated_over_the_whole_window
         corners_ = np.argwhere(inside)
         assert arcs._meeting(parts, inside, corners_, count) == (int(near.max()),
                                                                  scipy.ndimage.label(near >= 3)[1])
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_traced_cells_of_a_tiling_never_overlap(seed):
+    """What :func:`corners._cut` stands on: the cells of any tiling of the pixels by labels, traced
+    one by one (marching squares at 0.5: a cell's two diagonal pixels of a grid square get two
+    corners), share their borders and overlap nowhere, saddles and places where four meet too."""
+    from activecontour.geometry.raster import mask_to_curves
+    from activecontour.geometry.regions import _to_shapely
+
+    rng = np.random.default_rng(seed)
+    cells = rng.integers(1, rng.integers(2, 6), size=(9, 11))
+    cells[2:4, 3:5] = [[1, 2], [2, 1]]  # a saddle, whatever the draw
+    cells = np.unique(cells, return_inverse=True)[1].reshape(cells.shape) + 1
+    geometries = [_to_shapely(mask_to_curves(cells == j)) for j in range(1, cells.max() + 1)]
+    for j, first in enumerate(geometries):
+        for second in geometries[j + 1:]:
+            assert shapely.intersection(first, second).area == 0.0
+    assert sum(g.area for g in geometries) <= cells.size
+
+
+def _cut_by_overlays(curves, parts, low):
+    """:func:`corners._cut` as it was made before: each traced cell less the union of the earlier
+    cells its box meets (one overlay each), then the same simplification and intersection."""
+    import activecontour.geometry.regions as regions
+    from activecontour.geometry.raster import mask_to_curves
+
+    nearest = scipy.ndimage.distance_transform_edt(parts == 0, return_distances=False, return_indices=True)
+    cells = parts[tuple(nearest)]
+    boxes = scipy.ndimage.find_objects(cells)
+    geometries = [regions._to_shapely([c + low + (box[0].start, box[1].start)
+                                       for c in mask_to_curves(cells[box] == j)])
+                  for j, box in enumerate(boxes, start=1)]
+    tree = shapely.STRtree(geometries)
+    for j, cell in enumerate(geometries):
+        earlier = [k for k in tree.query(cell) if k < j]
+        if earlier:
+            geometries[j] = shapely.difference(cell, shapely.union_all([geometries[k] for k in earlier]))
+    return geometries
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_the_cut_orients_the_cells_as_the_overlays_left_them(seed, monkeypatch):
+    """The cells :func:`corners._cut` simplifies are the cells less their empty overlaps with the
+    earlier ones, oriented as those overlays leave them (the overlays are not made): the same
+    pieces to the bit as from the overlays' cells, on random outlines cut into the pixel cells
+    of two to four random seeds."""
+    outline = random_outline(seed)
+    rng = np.random.default_rng(seed)
+    low = np.floor(outline.min(axis=0)).astype(int) - 1
+    window = tuple(np.ceil(outline.max(axis=0)).astype(int) - low + 2)
+    pixels = np.argwhere(rasterize([outline - low], window))
+    seeds = pixels[rng.choice(len(pixels), size=min(len(pixels), rng.integers(2, 5)), replace=False)]
+    nearest = np.argmin(((pixels[:, None, :] - seeds[None]) ** 2).sum(axis=2), axis=1)
+    parts = np.zeros(window, dtype=np.int32)
+    parts[tuple(pixels.T)] = nearest + 1
+    parts = np.unique(parts, return_inverse=True)[1].reshape(parts.shape).astype(np.int32)
+    ours = corners._cut([outline], parts, low)
+    simplify = shapely.coverage_simplify
+    monkeypatch.setattr(shapely, "coverage_simplify", lambda geometries, *args, **kwargs: simplify(
+        _cut_by_overlays([outline], parts, low), *args, **kwargs))
+    theirs = corners._cut([outline], parts, low)
+    assert len(ours) == len(theirs) > 0
+    for mine, other in zip(ours, theirs, strict=True):
+        assert len(mine) == len(other)
+        for a, b in zip(mine, other, strict=True):
+            np.testing.assert_array_equal(a, b)
