@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from activecontour import _kernels
 from activecontour.objects.shapes import _is_blob, _reaches
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
@@ -163,7 +164,11 @@ def _contrast_split(mask, values, least, smallest):
     above = inside > threshold
     if above.all() or not above.any() or inside[above].mean() - inside[~above].mean() < least:
         return None  # (Otsu of values that hardly differ can put them all on one side)
-    bright = _without_small(scipy.ndimage.binary_fill_holes((smooth > threshold) & mask), smallest) & mask
+    # (holes filled as scipy.ndimage.binary_fill_holes fills them, on the class framed by one pixel:
+    # one compiled flood fill, :func:`activecontour._kernels.fill_holes`)
+    framed = np.pad((smooth > threshold) & mask, 1)
+    _kernels.fill_holes(framed.view(np.uint8))
+    bright = _without_small(framed[1:-1, 1:-1], smallest) & mask
     # (no bright core: every pixel is far from one)
     away = _reaches(mask, CONTRAST_RIM, strict=True) & (
         _reaches(~bright, CONTRAST_RIM, strict=True) if bright.any() else True)
