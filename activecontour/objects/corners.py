@@ -58,11 +58,11 @@ def _cut(curves, parts, low):
     # the traced cells are a coverage, which the simplification keeps: marching squares at 0.5
     # (mask_to_curves) gives a grid square's pixels of one cell the square's corner, half or all
     # but a corner, and two diagonal pixels two corners, so the cells of a tiling never overlap
-    # (their vertices are exact half-pixels); a cell whose box meets an earlier cell's is
-    # clockwise, as the overlay that took their (empty) overlap from it left it until now (the
-    # simplification and the intersection below read the orientation, not the first vertex:
-    # the same pieces to the bit on the 282 cuts of the families, DSB and the sample images,
-    # without the 1-2 overlays per cell)
+    # (their vertices are exact half-pixels).  A cell whose box meets an earlier cell's box is
+    # made clockwise: the orientation GEOS's difference with the earlier cells (an empty
+    # overlap) gave it, which the simplification and the intersection below read (the first
+    # vertex they do not: the same pieces to the bit on the 282 cuts of the families, DSB and
+    # the sample images as with the 1-2 overlays per cell)
     pairs = shapely.STRtree(geometries).query(geometries)
     later = np.unique(pairs[0][pairs[1] < pairs[0]])
     geometries[later] = shapely.orient_polygons(geometries[later], exterior_cw=True)
