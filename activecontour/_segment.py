@@ -18,7 +18,7 @@ import numpy as np
 from activecontour.backends import solver_for
 from activecontour.geometry.raster import mask_to_curves
 from activecontour.geometry.regions import clip_region, complement_region
-from activecontour.imaging.noise import auto_mu, is_auto
+from activecontour.imaging.noise import MU_BACKOFF, auto_mu, is_auto
 from activecontour.imaging.roi import (
     ROI_APART,
     ROI_INIT_MARGIN,
@@ -78,7 +78,9 @@ def segment(image, init=None, *, backend=_DEFAULT.backend, mu=_DEFAULT.mu, omega
         Length weight (intensity^2 * pixel, intensities normalised), >= 0.  Larger gives smoother,
         shorter contours: features with a radius of curvature below about ``mu / (c_in - c_out)^2``
         pixels are smoothed away.  ``"auto"`` (default) sets it from the image's noise
-        (:func:`activecontour.imaging.noise.auto_mu`); ``result.mu`` reports the value used.
+        (:func:`activecontour.imaging.noise.auto_mu`), and when that run leaves no object, runs
+        once more at half of it (:data:`~activecontour.imaging.noise.MU_BACKOFF`: small objects
+        dim against the noise); ``result.mu`` reports the value used.
     omega : float
         Area weight (intensity^2); positive shrinks, negative grows the inside.
     lambda_in, lambda_out : float
@@ -209,7 +211,7 @@ def solve_problem(problem, init=None, callback=None, *, objects=True):
     if isinstance(settings.roi, str):  # "init"
         solution = _pointed(problem, run, init, callback)
     else:
-        solution = _solve(problem, run, init, settings.roi, callback)
+        problem, solution = _solve_backing_off(problem, run, init, settings.roi, callback)
     fields, objects_of = _result_fields(problem, solution, getattr(init, "seeds", None))
     del problem, solution  # the normalised image goes before the objects' pass, the peak of memory
     if fields["classes"] is None:  # two regions: the classes of its mask
@@ -257,6 +259,27 @@ def _solve(problem, run, init, roi, callback):
         result = _rebuilt(result, clip_region(result.contours, mask_to_curves(domain)), model, working,
                           phi=None if result.phi is None else np.where(domain, result.phi, -1.0))
     return _Solution(problem, result, light, *_in_whole_image(result, problem.box, problem.domain, shape))
+
+
+def _solve_backing_off(problem, run, init, roi, callback):
+    """:func:`_solve`, and with ``mu="auto"`` once more at ``MU_BACKOFF`` times the weight when
+    the run leaves no object: ``(problem, solution)`` of the run taken.
+
+    The default weight (:func:`~activecontour.imaging.noise.auto_mu`) is a length prior of fixed
+    strength; objects small and dim against the noise (area / perimeter below
+    ``mu / (c_in - c_out)^2``) cost more length than their fit gains, and the empty set is then
+    the lower (6.38), however plainly the image shows them.  The weaker weight keeps them, and
+    still no noise speck (:data:`~activecontour.imaging.noise.MU_BACKOFF`).  The second run is
+    taken only when it finds something, and ``result.mu`` reports the weight of the run taken; a
+    result with objects at the default weight is that run's, unchanged.  A callback sees both
+    runs.
+    """
+    solution = _solve(problem, run, init, roi, callback)
+    if not is_auto(problem.settings.mu) or solution.mask.any():
+        return problem, solution
+    weaker = problem.reweighted(mu=MU_BACKOFF * problem.mu)
+    retry = _solve(weaker, run, init, roi, callback)
+    return (weaker, retry) if retry.mask.any() else (problem, solution)
 
 
 def _result_fields(problem, solution, seeds=None):
