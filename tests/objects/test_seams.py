@@ -47,7 +47,8 @@ def test_two_domes_of_one_brightness_are_cut_at_their_seam(seed):
 
 def test_three_domes_pressed_around_a_point_are_three_objects():
     # a trefoil: every seam runs from a waist of the outline to the point where the three meet
-    centres = [(24 + 10 * np.cos(a), 32 + 10 * np.sin(a)) for a in (0.3, 0.3 + 2 * np.pi / 3, 0.3 + 4 * np.pi / 3)]
+    angles = 0.3 + 2 * np.pi / 3 * np.arange(3)
+    centres = [(24 + 10 * np.cos(a), 32 + 10 * np.sin(a)) for a in angles]
     region, values, truth = domes(centres, shape=(56, 64))
     parts = contrast._contrast_parts(region.astype(np.int32), values, LEAST, MIN_SPLIT_RADIUS)
     assert parts.max() == 3
