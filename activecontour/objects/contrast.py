@@ -36,6 +36,10 @@ CONTRAST_SIZE_RATIO = 0.25
 #: or two wide between two nuclei survives it, and the noise of the smoothed values is the pixel
 #: noise over ``2 sqrt(pi) SEAM_SCALE`` (a mean over the Gaussian's 4 pi SEAM_SCALE^2 pixels).
 SEAM_SCALE = 2.0
+#: A part with more maxima than this is a texture, not a clump of objects each brightest in its
+#: middle (8 objects, the most of :data:`activecontour.synthetic.FAMILY_CLUMP`, two maxima each;
+#: the textured class of retina with three regions has about a thousand): it is not cut at seams.
+SEAM_MAX = 16
 
 
 def _window(image, box):
@@ -144,13 +148,13 @@ def _seam_parts(mask, values, least, min_radius):
     intensity between two maxima, and it ends in waists of the outline.  The intensity smoothed by
     ``SEAM_SCALE`` (normalised to the part) has its maxima of dynamic ``least / (2 sqrt(pi)
     SEAM_SCALE)`` at least -- the least contrast of a split for the smoothed field, whose noise
-    is the pixel noise over ``2 sqrt(pi) SEAM_SCALE`` -- as cores, and the watershed of the
-    smoothed intensity from them makes the pieces.  Two pieces whose border reaches the outline
-    nowhere, or somewhere less than ``MIN_WAIST_DEPTH`` inside the convex hull of the part's
-    pixels, merge (the one whose border is brightest first), so the texture of one convex nucleus
-    (its valleys end on convex stretches) and a bright spot inside it (its border is closed) are
-    not cut.  The split stands when two pieces or more are left and each passes the tests of a
-    split by contrast (:func:`_acceptable`).
+    is the pixel noise over ``2 sqrt(pi) SEAM_SCALE`` -- as cores (two to ``SEAM_MAX``), and the
+    watershed of the smoothed intensity from them makes the pieces.  Pieces whose border reaches the outline
+    nowhere, or at a place less than ``MIN_WAIST_DEPTH`` inside the convex hull of the part's
+    pixels, merge (:func:`_merge_off_waists`), so the texture of one convex nucleus (its valleys
+    end on convex stretches) and a bright spot inside it (its border is closed) are not cut.  The
+    split stands when two pieces or more are left and each passes the tests of a split by
+    contrast (:func:`_acceptable`).
     """
     import scipy.ndimage
     import skimage.morphology
@@ -164,61 +168,62 @@ def _seam_parts(mask, values, least, min_radius):
               / np.maximum(weight, 1e-12))
     smooth = np.where(mask, smooth, smooth[mask].min())
     depth = least / (2 * np.sqrt(np.pi) * SEAM_SCALE)
-    # (the count of the cores first, one compiled pass: most parts have one)
-    if _h_maxima_count(smooth, depth) < 2:
+    # (the count of the cores first, one compiled pass: most parts have one, a texture hundreds)
+    if not 2 <= _h_maxima_count(smooth, depth) <= SEAM_MAX:
         return None
     cores = scipy.ndimage.label(skimage.morphology.h_maxima(smooth, depth) & mask)[0]
     pieces = skimage.segmentation.watershed(-smooth, cores, mask=mask)
-    concavity = _concavity(mask, np.argwhere(mask).astype(np.float64))
-    while pieces.max() > 1:
-        borders = _borders(pieces)
-        shallow = [(smooth.ravel()[pixels].mean(), pair) for pair, pixels in borders.items()
-                   if not _ends_in_waists(pixels, concavity)]
-        if not shallow:
-            break
-        keep, gone = max(shallow)[1]
-        pieces[pieces == gone] = keep
-        pieces[pieces > gone] -= 1
+    pieces = _merge_off_waists(pieces, _concavity(mask, np.argwhere(mask).astype(np.float64)))
     if pieces.max() < 2 or not _acceptable(pieces, min_radius):
         return None
     return pieces
 
 
-def _borders(pieces):
-    """The borders between the pieces of a label image: {(i, j): flat indices of the pixels of
-    piece i or j with a 4-neighbour in the other, i < j}."""
-    flat = pieces.ravel()
+def _merge_off_waists(pieces, concavity):
+    """The pieces (a label image, 1..n) merged until every border between two of them reaches the
+    part's edge, and every place where a border does (8-connected pixels of the edge next to
+    another piece) lies ``MIN_WAIST_DEPTH`` inside the convex hull (``concavity``:
+    :func:`activecontour.objects.shapes._concavity`, -1 off the edge).  Each round merges at
+    once the pieces that meet at a shallow place and those whose border is closed."""
+    import scipy.ndimage
+    import scipy.sparse
+    import scipy.sparse.csgraph
+
     index = np.arange(pieces.size).reshape(pieces.shape)
-    found = []
-    for a, b in ((index[1:, :], index[:-1, :]), (index[:, 1:], index[:, :-1])):
-        a, b = a.ravel(), b.ravel()
+    on_edge = concavity.ravel() >= 0
+    while (count := int(pieces.max())) > 1:
+        flat = pieces.ravel()
+        a = np.concatenate([index[1:, :].ravel(), index[:, 1:].ravel()])
+        b = np.concatenate([index[:-1, :].ravel(), index[:, :-1].ravel()])
         keep = (flat[a] != flat[b]) & (flat[a] > 0) & (flat[b] > 0)
         a, b = a[keep], b[keep]
-        low, high = np.minimum(flat[a], flat[b]), np.maximum(flat[a], flat[b])
-        found += [(low, high, a), (low, high, b)]
-    low, high, pixels = (np.concatenate(column) for column in zip(*found, strict=True))
-    borders = {}
-    for i, j in np.unique(np.stack([low, high], axis=1), axis=0).tolist():
-        borders[(i, j)] = np.unique(pixels[(low == i) & (high == j)])
-    return borders
-
-
-def _ends_in_waists(pixels, concavity):
-    """Whether a border (flat indices) reaches the part's edge, and every place where it does
-    (8-connected pieces of its edge pixels) is ``MIN_WAIST_DEPTH`` inside the convex hull
-    (``concavity``: :func:`activecontour.objects.shapes._concavity`, -1 off the edge)."""
-    import scipy.ndimage
-
-    depth = concavity.ravel()[pixels]
-    edge = pixels[depth >= 0]
-    if edge.size == 0:
-        return False
-    drawn = np.zeros(concavity.shape, dtype=bool)
-    drawn.ravel()[edge] = True
-    places, count = scipy.ndimage.label(drawn, structure=np.ones((3, 3)))
-    deepest = np.full(count, -1.0)
-    np.maximum.at(deepest, places.ravel()[edge] - 1, depth[depth >= 0])
-    return bool(deepest.min() >= MIN_WAIST_DEPTH)
+        pair = np.minimum(flat[a], flat[b]) * (count + 1) + np.maximum(flat[a], flat[b])
+        reaching = on_edge[a] | on_edge[b]
+        closed = np.setdiff1d(pair, pair[reaching])
+        ends = np.zeros(pieces.size, dtype=bool)
+        ends[a[on_edge[a]]] = True
+        ends[b[on_edge[b]]] = True
+        places, n_places = scipy.ndimage.label(ends.reshape(pieces.shape), structure=np.ones((3, 3)))
+        at = np.flatnonzero(ends)
+        deepest = np.full(n_places + 1, -1.0)
+        np.maximum.at(deepest, places.ravel()[at], concavity.ravel()[at])
+        # each contact that reaches the edge, at its place: shallow ones join their two pieces
+        place = places.ravel()[np.where(on_edge[a], a, b)][reaching]
+        shallow = deepest[place] < MIN_WAIST_DEPTH
+        if closed.size == 0 and not shallow.any():
+            break
+        # the merge graph: pieces 1..count, then the places, each joined to the pieces that meet
+        # at it shallowly, and the pairs whose border is closed (each round joins two pieces)
+        node = count + place[shallow]
+        rows = np.concatenate([closed // (count + 1), flat[a[reaching][shallow]], flat[b[reaching][shallow]]])
+        cols = np.concatenate([closed % (count + 1), node, node])
+        graph = scipy.sparse.coo_matrix((np.ones(rows.size), (rows, cols)),
+                                        shape=(count + n_places + 1,) * 2)
+        component = scipy.sparse.csgraph.connected_components(graph, directed=False)[1][:count + 1]
+        lookup = np.zeros(count + 1, dtype=pieces.dtype)
+        lookup[1:] = np.unique(component[1:], return_inverse=True)[1] + 1
+        pieces = lookup[pieces]
+    return pieces
 
 
 def _acceptable(pieces, min_radius):
