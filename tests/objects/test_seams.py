@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import activecontour.objects.contrast as contrast
-from activecontour.objects.shapes import MIN_SPLIT_RADIUS
+from activecontour.objects.shapes import MIN_SPLIT_RADIUS, _concavity
 
 RADIUS = 12.0
 # the least contrast of a split by Otsu's two classes: the domes' cores and rims differ by less,
@@ -73,3 +73,16 @@ def test_a_uniform_object_with_a_waist_has_no_seam():
     region, values, _ = domes([(24, 22), (24, 40)])
     flat = np.where(region, 1.0, 0.0) + np.random.default_rng(3).normal(0, 0.02, region.shape) * region
     assert contrast._seam_parts(region, flat, LEAST, MIN_SPLIT_RADIUS) is None
+
+
+def test_a_piece_closed_inside_another_merges_with_it_and_a_seam_between_waists_stands():
+    # two disks side by side, cut between their waists, and a piece inside the left one (the
+    # basin of a bright spot in a crater): its border reaches the outline nowhere
+    region, _, truth = domes([(24, 22), (24, 40)])
+    rows, cols = np.mgrid[:48, :64]
+    pieces = truth.copy()
+    pieces[np.hypot(rows - 24, cols - 22) <= 3] = 3
+    concavity = _concavity(region, np.argwhere(region).astype(np.float64))
+    merged = contrast._merge_off_waists(pieces, concavity)
+    assert merged.max() == 2
+    assert np.array_equal(merged, truth)
