@@ -112,6 +112,9 @@ def _contrast_parts(parts, values, least, min_radius):
 
     result, count = np.zeros_like(parts), 0
     smallest = np.pi * min_radius ** 2
+    # the seams are valleys where the objects are brighter than the window around them, ridges
+    # where they are darker (:func:`_seam_parts` looks for the maxima of the objects' contrast)
+    contrast = 1.0 if values[parts > 0].mean() >= values[parts == 0].mean() else -1.0
     # each part on its box, grown by the reach of the smoothing: the same numbers as on the
     # window (outside the part everything is zero), at a cost of the part's size, not the window's
     margin = int(4.0 * CONTRAST_SCALE + 0.5) + 1
@@ -128,7 +131,7 @@ def _contrast_parts(parts, values, least, min_radius):
         # each piece of one brightness may still hold objects pressed together, seams between them
         for k in range(1, int(pieces.max()) + 1):
             piece = pieces == k
-            seams = _seam_parts(piece, values[box], least, min_radius)
+            seams = _seam_parts(piece, contrast * values[box], least, min_radius)
             if seams is None:
                 count += 1
                 result[box][piece] = count
@@ -139,7 +142,8 @@ def _contrast_parts(parts, values, least, min_radius):
 
 
 def _seam_parts(mask, values, least, min_radius):
-    """The pieces of a part (a bool mask, the image under its box) separated by seams, or None.
+    """The pieces of a part (a bool mask, the image under its box, negated for objects darker
+    than their surroundings) separated by seams, or None.
 
     Nuclei of one brightness pressed together (DSB 2018: three nuclei in a clump, each brightest in
     its middle, the clump's outline dented only a pixel or a few where two meet) are neither split

@@ -45,6 +45,16 @@ def test_two_domes_of_one_brightness_are_cut_at_their_seam(seed):
     assert best_iou(parts, truth).min() >= 0.95
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_two_dark_objects_on_a_bright_ground_are_cut_at_the_bright_ridge_between_them(seed):
+    # the same domes, darkest in their middles, inside a bright window: the seam is a ridge
+    region, values, truth = domes([(24, 22), (24, 40)], seed=seed)
+    dark = np.where(region, 1.6 - values, 1.0)
+    parts = contrast._contrast_parts(region.astype(np.int32), dark, LEAST, MIN_SPLIT_RADIUS)
+    assert parts.max() == 2
+    assert best_iou(parts, truth).min() >= 0.95
+
+
 def test_three_domes_pressed_around_a_point_are_three_objects():
     # a trefoil: every seam runs from a waist of the outline to the point where the three meet
     angles = 0.3 + 2 * np.pi / 3 * np.arange(3)
