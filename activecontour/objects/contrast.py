@@ -3,7 +3,9 @@
 A bright object touching a dim one, or two separated by a dark seam, without any waist: cores of
 one intensity, far enough from the outline and from each other, and every pixel to its nearest
 core (:func:`_contrast_parts`); a block-averaged look at an object's intensities first
-(:func:`_block_spread`), so an object of one intensity pays almost nothing.
+(:func:`_block_spread`), so an object of one intensity pays almost nothing.  Objects of one
+brightness pressed together, each brightest in its middle, are told apart by the seams between
+them (:func:`_seam_parts`): valleys of the smoothed intensity that end in waists of the outline.
 """
 
 from __future__ import annotations
@@ -11,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from activecontour import _kernels
-from activecontour.objects.shapes import _is_blob, _reaches
+from activecontour.objects.necks import _h_maxima_count
+from activecontour.objects.shapes import MIN_WAIST_DEPTH, _concavity, _is_blob, _reaches
 
 #: :func:`_contrast_parts` smooths the intensity inside the object with a Gaussian of this sigma
 #: (pixels; normalised to the object, so the background does not darken its rim) ...
@@ -30,6 +33,14 @@ CONTRAST_RIM = 4.0
 #: relief on a coin (skimage's coins: pieces of 0.07-0.19 of their coin) is no object; touching
 #: nuclei are of comparable size (DSB 2018: 0.26-0.48 in the splits made).
 CONTRAST_SIZE_RATIO = 0.25
+#: :func:`_seam_parts` smooths the intensity with a Gaussian of this sigma (pixels): a seam a pixel
+#: or two wide between two nuclei survives it, and the noise of the smoothed values is the pixel
+#: noise over ``2 sqrt(pi) SEAM_SCALE`` (a mean over the Gaussian's 4 pi SEAM_SCALE^2 pixels).
+SEAM_SCALE = 2.0
+#: A part with more maxima than this is a texture, not a clump of objects each brightest in its
+#: middle (8 objects, the most of :data:`activecontour.synthetic.FAMILY_CLUMP`, two maxima each;
+#: the textured class of retina with three regions has about a thousand): it is not cut at seams.
+SEAM_MAX = 16
 
 
 def _window(image, box):
@@ -99,10 +110,12 @@ def _contrast_parts(parts, values, least, min_radius):
     inside one object make specks, rims or arcs, not blobs of a size side by side.
     """
     import scipy.ndimage
-    import skimage.measure
 
     result, count = np.zeros_like(parts), 0
     smallest = np.pi * min_radius ** 2
+    # the seams are valleys where the objects are brighter than the window around them, ridges
+    # where they are darker (:func:`_seam_parts` looks for the maxima of the objects' contrast)
+    contrast = 1.0 if values[parts > 0].mean() >= values[parts == 0].mean() else -1.0
     # each part on its box, grown by the reach of the smoothing: the same numbers as on the
     # window (outside the part everything is zero), at a cost of the part's size, not the window's
     margin = int(4.0 * CONTRAST_SCALE + 0.5) + 1
@@ -112,25 +125,125 @@ def _contrast_parts(parts, values, least, min_radius):
         box = tuple(slice(max(b.start - margin, 0), b.stop + margin) for b in box)
         mask = parts[box] == j
         pieces = _contrast_split(mask, values[box], least, smallest)
-        if pieces is not None:
-            props = skimage.measure.regionprops(pieces)
-            largest = max(p.area for p in props)
-            # a piece's inscribed radius on its box and a pixel more (the nearest pixel outside
-            # a piece touches it)
-            # (every piece's size first, then every piece's inscribed radius, one compiled pass
-            # each: a blob's solidity and moments cost a convex hull image and skimage's moments;
-            # the tests are and-ed, so their order changes no answer)
-            if not (all(p.area >= CONTRAST_SIZE_RATIO * largest for p in props)
-                    and all(_inscribed_radius_reaches(pieces, p.label, p.slice, min_radius) for p in props)
-                    and all(_is_blob(p) for p in props)):
-                pieces = None
+        if pieces is not None and not _acceptable(pieces, min_radius):
+            pieces = None
         if pieces is None:
-            count += 1
-            result[box][mask] = count
-        else:
-            result[box][mask] = pieces[mask] + count
-            count += int(pieces.max())
+            pieces = mask.astype(np.int32)
+        # each piece of one brightness may still hold objects pressed together, seams between them
+        for k in range(1, int(pieces.max()) + 1):
+            piece = pieces == k
+            seams = _seam_parts(piece, contrast * values[box], least, min_radius)
+            if seams is None:
+                count += 1
+                result[box][piece] = count
+            else:
+                result[box][piece] = seams[piece] + count
+                count += int(seams.max())
     return result
+
+
+def _seam_parts(mask, values, least, min_radius):
+    """The pieces of a part (a bool mask, the image under its box, negated for objects darker
+    than their surroundings) separated by seams, or None.
+
+    Nuclei of one brightness pressed together (DSB 2018: three nuclei in a clump, each brightest in
+    its middle, the clump's outline dented only a pixel or a few where two meet) are neither split
+    by Otsu's two classes (the seams are as bright as the rims) nor by their outline (no neck, no
+    corner sharp enough).  What tells them apart is both together: a seam is a valley of the
+    intensity between two maxima, and it ends in waists of the outline.  The intensity smoothed by
+    ``SEAM_SCALE`` (normalised to the part) has its maxima of dynamic ``least / (2 sqrt(pi)
+    SEAM_SCALE)`` at least -- the least contrast of a split for the smoothed field, whose noise
+    is the pixel noise over ``2 sqrt(pi) SEAM_SCALE`` -- as cores (two to ``SEAM_MAX``), and the
+    watershed of the smoothed intensity from them makes the pieces.  Pieces whose border reaches the outline
+    nowhere, or at a place less than ``MIN_WAIST_DEPTH`` inside the convex hull of the part's
+    pixels, merge (:func:`_merge_off_waists`), so the texture of one convex nucleus (its valleys
+    end on convex stretches) and a bright spot inside it (its border is closed) are not cut.  The
+    split stands when two pieces or more are left and each passes the tests of a split by
+    contrast (:func:`_acceptable`).
+    """
+    import scipy.ndimage
+    import skimage.morphology
+    import skimage.segmentation
+
+    smallest = np.pi * min_radius ** 2
+    if np.count_nonzero(mask) <= 2 * smallest:
+        return None
+    weight = scipy.ndimage.gaussian_filter(mask.astype(float), SEAM_SCALE)
+    smooth = (scipy.ndimage.gaussian_filter(np.where(mask, values, 0.0), SEAM_SCALE)
+              / np.maximum(weight, 1e-12))
+    smooth = np.where(mask, smooth, smooth[mask].min())
+    depth = least / (2 * np.sqrt(np.pi) * SEAM_SCALE)
+    # (the count of the cores first, one compiled pass: most parts have one, a texture hundreds)
+    if not 2 <= _h_maxima_count(smooth, depth) <= SEAM_MAX:
+        return None
+    cores = scipy.ndimage.label(skimage.morphology.h_maxima(smooth, depth) & mask)[0]
+    pieces = skimage.segmentation.watershed(-smooth, cores, mask=mask)
+    pieces = _merge_off_waists(pieces, _concavity(mask, np.argwhere(mask).astype(np.float64)))
+    if pieces.max() < 2 or not _acceptable(pieces, min_radius):
+        return None
+    return pieces
+
+
+def _merge_off_waists(pieces, concavity):
+    """The pieces (a label image, 1..n) merged until every border between two of them reaches the
+    part's edge, and every place where a border does (8-connected pixels of the edge next to
+    another piece) lies ``MIN_WAIST_DEPTH`` inside the convex hull (``concavity``:
+    :func:`activecontour.objects.shapes._concavity`, -1 off the edge).  Each round merges at
+    once the pieces that meet at a shallow place and those whose border is closed."""
+    import scipy.ndimage
+    import scipy.sparse
+    import scipy.sparse.csgraph
+
+    index = np.arange(pieces.size).reshape(pieces.shape)
+    on_edge = concavity.ravel() >= 0
+    while (count := int(pieces.max())) > 1:
+        flat = pieces.ravel()
+        a = np.concatenate([index[1:, :].ravel(), index[:, 1:].ravel()])
+        b = np.concatenate([index[:-1, :].ravel(), index[:, :-1].ravel()])
+        keep = (flat[a] != flat[b]) & (flat[a] > 0) & (flat[b] > 0)
+        a, b = a[keep], b[keep]
+        pair = np.minimum(flat[a], flat[b]) * (count + 1) + np.maximum(flat[a], flat[b])
+        reaching = on_edge[a] | on_edge[b]
+        closed = np.setdiff1d(pair, pair[reaching])
+        ends = np.zeros(pieces.size, dtype=bool)
+        ends[a[on_edge[a]]] = True
+        ends[b[on_edge[b]]] = True
+        places, n_places = scipy.ndimage.label(ends.reshape(pieces.shape), structure=np.ones((3, 3)))
+        at = np.flatnonzero(ends)
+        deepest = np.full(n_places + 1, -1.0)
+        np.maximum.at(deepest, places.ravel()[at], concavity.ravel()[at])
+        # each contact that reaches the edge, at its place: shallow ones join their two pieces
+        place = places.ravel()[np.where(on_edge[a], a, b)][reaching]
+        shallow = deepest[place] < MIN_WAIST_DEPTH
+        if closed.size == 0 and not shallow.any():
+            break
+        # the merge graph: pieces 1..count, then the places, each joined to the pieces that meet
+        # at it shallowly, and the pairs whose border is closed (each round joins two pieces)
+        node = count + place[shallow]
+        rows = np.concatenate([closed // (count + 1), flat[a[reaching][shallow]], flat[b[reaching][shallow]]])
+        cols = np.concatenate([closed % (count + 1), node, node])
+        graph = scipy.sparse.coo_matrix((np.ones(rows.size), (rows, cols)),
+                                        shape=(count + n_places + 1,) * 2)
+        component = scipy.sparse.csgraph.connected_components(graph, directed=False)[1][:count + 1]
+        lookup = np.zeros(count + 1, dtype=pieces.dtype)
+        lookup[1:] = np.unique(component[1:], return_inverse=True)[1] + 1
+        pieces = lookup[pieces]
+    return pieces
+
+
+def _acceptable(pieces, min_radius):
+    """The tests every split by contrast passes: every piece at least ``CONTRAST_SIZE_RATIO`` of
+    the largest, with an inscribed radius of ``min_radius`` or more, and a blob (:func:`_is_blob`).
+    (Every piece's size first, then every piece's inscribed radius, one compiled pass each: a
+    blob's solidity and moments cost a convex hull image and skimage's moments; the tests are
+    and-ed, so their order changes no answer.)"""
+    import skimage.measure
+
+    props = skimage.measure.regionprops(pieces)
+    largest = max(p.area for p in props)
+    return (all(p.area >= CONTRAST_SIZE_RATIO * largest for p in props)
+            and all(_inscribed_radius_reaches(pieces, p.label, p.slice, min_radius) for p in props)
+            and all(_is_blob(p) for p in props))
 
 
 def _inscribed_radius_reaches(labels, label, box, radius):
