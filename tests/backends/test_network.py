@@ -809,3 +809,24 @@ def test_a_loop_turned_inside_out_is_caught_where_no_interfaces_meet():
     # with the sides swapped too it is the island again, walked the other way
     swapped = _hand_network(points, edge + [(b, a, 0, 1), (c, b, 0, 1), (a, c, 0, 1)], (4, 6))
     assert swapped.inheriting(island, np.arange(7)).sides_hold_after(island, island.nodes)
+
+
+def test_two_slivers_side_by_side_both_go():
+    # regions 1 and 2 two slivers side by side in region 0 (three runs from a to b, 1e-9 px apart:
+    # 0 | 1 above, 1 | 2 between, 2 | 0 below): merging 1 into 2 changes region 2's sides, so its
+    # loop is read again, not from the sides it had (which left a run of region 1 against 0 with no
+    # region 1 around it); both go, and the partition is region 0's alone
+    from activecontour.backends.network.flow import _without_slivers
+
+    tl, bl, br, tr, a, m, b, t, d = range(9)
+    points = [*_CORNERS, (1.0, 1.0), (1.0, 2.0), (1.0, 4.0), (1.0 - 1e-9, 2.5), (1.0 + 1e-9, 3.0)]
+    edge = [(tl, bl, 0, -1), (bl, br, 0, -1), (br, tr, 0, -1), (tr, tl, 0, -1)]
+    network = _hand_network(points, edge + [(a, m, 1, 2), (m, b, 1, 2), (b, t, 1, 0), (t, a, 1, 0),
+                                            (a, d, 2, 0), (d, b, 2, 0)], (4, 6))
+    found = _without_slivers(network, network.nodes)
+    assert [len(curves) for curves in map(found.region_curves, np.eye(3, dtype=bool))] == [1, 0, 0]
+    image = np.random.default_rng(15).random((4, 6))
+    model, params = _setup(image, 0.3)
+    assert evaluate_partition(model, found.boundary(), params, 3).energy == pytest.approx(
+        evaluate_partition(model, _hand_network(points, edge, (4, 6)).boundary(), params, 3).energy,
+        rel=1e-12)

@@ -87,8 +87,11 @@ def _without_slivers(network, nodes):
     all have the same two sides, so leaving them out merges the sliver (about 1e-12 px^2) into the
     region around it and takes its length out of the length term; a loop along the image's edge
     (an interface lying on the edge's segment) gives its edge segments to that region, and one
-    between two regions (a run of segments along each) leaves one run between them."""
-    keep = np.ones(len(network.start), dtype=bool)
+    between two regions (a run of segments along each) leaves one run between them.  A sliver next
+    to one merged already has new sides: it is read again from the network without the first
+    (two slivers side by side both go), never from the sides it had."""
+    keep, touched = np.ones(len(network.start), dtype=bool), np.zeros(len(network.start), dtype=bool)
+    again = False
     inner, outer = network.inner.copy(), network.outer.copy()
     n_regions = int(max(network.inner.max(), network.outer.max())) + 1
     for region in range(n_regions):
@@ -107,21 +110,27 @@ def _without_slivers(network, nodes):
         perimeter = np.add.reduceat(np.hypot(*(b - a).T), firsts)
         for loop in np.flatnonzero(area <= _SLIVER * np.maximum(1.0, perimeter) ** 2):
             members = segments[order[offsets[loop]:offsets[loop + 1]]]
+            if touched[members].any():  # next to a sliver merged already: read it again
+                again = True
+                continue
             on_edge = ~network.interface[members]
             other = np.where(network.inner[members] == region, network.outer[members], network.inner[members])
             around = np.unique(other[~on_edge])
             if around.size == 1:
+                touched[members] = True
                 keep[members[~on_edge]] = False
                 inner[members[on_edge]] = around[0]
             elif around.size == 2 and not on_edge.any() and np.count_nonzero(other != np.roll(other, 1)) == 2:
                 # two runs, one along each region: the first run stays, between the two
+                touched[members] = True
                 kept, gone = members[other == around[0]], members[other == around[1]]
                 keep[gone] = False
                 inner[kept] = np.where(inner[kept] == region, around[1], inner[kept])
                 outer[kept] = np.where(outer[kept] == region, around[1], outer[kept])
     if keep.all():
         return network
-    return Network(nodes, network.start[keep], network.end[keep], inner[keep], outer[keep], network.shape)
+    merged = Network(nodes, network.start[keep], network.end[keep], inner[keep], outer[keep], network.shape)
+    return _without_slivers(merged, nodes) if again else merged
 
 
 class _Flow:
