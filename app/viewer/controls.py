@@ -58,8 +58,12 @@ class Controls:
         return self.layout.backend_radio.value_selected
 
     def settings(self, **changes):
-        """The settings of the next run (with ``changes``), checked by the library."""
+        """The settings of the next run (with ``changes``), checked by the library; mu stays
+        ``"auto"`` while it is automatic, so that a run takes the library's own rule (the weight
+        it backs off to where the image's leaves no object), not the value the slider shows."""
         values = {name: float(self.layout.sliders[name].val) for name, *_ in SLIDERS}
+        if self.mu_auto:
+            values["mu"] = "auto"
         values.update(backend=self.backend, max_num_iter=int(self.layout.maxiter_box.text),
                       tol=float(self.layout.tol_box.text), color=self.color, n_regions=self.n_regions,
                       fit=self.fit, options=self._options())
@@ -97,6 +101,16 @@ class Controls:
         if self.mu_auto:
             self.mu_auto = False  # set_val below notifies on_mu_slider, which would clear it
             set_slider_value(self.layout.sliders["mu"], automatic_mu(image, self.settings(mu="auto")))
+            self.mu_auto = True
+            self._show_mu_mode()
+
+    def show_run_mu(self, mu):
+        """While mu is automatic, show the weight a run took: ``result.mu``, which is half the
+        image's automatic value where that value left no object
+        (:data:`activecontour.imaging.noise.MU_BACKOFF`)."""
+        if self.mu_auto:
+            self.mu_auto = False  # as in refresh_auto_mu: set_val would clear the automatic mode
+            set_slider_value(self.layout.sliders["mu"], mu)
             self.mu_auto = True
             self._show_mu_mode()
 

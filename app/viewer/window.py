@@ -274,6 +274,7 @@ class Viewer:
             self.run_button.label.set_text("Run")
         if result is not None:
             self.session.accept(result, self.controls.max_num_iter())
+            self.controls.show_run_mu(result.mu)
         after, self._after_run = self._after_run, None
         if self.closed:
             return result

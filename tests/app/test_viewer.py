@@ -885,6 +885,22 @@ def test_automatic_mu_follows_the_image_until_the_slider_is_moved(disk_image, ma
     assert viewer.parameters()["mu"] == pytest.approx(1.5, abs=1e-9)  # the user's value stays
 
 
+def test_automatic_mu_shows_the_weight_a_backed_off_run_took(make_viewer):
+    # touching ellipses at twice the pixel size: the default weight leaves no object, and the
+    # library runs again at MU_BACKOFF of it; the slider, still automatic, shows that weight
+    from activecontour import synthetic
+    from activecontour.imaging.noise import MU_BACKOFF
+
+    image, _ = synthetic.touching_ellipses(13, pixel=2.0)
+    viewer = make_viewer(image, separate=False)
+    mu = viewer.sliders["mu"]
+    default = mu.val
+    click_axes(viewer, viewer.run_button.ax)
+    assert mu.val == pytest.approx(MU_BACKOFF * default)
+    assert viewer.slider_labels["mu"].get_text() == "smoothness (auto)"
+    assert viewer.parameters()["mu"] == "auto"
+
+
 def test_the_shown_start_follows_mu_as_the_librarys_does(coins_image, make_viewer):
     image, _ = coins_image
     viewer = make_viewer(image)
