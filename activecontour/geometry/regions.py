@@ -19,9 +19,13 @@ __all__ = ["clip_region", "complement_region", "group_curves", "group_indices", 
            "orient_by_nesting", "polygons"]
 
 def _to_shapely(curves):
-    """A (Multi)Polygon from oriented curves in (row, col) (x = row, y = col)."""
+    """A (Multi)Polygon from oriented curves in (row, col) (x = row, y = col); one outer boundary
+    (positive) is its polygon without the nesting of curves into outer boundaries and holes (a
+    traced cell or an object without holes: most of those the split cuts)."""
     import shapely
 
+    if len(curves) == 1 and signed_area(curves[0]) > 0:
+        return shapely.make_valid(shapely.Polygon(curves[0]))
     polygons = [shapely.Polygon(obj[0], holes=obj[1:]) for obj in group_curves(curves)]
     return shapely.make_valid(shapely.MultiPolygon(polygons) if len(polygons) != 1 else polygons[0])
 

@@ -52,7 +52,7 @@ def _cut(curves, parts, low):
                                                    return_indices=True)
     cells = parts[tuple(nearest)]
     boxes = scipy.ndimage.find_objects(cells)
-    geometries = np.array([_region([c + low + (box[0].start, box[1].start)
+    geometries = np.array([_to_shapely([c + low + (box[0].start, box[1].start)
                                     for c in mask_to_curves(cells[box] == j)])
                            for j, box in enumerate(boxes, start=1)], dtype=object)
     # the traced cells are a coverage, which the simplification keeps: marching squares at 0.5
@@ -67,7 +67,7 @@ def _cut(curves, parts, low):
     later = np.unique(pairs[0][pairs[1] < pairs[0]])
     geometries[later] = shapely.orient_polygons(geometries[later], exterior_cw=True)
     geometries = shapely.coverage_simplify(geometries, SPLIT_LINE_TOLERANCE, simplify_boundary=False)
-    region = _region(curves)
+    region = _to_shapely(curves)
     polygons = [polygon for piece in shapely.intersection(region, geometries)
                 for polygon in getattr(piece, "geoms", [piece])
                 if isinstance(polygon, shapely.Polygon) and polygon.area > 0]
@@ -83,17 +83,6 @@ def _cut(curves, parts, low):
         if isinstance(joined, shapely.Polygon):
             polygons[j], polygons[k] = joined, None
     return [part for polygon in polygons if polygon is not None and (part := _from_shapely(polygon))]
-
-
-def _region(curves):
-    """:func:`activecontour.geometry.regions._to_shapely` of oriented curves: one outer boundary
-    (positive) is its polygon, made valid, without the nesting of curves into outer boundaries
-    and holes (a traced cell or an object without holes: most of them)."""
-    import shapely
-
-    if len(curves) == 1 and signed_area(curves[0]) > 0:
-        return shapely.make_valid(shapely.Polygon(curves[0]))
-    return _to_shapely(curves)
 
 
 # ---- stage 2: concave corners paired into cut lines ---------------------------------------------

@@ -745,13 +745,17 @@ def test_the_cut_orients_the_cells_as_the_overlays_left_them(seed, monkeypatch):
 
 @pytest.mark.parametrize("seed", range(10))
 def test_the_region_of_one_outline_is_the_nested_one(seed):
-    """:func:`corners._region` skips the nesting for one positive outline only: the same geometry
-    to the bit as :func:`activecontour.geometry.regions._to_shapely`, for an outline, a hole alone,
-    an outline with a hole, and a self-touching outline made valid."""
-    from activecontour.geometry.regions import _to_shapely
+    """:func:`activecontour.geometry.regions._to_shapely` skips the nesting for one positive
+    outline only: the same geometry to the bit as the curves nested into outer boundaries and
+    holes, for an outline, a hole alone, an outline with a hole, and a self-touching outline."""
+    from activecontour.geometry.regions import _to_shapely, group_curves
+
+    def nested(curves):
+        polygons = [shapely.Polygon(obj[0], holes=obj[1:]) for obj in group_curves(curves)]
+        return shapely.make_valid(shapely.MultiPolygon(polygons) if len(polygons) != 1 else polygons[0])
 
     outline = random_outline(seed)
     hole = orient(outline[::3] * 0.2 + outline.mean(axis=0) * 0.8, hole=True)
     bow = orient(np.array([[0.0, 0.0], [0.0, 4.0], [2.0, 2.0], [4.0, 4.0], [4.0, 0.0], [2.0, 2.0]]) + seed)
     for curves in ([outline], [hole], [outline, hole], [bow]):
-        assert shapely.to_wkb(corners._region(curves)) == shapely.to_wkb(_to_shapely(curves))
+        assert shapely.to_wkb(_to_shapely(curves)) == shapely.to_wkb(nested(curves))
